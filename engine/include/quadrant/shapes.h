@@ -1,0 +1,67 @@
+// Quadrant: collision shapes and their exact mass properties.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <span>
+
+#include "quadrant/math.h"
+
+namespace quadrant {
+
+/// Most vertices a polygon may have (as Box2D's default).
+inline constexpr int kMaxPolygonVertices = 8;
+
+/// Largest coordinate magnitude accepted for positions and vertices (m). float32 still
+/// resolves 1 mm at 1e5 m only roughly (ulp ~ 8 mm), so beyond 1e6 results are meaningless.
+inline constexpr Real kMaxCoordinate = Real(1e6);
+
+/// Smallest edge length / circle radius accepted (m). Below this the hull and the narrow
+/// phase lose precision in float32.
+inline constexpr Real kMinFeatureSize = Real(0.005);
+
+/// A circle centred at `center` in body coordinates.
+struct Circle {
+  Vec2 center;
+  Real radius = Real(0.5);
+};
+
+/// A convex polygon, counter-clockwise, with precomputed outward unit normals.
+/// Build it with MakePolygon or MakeBox: they validate the input.
+struct Polygon {
+  std::array<Vec2, kMaxPolygonVertices> vertices{};
+  std::array<Vec2, kMaxPolygonVertices> normals{};
+  Vec2 centroid;
+  int count = 0;
+};
+
+/// Mass properties of a shape at a given density (kg/m^2).
+struct MassData {
+  Real mass = 0;     ///< kg
+  Vec2 center;       ///< centre of mass in body coordinates
+  Real rotationalInertia = 0;  ///< about the centre of mass, kg m^2
+};
+
+/// Builds the convex hull of 3..8 points (any order) as a counter-clockwise polygon.
+/// Throws quadrant::Error for fewer than 3 or more than 8 points, non-finite or huge
+/// coordinates, duplicate points, collinear or nearly collinear input (area or an edge below
+/// kMinFeatureSize), and input that is not convex when `requireConvex` is true (points that
+/// the hull would drop, which means the caller's polygon was not the convex shape it meant).
+Polygon MakePolygon(std::span<const Vec2> points, bool requireConvex = true);
+
+/// An axis-aligned box of half-widths hx, hy centred at `center`, rotated by `angle`.
+Polygon MakeBox(Real hx, Real hy, Vec2 center = {}, Real angle = 0);
+
+/// Validates a circle (finite centre, radius >= kMinFeatureSize); throws quadrant::Error.
+void ValidateCircle(const Circle& circle);
+
+MassData ComputeMass(const Circle& circle, Real density);
+MassData ComputeMass(const Polygon& polygon, Real density);
+
+/// Signed area of a polygon (positive for counter-clockwise).
+Real ComputeArea(const Polygon& polygon);
+
+AABB ComputeAABB(const Circle& circle, Transform xf);
+AABB ComputeAABB(const Polygon& polygon, Transform xf);
+
+}  // namespace quadrant

@@ -1,0 +1,201 @@
+// Quadrant: the world, its definitions and its read-outs.
+//
+// Style after Box2D 3 and Jolt: ids are values (index + generation), objects are made from
+// definition structs whose defaults are documented here, and one call steps the world.
+//
+//   quadrant::WorldDef def;                      // gravity (0,-10), pgs, 8 iterations
+//   quadrant::World world(def);
+//   quadrant::BodyDef ground;                    // static by default
+//   ground.shape = quadrant::ShapeDef::Box(20, 0.5);
+//   world.CreateBody(ground);
+//   quadrant::BodyDef ball;
+//   ball.type = quadrant::BodyType::kDynamic;
+//   ball.position = {0, 4};
+//   ball.shape = quadrant::ShapeDef::MakeCircle(0.5);
+//   quadrant::BodyId id = world.CreateBody(ball);
+//   for (int i = 0; i < 60; ++i) world.Step(1.0f / 60.0f);
+//   quadrant::Vec2 p = world.GetPosition(id);   // resting on the ground at y ~ 1.0
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <vector>
+
+#include "quadrant/error.h"
+#include "quadrant/math.h"
+#include "quadrant/shapes.h"
+
+namespace quadrant {
+
+/// A body handle. A value type: index into the world's slots plus a generation that is
+/// bumped when the slot is freed, so a stale id is detected instead of aliasing a new body.
+/// The default (generation 0) is the null id; live ids have generation >= 1.
+struct BodyId {
+  uint32_t index = 0;
+  uint32_t generation = 0;
+  constexpr bool IsNull() const { return generation == 0; }
+  friend constexpr bool operator==(BodyId a, BodyId b) = default;
+};
+
+enum class BodyType : uint8_t {
+  kStatic,     ///< never moves, infinite mass
+  kKinematic,  ///< moves by its velocity, infinite mass, not pushed by contacts
+  kDynamic,    ///< moved by gravity and contacts
+};
+
+enum class ShapeType : uint8_t { kCircle, kPolygon };
+
+/// The single shape of a body. Quadrant bodies carry exactly one shape: every scene of the
+/// suite needs no more, and it keeps the hot loops free of a shape list per body.
+struct ShapeDef {
+  ShapeType type = ShapeType::kCircle;
+  Circle circle;
+  Polygon polygon;
+  Real density = 1;       ///< kg/m^2, > 0 for dynamic bodies
+  Real friction = Real(0.6);   ///< Coulomb coefficient, >= 0; mixed as sqrt(fa*fb) like Box2D
+  Real restitution = 0;   ///< 0..1 (values above 1 are refused); mixed as max(ea, eb) like Box2D
+
+  static ShapeDef MakeCircle(Real radius, Vec2 center = {});
+  static ShapeDef Box(Real hx, Real hy, Vec2 center = {}, Real angle = 0);
+  static ShapeDef FromPolygon(const Polygon& polygon);
+};
+
+struct BodyDef {
+  BodyType type = BodyType::kStatic;
+  Vec2 position;            ///< world position of the body origin (m)
+  Real angle = 0;           ///< radians
+  Vec2 linearVelocity;      ///< m/s, of the centre of mass
+  Real angularVelocity = 0; ///< rad/s
+  Real linearDamping = 0;   ///< 1/s, >= 0 (applied only when the world enables damping)
+  Real angularDamping = 0;  ///< 1/s, >= 0
+  ShapeDef shape;
+};
+
+enum class SolverType : uint8_t {
+  kThesis,  ///< the 2013 thesis: mass-ratio separation + one impulse per contact, no iterations
+  kPgs,     ///< sequential impulses, warm starting, velocity iterations, position pass (Box2D 2.4)
+};
+
+enum class BroadPhaseType : uint8_t {
+  kQuadTree,     ///< the thesis's region quad-tree (body in the smallest node holding its AABB)
+  kUniformGrid,  ///< a uniform grid rebuilt each step, cell size from the median body size
+};
+
+/// Effects a world simulates. A disabled effect's work is not done at all: the step picks a
+/// specialised path, it does not multiply by zero.
+struct Effects {
+  bool gravity = true;
+  bool friction = true;
+  bool restitution = true;
+  bool rotation = true;       ///< false: angular velocity stays 0 and no angular terms are solved
+  bool warmStarting = true;   ///< pgs only: start from last step's impulses
+  bool damping = false;       ///< apply per-body linear/angular damping
+};
+
+struct WorldDef {
+  Vec2 gravity{0, Real(-10)};           ///< m/s^2
+  SolverType solver = SolverType::kPgs;
+  BroadPhaseType broadPhase = BroadPhaseType::kUniformGrid;
+  int velocityIterations = 8;           ///< pgs, >= 1 (Box2D 2.4 default 8)
+  int positionIterations = 3;           ///< pgs position pass, >= 0 (Box2D 2.4 default 3)
+  Real linearSlop = Real(0.005);        ///< allowed penetration (m), as Box2D
+  Real baumgarte = Real(0.2);           ///< fraction of penetration removed per position iteration
+  Real maxLinearCorrection = Real(0.2); ///< most a position iteration moves a contact (m)
+  Real speculativeDistance = Real(0.02);///< contacts are created this far before touching (m)
+  Real restitutionThreshold = Real(1);  ///< approach speed (m/s) below which no bounce is added
+  Real maxLinearSpeed = Real(400);      ///< m/s; a numerical guard, as Box2D 3's default
+  int threadCount = 1;                  ///< worker threads (1 = no threading at all)
+  int quadTreeMaxDepth = 8;             ///< quad-tree levels below the root, 1..12
+  Effects effects;
+};
+
+/// Wall-clock milliseconds per stage of the last Step (summed over its sub-steps).
+struct Profile {
+  double broadPhase = 0;   ///< AABB update and candidate pairs
+  double narrowPhase = 0;  ///< manifolds for candidate pairs
+  double persistence = 0;  ///< matching manifolds to last step's, warm-start impulses
+  double solve = 0;        ///< contact solver (velocity and position passes)
+  double integrate = 0;    ///< velocities and positions
+  double total = 0;        ///< the whole Step
+};
+
+/// Counts from the last Step.
+struct Counters {
+  int bodies = 0;
+  int candidatePairs = 0;    ///< pairs whose AABBs overlap, from the broad phase
+  int contacts = 0;          ///< manifolds with at least one point (touching or speculative)
+  int touchingContacts = 0;  ///< manifolds with a point at separation <= 0
+  int contactPoints = 0;
+};
+
+/// A contact as read back for validation and drawing.
+struct ContactInfo {
+  BodyId bodyA;
+  BodyId bodyB;
+  Vec2 normal;  ///< unit, from A to B
+  int pointCount = 0;
+  Vec2 points[2];
+  Real separations[2] = {0, 0};
+  Real normalImpulses[2] = {0, 0};
+  Real tangentImpulses[2] = {0, 0};
+};
+
+class World {
+ public:
+  /// Throws quadrant::Error if `def` is invalid (non-finite gravity, iterations < 1, ...).
+  explicit World(const WorldDef& def = WorldDef{});
+  ~World();
+  World(const World&) = delete;
+  World& operator=(const World&) = delete;
+  World(World&&) noexcept;
+  World& operator=(World&&) noexcept;
+
+  /// Validates `def` fully before adding anything; throws quadrant::Error on bad input.
+  BodyId CreateBody(const BodyDef& def);
+  /// Throws quadrant::Error for a stale or null id.
+  void DestroyBody(BodyId id);
+  bool IsValid(BodyId id) const;
+
+  /// Advances by dt seconds as `subSteps` equal sub-steps of the whole pipeline.
+  /// Throws quadrant::Error for dt <= 0 or non-finite, or subSteps < 1.
+  void Step(Real dt, int subSteps = 1);
+
+  // Read-back (all throw quadrant::Error on a stale id).
+  Vec2 GetPosition(BodyId id) const;
+  Real GetAngle(BodyId id) const;
+  Rot GetRotation(BodyId id) const;
+  Vec2 GetLinearVelocity(BodyId id) const;
+  Real GetAngularVelocity(BodyId id) const;
+  Vec2 GetWorldCenter(BodyId id) const;
+  Real GetMass(BodyId id) const;
+  Real GetRotationalInertia(BodyId id) const;  ///< about the centre of mass
+  BodyType GetType(BodyId id) const;
+  AABB GetAABB(BodyId id) const;
+  const ShapeDef& GetShape(BodyId id) const;
+
+  // Writes (validated; throw quadrant::Error and change nothing on bad input).
+  void SetLinearVelocity(BodyId id, Vec2 v);
+  void SetAngularVelocity(BodyId id, Real w);
+  void SetTransform(BodyId id, Vec2 position, Real angle);
+  void ApplyLinearImpulse(BodyId id, Vec2 impulse, Vec2 worldPoint);
+
+  int GetBodyCount() const;
+  /// Live ids in creation order (destroying a body moves the last body into its place).
+  std::vector<BodyId> GetBodyIds() const;
+  const WorldDef& GetDef() const;
+  const Profile& GetProfile() const;
+  const Counters& GetCounters() const;
+  std::vector<ContactInfo> GetContacts() const;
+
+  /// 64-bit FNV-1a over the exact bits of every body's position, rotation and velocities,
+  /// in body order. Equal hashes mean bit-identical states.
+  uint64_t StateHash() const;
+
+  struct Impl;
+
+ private:
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace quadrant

@@ -1,0 +1,40 @@
+// Symplectic Euler integration at a fixed step.
+#include "integrate.h"
+
+namespace quadrant {
+
+void IntegrateVelocities(Bodies& bodies, const WorldDef& def, Real dt) {
+  const int n = bodies.Count();
+  const Effects& fx = def.effects;
+  if (fx.gravity) {
+    const Vec2 dv = dt * def.gravity;
+    for (int i = 0; i < n; ++i) {
+      if (bodies.type[i] == BodyType::kDynamic) bodies.vel[i].v += dv;
+    }
+  }
+  if (fx.damping) {
+    // The implicit form 1 / (1 + dt c) stays stable for any c, unlike 1 - dt c.
+    for (int i = 0; i < n; ++i) {
+      if (bodies.type[i] != BodyType::kDynamic) continue;
+      bodies.vel[i].v = (Real(1) / (Real(1) + dt * bodies.linearDamping[i])) * bodies.vel[i].v;
+      bodies.vel[i].w *= Real(1) / (Real(1) + dt * bodies.angularDamping[i]);
+    }
+  }
+}
+
+void IntegratePositions(Bodies& bodies, const WorldDef& def, Real dt) {
+  const int n = bodies.Count();
+  const Real maxSpeed2 = def.maxLinearSpeed * def.maxLinearSpeed;
+  const bool rotation = def.effects.rotation;
+  for (int i = 0; i < n; ++i) {
+    if (bodies.type[i] == BodyType::kStatic) continue;
+    BodyVelocity& bv = bodies.vel[i];
+    const Real speed2 = LengthSquared(bv.v);
+    if (speed2 > maxSpeed2) bv.v = (def.maxLinearSpeed / std::sqrt(speed2)) * bv.v;
+    bodies.center[i] += dt * bv.v;
+    if (rotation) bodies.xf[i].q = IntegrateRot(bodies.xf[i].q, dt * bv.w);
+    SyncTransform(bodies, i);
+  }
+}
+
+}  // namespace quadrant

@@ -1,0 +1,22 @@
+// Integration: symplectic Euler at a fixed time step (velocities first, then positions with the
+// new velocities). The thesis used the wall-clock duration of the previous step as dt, which
+// made runs unrepeatable; the suite needs fixed steps.
+#pragma once
+
+#include "world_internal.h"
+
+namespace quadrant {
+
+/// v += dt * gravity (if the effect is on), then damping (if on): v *= 1 / (1 + dt * c).
+void IntegrateVelocities(Bodies& bodies, const WorldDef& def, Real dt);
+
+/// centre += dt * v, rotation += dt * w (if rotation is on); updates the origin transform.
+/// Speeds above def.maxLinearSpeed are scaled down to it (a numerical guard, as in Box2D).
+void IntegratePositions(Bodies& bodies, const WorldDef& def, Real dt);
+
+/// Recomputes the origin transform of body i from its centre of mass and rotation.
+inline void SyncTransform(Bodies& bodies, int i) {
+  bodies.xf[i].p = bodies.center[i] - Rotate(bodies.xf[i].q, bodies.localCenter[i]);
+}
+
+}  // namespace quadrant

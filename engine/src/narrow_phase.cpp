@@ -1,0 +1,204 @@
+// Narrow phase: circle-circle, polygon-circle and polygon-polygon manifolds.
+//
+// Polygon pairs use the separating axis test over both polygons' face normals, then clip the
+// incident edge against the side planes of the reference edge (Sutherland-Hodgman on one
+// segment), which yields the two-point manifold a stack needs. The thesis produced one point
+// per pair, which lets a box rock on its single contact and a stack topple.
+#include "narrow_phase.h"
+
+#include <cfloat>
+
+namespace quadrant {
+namespace {
+
+// Prefer A's face unless B's is clearly better, so the reference face does not flip between
+// two nearly equal axes from step to step (that would change feature ids and lose warm starts).
+constexpr Real kAxisPreference = Real(0.0005);
+
+// Largest separation of `b` (given in a's frame) along one of a's face normals.
+Real MaxSeparation(const Polygon& a, const Vec2* bVerts, int bCount, int* edgeOut) {
+  Real best = -FLT_MAX;
+  int bestEdge = 0;
+  for (int i = 0; i < a.count; ++i) {
+    const Vec2 n = a.normals[i];
+    const Vec2 v = a.vertices[i];
+    Real minDot = FLT_MAX;
+    for (int j = 0; j < bCount; ++j) {
+      Real d = Dot(n, bVerts[j] - v);
+      minDot = d < minDot ? d : minDot;
+    }
+    if (minDot > best) {
+      best = minDot;
+      bestEdge = i;
+    }
+  }
+  *edgeOut = bestEdge;
+  return best;
+}
+
+struct ClipVertex {
+  Vec2 v;
+  uint32_t feature;  // incident vertex index, or 0x80 | side when created by clipping
+};
+
+// Keeps the part of segment (in[0], in[1]) where Dot(n, p) <= offset.
+int ClipSegment(ClipVertex out[2], const ClipVertex in[2], Vec2 n, Real offset, uint32_t side) {
+  int count = 0;
+  Real d0 = Dot(n, in[0].v) - offset;
+  Real d1 = Dot(n, in[1].v) - offset;
+  if (d0 <= 0) out[count++] = in[0];
+  if (d1 <= 0) out[count++] = in[1];
+  if (d0 * d1 < 0) {
+    Real t = d0 / (d0 - d1);
+    out[count].v = in[0].v + t * (in[1].v - in[0].v);
+    out[count].feature = 0x80u | side;
+    ++count;
+  }
+  return count;
+}
+
+}  // namespace
+
+Manifold CollideCircles(const Circle& a, Transform xfA, const Circle& b, Transform xfB, Real speculative) {
+  Manifold m;
+  const Vec2 pA = TransformPoint(xfA, a.center);
+  const Vec2 pB = TransformPoint(xfB, b.center);
+  const Vec2 d = pB - pA;
+  const Real dist2 = LengthSquared(d);
+  const Real reach = a.radius + b.radius + speculative;
+  if (dist2 > reach * reach) return m;
+  const Real dist = std::sqrt(dist2);
+  // Coincident centres: any direction is as good; pick +x so the result is deterministic.
+  const Vec2 normal = dist > Real(1e-9) ? (Real(1) / dist) * d : Vec2{1, 0};
+  const Real separation = dist - a.radius - b.radius;
+  m.normal = normal;
+  m.pointCount = 1;
+  m.points[0].point = pA + (a.radius + Real(0.5) * separation) * normal;
+  m.points[0].separation = separation;
+  m.points[0].id = 0;
+  return m;
+}
+
+Manifold CollidePolygonAndCircle(const Polygon& a, Transform xfA, const Circle& b, Transform xfB,
+                                 Real speculative) {
+  Manifold m;
+  const Vec2 c = InvTransformPoint(xfA, TransformPoint(xfB, b.center));  // in a's frame
+  const Real r = b.radius;
+
+  int face = 0;
+  Real faceSep = -FLT_MAX;
+  for (int i = 0; i < a.count; ++i) {
+    Real s = Dot(a.normals[i], c - a.vertices[i]);
+    if (s > faceSep) {
+      faceSep = s;
+      face = i;
+    }
+  }
+  if (faceSep - r > speculative) return m;
+
+  const Vec2 v1 = a.vertices[face];
+  const Vec2 v2 = a.vertices[face + 1 < a.count ? face + 1 : 0];
+  Vec2 normal;
+  Real separation;
+  uint32_t id;
+  // Outside the face's extent the nearest feature is a vertex (its Voronoi region).
+  if (faceSep > 0 && Dot(c - v1, v2 - v1) < 0) {
+    Vec2 d = c - v1;
+    Real dist = Length(d);
+    normal = (Real(1) / dist) * d;
+    separation = dist - r;
+    id = MakeFeatureId(face, 0xFE, false);
+  } else if (faceSep > 0 && Dot(c - v2, v1 - v2) < 0) {
+    Vec2 d = c - v2;
+    Real dist = Length(d);
+    normal = (Real(1) / dist) * d;
+    separation = dist - r;
+    id = MakeFeatureId(face, 0xFF, false);
+  } else {
+    normal = a.normals[face];
+    separation = faceSep - r;
+    id = MakeFeatureId(face, 0, false);
+  }
+  if (separation > speculative) return m;
+
+  const Vec2 onCircle = c - r * normal;
+  m.normal = Rotate(xfA.q, normal);
+  m.pointCount = 1;
+  m.points[0].point = TransformPoint(xfA, onCircle - Real(0.5) * separation * normal);
+  m.points[0].separation = separation;
+  m.points[0].id = id;
+  return m;
+}
+
+Manifold CollidePolygons(const Polygon& a, Transform xfA, const Polygon& b, Transform xfB, Real speculative) {
+  Manifold m;
+  // Each polygon's vertices in the other's frame, so both axis searches are plain dot products.
+  const Transform bInA = InvMulTransforms(xfA, xfB);
+  const Transform aInB = InvMulTransforms(xfB, xfA);
+  Vec2 bVerts[kMaxPolygonVertices];
+  Vec2 aVerts[kMaxPolygonVertices];
+  for (int i = 0; i < b.count; ++i) bVerts[i] = TransformPoint(bInA, b.vertices[i]);
+  for (int i = 0; i < a.count; ++i) aVerts[i] = TransformPoint(aInB, a.vertices[i]);
+
+  int edgeA = 0;
+  const Real sepA = MaxSeparation(a, bVerts, b.count, &edgeA);
+  if (sepA > speculative) return m;
+  int edgeB = 0;
+  const Real sepB = MaxSeparation(b, aVerts, a.count, &edgeB);
+  if (sepB > speculative) return m;
+
+  const bool flip = sepB > sepA + kAxisPreference;
+  const Polygon& ref = flip ? b : a;
+  const Polygon& inc = flip ? a : b;
+  const Vec2* incVerts = flip ? aVerts : bVerts;  // incident vertices in the reference frame
+  const Transform& refXf = flip ? xfB : xfA;
+  const int refEdge = flip ? edgeB : edgeA;
+
+  // Incident edge: the one whose normal is most anti-parallel to the reference normal.
+  const Vec2 refNormal = ref.normals[refEdge];
+  const Rot incInRef = flip ? InvMul(xfB.q, xfA.q) : InvMul(xfA.q, xfB.q);
+  int incEdge = 0;
+  Real minDot = FLT_MAX;
+  for (int i = 0; i < inc.count; ++i) {
+    Real d = Dot(refNormal, Rotate(incInRef, inc.normals[i]));
+    if (d < minDot) {
+      minDot = d;
+      incEdge = i;
+    }
+  }
+  const int incNext = incEdge + 1 < inc.count ? incEdge + 1 : 0;
+  const ClipVertex incident[2] = {{incVerts[incEdge], uint32_t(incEdge)}, {incVerts[incNext], uint32_t(incNext)}};
+
+  const Vec2 r1 = ref.vertices[refEdge];
+  const Vec2 r2 = ref.vertices[refEdge + 1 < ref.count ? refEdge + 1 : 0];
+  const Vec2 tangent = Normalize(r2 - r1);
+  ClipVertex clip1[2];
+  ClipVertex clip2[2];
+  if (ClipSegment(clip1, incident, -tangent, -Dot(tangent, r1), 0) < 2) return m;
+  if (ClipSegment(clip2, clip1, tangent, Dot(tangent, r2), 1) < 2) return m;
+
+  m.normal = Rotate(refXf.q, flip ? -refNormal : refNormal);
+  for (const ClipVertex& cv : clip2) {
+    const Real separation = Dot(refNormal, cv.v - r1);
+    if (separation > speculative) continue;
+    ManifoldPoint& mp = m.points[m.pointCount++];
+    mp.separation = separation;
+    // Halfway between the incident vertex and the reference face.
+    mp.point = TransformPoint(refXf, cv.v - Real(0.5) * separation * refNormal);
+    mp.id = MakeFeatureId(uint32_t(refEdge), cv.feature, flip);
+  }
+  return m;
+}
+
+Manifold Collide(const ShapeDef& a, Transform xfA, const ShapeDef& b, Transform xfB, Real speculative) {
+  if (a.type == ShapeType::kCircle) {
+    if (b.type == ShapeType::kCircle) return CollideCircles(a.circle, xfA, b.circle, xfB, speculative);
+    Manifold m = CollidePolygonAndCircle(b.polygon, xfB, a.circle, xfA, speculative);
+    m.normal = -m.normal;
+    return m;
+  }
+  if (b.type == ShapeType::kCircle) return CollidePolygonAndCircle(a.polygon, xfA, b.circle, xfB, speculative);
+  return CollidePolygons(a.polygon, xfA, b.polygon, xfB, speculative);
+}
+
+}  // namespace quadrant

@@ -1,0 +1,172 @@
+// The thesis's region quad-tree (section 4.2.2.1): a body lives in the smallest node whose
+// region contains its AABB; a pair can only overlap if one body's node is the other's node
+// or an ancestor of it.
+//
+// Built from scratch each step without heap allocation once warm: the tree is complete to a
+// fixed depth and stored flat (level L starts at (4^L - 1) / 3), a body's node follows from
+// integer cell coordinates at the finest level (the node is the deepest level at which both
+// corners of the AABB fall in the same cell), and bodies are bucketed by a counting sort.
+//
+// The thesis enumerates, for each body, its node's bodies and all ancestors' bodies. Here the
+// same pair set is enumerated from the ancestor's side: each body is tested against its own
+// node's later bodies and against the bodies of descendant nodes whose region overlaps its
+// AABB. Bodies straddling a root boundary (the thesis's weakness: they are compared with every
+// body) then cost a walk down the few nodes they touch, not a pass over the whole world.
+#include <algorithm>
+#include <bit>
+
+#include "broad_phase.h"
+
+namespace quadrant {
+namespace {
+
+constexpr int NodesUpTo(int level) { return ((1 << (2 * (level + 1))) - 1) / 3; }  // levels 0..level
+constexpr int LevelOffset(int level) { return ((1 << (2 * level)) - 1) / 3; }
+
+class QuadTree final : public BroadPhase {
+ public:
+  explicit QuadTree(int maxDepth) : maxDepth_(maxDepth) {}
+  const char* Name() const override { return "quad_tree"; }
+
+  void FindPairs(std::span<const AABB> aabbs, std::span<const uint8_t> movable,
+                 std::vector<CandidatePair>& out) override {
+    out.clear();
+    const int n = static_cast<int>(aabbs.size());
+    if (n < 2) return;
+    ChooseRegion(aabbs);
+    AssignNodes(aabbs);
+    Bucket(n);
+    for (int node = 0; node < nodeCount_; ++node) {
+      const int begin = start_[node];
+      const int end = start_[node + 1];
+      for (int k = begin; k < end; ++k) {
+        const int i = items_[k];
+        for (int l = k + 1; l < end; ++l) TestPair(i, items_[l], aabbs, movable, out);
+        if (node < firstLeaf_) QueryDescendants(node, i, aabbs, movable, out);
+      }
+    }
+  }
+
+ private:
+  struct CellRange {
+    int x0, y0, x1, y1;  // inclusive, at the finest level
+  };
+
+  // The root region: the square around all AABBs (so every body is contained), and the depth:
+  // deep enough that leaves are about twice the mean body size, at most maxDepth_.
+  void ChooseRegion(std::span<const AABB> aabbs) {
+    AABB box = aabbs[0];
+    double extent = 0;
+    for (const AABB& b : aabbs) {
+      box = Union(box, b);
+      extent += std::max(b.upper.x - b.lower.x, b.upper.y - b.lower.y);
+    }
+    extent /= double(aabbs.size());
+    const double side = std::max<double>(std::max(box.upper.x - box.lower.x, box.upper.y - box.lower.y), 1e-6);
+    depth_ = 0;
+    while (depth_ < maxDepth_ && side / double(1 << (depth_ + 1)) >= 2.0 * extent) ++depth_;
+    originX_ = box.lower.x;
+    originY_ = box.lower.y;
+    const int cells = 1 << depth_;
+    // Slightly more than cells/side so the upper edge maps to the last cell, not one past it.
+    scale_ = double(cells) / (side * (1.0 + 1e-6));
+    nodeCount_ = NodesUpTo(depth_);
+    firstLeaf_ = LevelOffset(depth_);
+  }
+
+  int CellOf(double v, double origin) const {
+    int c = static_cast<int>((v - origin) * scale_);
+    return std::clamp(c, 0, (1 << depth_) - 1);
+  }
+
+  void AssignNodes(std::span<const AABB> aabbs) {
+    const int n = static_cast<int>(aabbs.size());
+    node_.resize(n);
+    range_.resize(n);
+    for (int i = 0; i < n; ++i) {
+      CellRange r{CellOf(aabbs[i].lower.x, originX_), CellOf(aabbs[i].lower.y, originY_),
+                  CellOf(aabbs[i].upper.x, originX_), CellOf(aabbs[i].upper.y, originY_)};
+      range_[i] = r;
+      const unsigned differ = unsigned(r.x0 ^ r.x1) | unsigned(r.y0 ^ r.y1);
+      const int up = std::bit_width(differ);  // levels to climb until both corners share a cell
+      const int level = depth_ - up;
+      const int cx = r.x0 >> up;
+      const int cy = r.y0 >> up;
+      node_[i] = LevelOffset(level) + (cy << level) + cx;
+    }
+  }
+
+  void Bucket(int n) {
+    start_.assign(nodeCount_ + 1, 0);
+    for (int i = 0; i < n; ++i) ++start_[node_[i] + 1];
+    // Bodies in a node's whole subtree, to skip empty subtrees during the downward walk.
+    subtree_.assign(start_.begin() + 1, start_.end());
+    for (int level = depth_; level > 0; --level) {
+      const int side = 1 << level;
+      for (int cy = 0; cy < side; ++cy) {
+        for (int cx = 0; cx < side; ++cx) {
+          const int parent = LevelOffset(level - 1) + ((cy >> 1) << (level - 1)) + (cx >> 1);
+          subtree_[parent] += subtree_[LevelOffset(level) + cy * side + cx];
+        }
+      }
+    }
+    for (int k = 0; k < nodeCount_; ++k) start_[k + 1] += start_[k];
+    fill_.assign(start_.begin(), start_.end() - 1);
+    items_.resize(n);
+    for (int i = 0; i < n; ++i) items_[fill_[node_[i]]++] = i;
+  }
+
+  void QueryDescendants(int node, int i, std::span<const AABB> aabbs, std::span<const uint8_t> movable,
+                        std::vector<CandidatePair>& out) {
+    const CellRange r = range_[i];
+    // Decode (level, cx, cy) of the starting node.
+    int level = 0;
+    while (level < depth_ && node >= LevelOffset(level + 1)) ++level;
+    const int local = node - LevelOffset(level);
+    stack_.clear();
+    stack_.push_back({level, local & ((1 << level) - 1), local >> level});
+    while (!stack_.empty()) {
+      const NodeRef ref = stack_.back();
+      stack_.pop_back();
+      const int childLevel = ref.level + 1;
+      const int shift = depth_ - childLevel;  // finest cells per child cell = 1 << shift
+      for (int q = 0; q < 4; ++q) {
+        const int cx = (ref.cx << 1) | (q & 1);
+        const int cy = (ref.cy << 1) | (q >> 1);
+        if ((cx << shift) > r.x1 || (((cx + 1) << shift) - 1) < r.x0) continue;
+        if ((cy << shift) > r.y1 || (((cy + 1) << shift) - 1) < r.y0) continue;
+        const int child = LevelOffset(childLevel) + (cy << childLevel) + cx;
+        if (subtree_[child] == 0) continue;
+        for (int k = start_[child]; k < start_[child + 1]; ++k) TestPair(i, items_[k], aabbs, movable, out);
+        if (childLevel < depth_) stack_.push_back({childLevel, cx, cy});
+      }
+    }
+  }
+
+  static void TestPair(int i, int j, std::span<const AABB> aabbs, std::span<const uint8_t> movable,
+                       std::vector<CandidatePair>& out) {
+    if (!(movable[i] | movable[j])) return;
+    if (!Overlaps(aabbs[i], aabbs[j])) return;
+    out.push_back(i < j ? CandidatePair{i, j} : CandidatePair{j, i});
+  }
+
+  struct NodeRef {
+    int level, cx, cy;
+  };
+
+  int maxDepth_;
+  int depth_ = 0;
+  int nodeCount_ = 1;
+  int firstLeaf_ = 0;
+  double originX_ = 0, originY_ = 0, scale_ = 1;
+  std::vector<int> node_;
+  std::vector<CellRange> range_;
+  std::vector<int> start_, fill_, subtree_, items_;
+  std::vector<NodeRef> stack_;
+};
+
+}  // namespace
+
+std::unique_ptr<BroadPhase> MakeQuadTree(int maxDepth) { return std::make_unique<QuadTree>(maxDepth); }
+
+}  // namespace quadrant

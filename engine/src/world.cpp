@@ -1,0 +1,442 @@
+// The world: body storage, validation, and the step pipeline
+//   broad phase -> narrow phase -> persistence -> solver (velocities, contacts, positions).
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <string>
+
+#include "broad_phase.h"
+#include "contact_cache.h"
+#include "integrate.h"
+#include "narrow_phase.h"
+#include "quadrant/world.h"
+#include "solver.h"
+#include "world_internal.h"
+
+namespace quadrant {
+
+uint64_t HashBodies(const Bodies& bodies);  // state_hash.cpp
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double Ms(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double, std::milli>(b - a).count(); }
+
+constexpr int kMaxThreads = 64;
+
+void Require(bool ok, const std::string& message) {
+  if (!ok) throw Error(message);
+}
+
+void ValidateWorldDef(const WorldDef& d) {
+  Require(IsFinite(d.gravity), "WorldDef.gravity is not finite");
+  Require(d.solver == SolverType::kThesis || d.solver == SolverType::kPgs, "WorldDef.solver is unknown");
+  Require(d.broadPhase == BroadPhaseType::kQuadTree || d.broadPhase == BroadPhaseType::kUniformGrid,
+          "WorldDef.broadPhase is unknown");
+  Require(d.velocityIterations >= 1, "WorldDef.velocityIterations must be >= 1");
+  Require(d.positionIterations >= 0, "WorldDef.positionIterations must be >= 0");
+  Require(IsFinite(d.linearSlop) && d.linearSlop >= 0, "WorldDef.linearSlop must be finite and >= 0");
+  Require(IsFinite(d.baumgarte) && d.baumgarte >= 0 && d.baumgarte <= 1, "WorldDef.baumgarte must be in [0, 1]");
+  Require(IsFinite(d.maxLinearCorrection) && d.maxLinearCorrection > 0, "WorldDef.maxLinearCorrection must be > 0");
+  Require(IsFinite(d.speculativeDistance) && d.speculativeDistance >= 0,
+          "WorldDef.speculativeDistance must be finite and >= 0");
+  Require(IsFinite(d.restitutionThreshold) && d.restitutionThreshold >= 0,
+          "WorldDef.restitutionThreshold must be finite and >= 0");
+  Require(IsFinite(d.maxLinearSpeed) && d.maxLinearSpeed > 0, "WorldDef.maxLinearSpeed must be > 0");
+  Require(d.threadCount >= 1 && d.threadCount <= kMaxThreads, "WorldDef.threadCount must be in [1, 64]");
+  Require(d.quadTreeMaxDepth >= 1 && d.quadTreeMaxDepth <= 12, "WorldDef.quadTreeMaxDepth must be in [1, 12]");
+}
+
+// Validates a body definition and returns its shape in canonical form (polygons re-hulled).
+ShapeDef ValidateBodyDef(const BodyDef& def) {
+  Require(def.type == BodyType::kStatic || def.type == BodyType::kKinematic || def.type == BodyType::kDynamic,
+          "BodyDef.type is unknown");
+  Require(IsFinite(def.position) && IsFinite(def.angle), "BodyDef position or angle is not finite");
+  Require(std::abs(def.position.x) <= kMaxCoordinate && std::abs(def.position.y) <= kMaxCoordinate,
+          "BodyDef.position is beyond the coordinate limit of 1e6 m");
+  Require(IsFinite(def.linearVelocity) && IsFinite(def.angularVelocity), "BodyDef velocity is not finite");
+  Require(IsFinite(def.linearDamping) && def.linearDamping >= 0, "BodyDef.linearDamping must be finite and >= 0");
+  Require(IsFinite(def.angularDamping) && def.angularDamping >= 0, "BodyDef.angularDamping must be finite and >= 0");
+  ShapeDef shape = def.shape;
+  Require(IsFinite(shape.density) && shape.density >= 0, "ShapeDef.density must be finite and >= 0");
+  Require(def.type != BodyType::kDynamic || shape.density > 0, "a dynamic body needs ShapeDef.density > 0");
+  Require(IsFinite(shape.friction) && shape.friction >= 0, "ShapeDef.friction must be finite and >= 0");
+  Require(IsFinite(shape.restitution) && shape.restitution >= 0 && shape.restitution <= 1,
+          "ShapeDef.restitution must be in [0, 1]");
+  if (shape.type == ShapeType::kCircle) {
+    ValidateCircle(shape.circle);
+  } else if (shape.type == ShapeType::kPolygon) {
+    const int count = shape.polygon.count;
+    Require(count >= 3 && count <= kMaxPolygonVertices, "polygon vertex count must be in [3, 8], got " + std::to_string(count));
+    shape.polygon = MakePolygon(std::span<const Vec2>(shape.polygon.vertices.data(), size_t(count)));
+  } else {
+    throw Error("ShapeDef.type is unknown");
+  }
+  return shape;
+}
+
+}  // namespace
+
+ShapeDef ShapeDef::MakeCircle(Real radius, Vec2 center) {
+  ShapeDef s;
+  s.type = ShapeType::kCircle;
+  s.circle = Circle{center, radius};
+  ValidateCircle(s.circle);
+  return s;
+}
+
+ShapeDef ShapeDef::Box(Real hx, Real hy, Vec2 center, Real angle) {
+  ShapeDef s;
+  s.type = ShapeType::kPolygon;
+  s.polygon = MakeBox(hx, hy, center, angle);
+  return s;
+}
+
+ShapeDef ShapeDef::FromPolygon(const Polygon& polygon) {
+  ShapeDef s;
+  s.type = ShapeType::kPolygon;
+  s.polygon = polygon;
+  return s;
+}
+
+struct World::Impl {
+  WorldDef def;
+  Bodies bodies;
+  // Id slots: generation per slot (odd bumps on free keep stale ids stale), dense index or -1.
+  std::vector<uint32_t> generation;
+  std::vector<int32_t> denseOf;
+  std::vector<uint32_t> freeSlots;
+
+  std::unique_ptr<BroadPhase> broadPhase;
+  std::unique_ptr<Solver> solver;
+  ContactCache cache;
+  std::vector<CandidatePair> pairs;
+  std::vector<Contact> contacts;
+  std::vector<Contact> sortScratch;
+  std::vector<uint32_t> radixCounts;
+  Profile profile;
+  Counters counters;
+
+  int Dense(BodyId id) const {
+    if (id.generation == 0 || id.index >= generation.size() || generation[id.index] != id.generation ||
+        denseOf[id.index] < 0) {
+      throw Error("stale or invalid BodyId (index " + std::to_string(id.index) + ", generation " +
+                  std::to_string(id.generation) + ")");
+    }
+    return denseOf[id.index];
+  }
+
+  // The broad-phase box of a body: its shape's AABB grown by half the speculative distance on
+  // every side (so two shapes closer than that distance pair up), and for moving bodies swept
+  // by this step's displacement, so a pair that can meet within the step is found before it
+  // touches and the speculative contact stops it at the surface.
+  void UpdateAABB(int i, Real dt) {
+    const ShapeDef& s = bodies.shape[i];
+    AABB box = s.type == ShapeType::kCircle ? ComputeAABB(s.circle, bodies.xf[i]) : ComputeAABB(s.polygon, bodies.xf[i]);
+    const BodyVelocity& bv = bodies.vel[i];
+    const Real margin = Real(0.5) * def.speculativeDistance + dt * std::abs(bv.w) * bodies.boundRadius[i];
+    const Vec2 d = dt * bv.v;
+    box.lower = box.lower + Vec2{std::min(d.x, Real(0)) - margin, std::min(d.y, Real(0)) - margin};
+    box.upper = box.upper + Vec2{std::max(d.x, Real(0)) + margin, std::max(d.y, Real(0)) + margin};
+    bodies.aabb[i] = box;
+  }
+
+  void SubStep(Real dt);
+  void NarrowPhase(Real dt);
+  void SortContacts();
+};
+
+World::World(const WorldDef& def) : impl_(std::make_unique<Impl>()) {
+  ValidateWorldDef(def);
+  impl_->def = def;
+  impl_->broadPhase = MakeBroadPhase(def.broadPhase, def.quadTreeMaxDepth);
+  impl_->solver = MakeSolver(def.solver);
+}
+
+World::~World() = default;
+World::World(World&&) noexcept = default;
+World& World::operator=(World&&) noexcept = default;
+
+BodyId World::CreateBody(const BodyDef& def) {
+  Impl& w = *impl_;
+  const ShapeDef shape = ValidateBodyDef(def);  // throws before anything changes
+
+  MassData md{};
+  Real boundRadius = 0;
+  if (shape.type == ShapeType::kCircle) {
+    md = ComputeMass(shape.circle, shape.density);
+    boundRadius = shape.circle.radius;
+  } else {
+    md = ComputeMass(shape.polygon, shape.density);
+    for (int k = 0; k < shape.polygon.count; ++k) {
+      boundRadius = std::max(boundRadius, Length(shape.polygon.vertices[k] - md.center));
+    }
+  }
+  const bool dynamic = def.type == BodyType::kDynamic;
+
+  uint32_t slot;
+  if (!w.freeSlots.empty()) {
+    slot = w.freeSlots.back();
+    w.freeSlots.pop_back();
+  } else {
+    slot = static_cast<uint32_t>(w.generation.size());
+    w.generation.push_back(1);
+    w.denseOf.push_back(-1);
+  }
+  const int i = w.bodies.Count();
+  w.denseOf[slot] = i;
+
+  Bodies& b = w.bodies;
+  const Transform xf{def.position, MakeRot(def.angle)};
+  b.type.push_back(def.type);
+  b.xf.push_back(xf);
+  b.center.push_back(TransformPoint(xf, md.center));
+  b.localCenter.push_back(md.center);
+  const bool moves = def.type != BodyType::kStatic;
+  b.vel.push_back(moves ? BodyVelocity{def.linearVelocity, w.def.effects.rotation ? def.angularVelocity : Real(0)}
+                        : BodyVelocity{});
+  b.inv.push_back(dynamic ? BodyInverseMass{Real(1) / md.mass, md.rotationalInertia > 0 ? Real(1) / md.rotationalInertia : Real(0)}
+                          : BodyInverseMass{});
+  b.mass.push_back(dynamic ? md.mass : Real(0));
+  b.inertia.push_back(dynamic ? md.rotationalInertia : Real(0));
+  b.linearDamping.push_back(def.linearDamping);
+  b.angularDamping.push_back(def.angularDamping);
+  b.shape.push_back(shape);
+  b.boundRadius.push_back(boundRadius);
+  b.aabb.push_back({});
+  b.dynamic.push_back(dynamic ? 1 : 0);
+  b.slot.push_back(slot);
+  w.UpdateAABB(i, 0);
+  return BodyId{slot, w.generation[slot]};
+}
+
+void World::DestroyBody(BodyId id) {
+  Impl& w = *impl_;
+  const int i = w.Dense(id);
+  const int last = w.bodies.Count() - 1;
+  Bodies& b = w.bodies;
+  auto moveLast = [&](auto& v) {
+    v[i] = v[last];
+    v.pop_back();
+  };
+  moveLast(b.type); moveLast(b.xf); moveLast(b.center); moveLast(b.localCenter); moveLast(b.vel);
+  moveLast(b.inv); moveLast(b.mass); moveLast(b.inertia); moveLast(b.linearDamping);
+  moveLast(b.angularDamping); moveLast(b.shape); moveLast(b.boundRadius); moveLast(b.aabb);
+  moveLast(b.dynamic); moveLast(b.slot);
+  if (i != last) w.denseOf[b.slot[i]] = i;
+  w.denseOf[id.index] = -1;
+  // Generation 0 means null, so skip it when the counter wraps.
+  w.generation[id.index] = w.generation[id.index] + 1 == 0 ? 1 : w.generation[id.index] + 1;
+  w.freeSlots.push_back(id.index);
+  // Dense indices moved, so last step's contacts no longer name the right bodies.
+  w.cache.Clear();
+  w.contacts.clear();
+}
+
+bool World::IsValid(BodyId id) const {
+  const Impl& w = *impl_;
+  return id.generation != 0 && id.index < w.generation.size() && w.generation[id.index] == id.generation &&
+         w.denseOf[id.index] >= 0;
+}
+
+void World::Step(Real dt, int subSteps) {
+  Require(IsFinite(dt) && dt > 0, "Step: dt must be finite and > 0");
+  Require(subSteps >= 1, "Step: subSteps must be >= 1");
+  Impl& w = *impl_;
+  w.profile = Profile{};
+  const auto start = Clock::now();
+  const Real h = dt / Real(subSteps);
+  for (int s = 0; s < subSteps; ++s) w.SubStep(h);
+  w.profile.total = Ms(start, Clock::now());
+}
+
+void World::Impl::SubStep(Real dt) {
+  const int n = bodies.Count();
+  auto t0 = Clock::now();
+  for (int i = 0; i < n; ++i) {
+    if (bodies.type[i] != BodyType::kStatic) UpdateAABB(i, dt);
+  }
+  broadPhase->FindPairs(bodies.aabb, bodies.dynamic, pairs);
+  auto t1 = Clock::now();
+  NarrowPhase(dt);
+  auto t2 = Clock::now();
+  SortContacts();
+  // The pgs solver carries state between steps (impulses for warm starting, approach speeds of
+  // speculative points for restitution); the thesis solver carries none.
+  const bool persist = def.solver == SolverType::kPgs;
+  if (persist) cache.Restore(contacts, def.effects.warmStarting);
+  auto t3 = Clock::now();
+
+  StepContext ctx;
+  ctx.dt = dt;
+  ctx.def = &def;
+  ctx.bodies = &bodies;
+  ctx.contacts = contacts;
+  ctx.profile = &profile;
+  solver->Step(ctx);
+
+  auto t4 = Clock::now();
+  if (persist) cache.Store(contacts);
+  auto t5 = Clock::now();
+
+  profile.broadPhase += Ms(t0, t1);
+  profile.narrowPhase += Ms(t1, t2);
+  profile.persistence += Ms(t2, t3) + Ms(t4, t5);
+
+  counters = Counters{};
+  counters.bodies = n;
+  counters.candidatePairs = static_cast<int>(pairs.size());
+  counters.contacts = static_cast<int>(contacts.size());
+  for (const Contact& c : contacts) {
+    counters.contactPoints += c.manifold.pointCount;
+    bool touching = false;
+    for (int k = 0; k < c.manifold.pointCount; ++k) touching = touching || c.manifold.points[k].separation <= 0;
+    counters.touchingContacts += touching ? 1 : 0;
+  }
+}
+
+void World::Impl::NarrowPhase(Real dt) {
+  contacts.clear();
+  for (const CandidatePair& p : pairs) {
+    const int a = p.a, b = p.b;
+    // Two bodies that cannot be moved by contacts (kinematic vs kinematic) need no manifold.
+    if (!(bodies.dynamic[a] | bodies.dynamic[b])) continue;
+    // How far the two surfaces can approach each other this step, plus the base distance: points
+    // closer than this become speculative constraints (the solver lets the gap close, no more).
+    const BodyVelocity& va = bodies.vel[a];
+    const BodyVelocity& vb = bodies.vel[b];
+    const Real spec = def.speculativeDistance +
+                      dt * (Length(vb.v - va.v) + std::abs(va.w) * bodies.boundRadius[a] + std::abs(vb.w) * bodies.boundRadius[b]);
+    // Bounding circles reject most AABB-overlapping pairs before any shape test.
+    const Real reach = bodies.boundRadius[a] + bodies.boundRadius[b] + spec;
+    if (LengthSquared(bodies.center[b] - bodies.center[a]) > reach * reach) continue;
+    Manifold m = Collide(bodies.shape[a], bodies.xf[a], bodies.shape[b], bodies.xf[b], spec);
+    if (m.pointCount == 0) continue;
+    Contact c;
+    c.a = a;
+    c.b = b;
+    // Mixing as Box2D: friction geometric mean, restitution the larger.
+    c.friction = std::sqrt(bodies.shape[a].friction * bodies.shape[b].friction);
+    c.restitution = std::max(bodies.shape[a].restitution, bodies.shape[b].restitution);
+    c.manifold = m;
+    contacts.push_back(c);
+  }
+}
+
+// Contacts are solved in pair-key order, not broad-phase order, so the result does not depend
+// on which broad phase found them (and, later, on how threads split the work). A radix sort on
+// the 64-bit key (two 16-bit passes per index word, skipped when a word is constant) keeps it
+// linear.
+void World::Impl::SortContacts() {
+  const size_t n = contacts.size();
+  if (n < 2) return;
+  sortScratch.resize(n);
+  uint64_t orAll = 0, andAll = ~uint64_t(0);
+  for (const Contact& c : contacts) {
+    orAll |= c.Key();
+    andAll &= c.Key();
+  }
+  std::vector<Contact>* src = &contacts;
+  std::vector<Contact>* dst = &sortScratch;
+  std::vector<uint32_t>& counts = radixCounts;
+  counts.resize(65536 + 1);
+  for (int shift = 0; shift < 64; shift += 16) {
+    if ((((orAll ^ andAll) >> shift) & 0xFFFF) == 0) continue;  // all keys equal in these bits
+    std::fill(counts.begin(), counts.end(), 0u);
+    for (const Contact& c : *src) ++counts[((c.Key() >> shift) & 0xFFFF) + 1];
+    for (size_t k = 0; k < 65536; ++k) counts[k + 1] += counts[k];
+    for (const Contact& c : *src) (*dst)[counts[(c.Key() >> shift) & 0xFFFF]++] = c;
+    std::swap(src, dst);
+  }
+  if (src != &contacts) contacts.swap(sortScratch);
+}
+
+Vec2 World::GetPosition(BodyId id) const { return impl_->bodies.xf[impl_->Dense(id)].p; }
+Real World::GetAngle(BodyId id) const { return quadrant::GetAngle(impl_->bodies.xf[impl_->Dense(id)].q); }
+Rot World::GetRotation(BodyId id) const { return impl_->bodies.xf[impl_->Dense(id)].q; }
+Vec2 World::GetLinearVelocity(BodyId id) const { return impl_->bodies.vel[impl_->Dense(id)].v; }
+Real World::GetAngularVelocity(BodyId id) const { return impl_->bodies.vel[impl_->Dense(id)].w; }
+Vec2 World::GetWorldCenter(BodyId id) const { return impl_->bodies.center[impl_->Dense(id)]; }
+Real World::GetMass(BodyId id) const { return impl_->bodies.mass[impl_->Dense(id)]; }
+Real World::GetRotationalInertia(BodyId id) const { return impl_->bodies.inertia[impl_->Dense(id)]; }
+BodyType World::GetType(BodyId id) const { return impl_->bodies.type[impl_->Dense(id)]; }
+AABB World::GetAABB(BodyId id) const {
+  const int i = impl_->Dense(id);
+  const ShapeDef& s = impl_->bodies.shape[i];
+  const Transform& xf = impl_->bodies.xf[i];
+  return s.type == ShapeType::kCircle ? ComputeAABB(s.circle, xf) : ComputeAABB(s.polygon, xf);
+}
+const ShapeDef& World::GetShape(BodyId id) const { return impl_->bodies.shape[impl_->Dense(id)]; }
+
+void World::SetLinearVelocity(BodyId id, Vec2 v) {
+  const int i = impl_->Dense(id);
+  Require(IsFinite(v), "SetLinearVelocity: velocity is not finite");
+  if (impl_->bodies.type[i] == BodyType::kStatic) return;  // static bodies have no velocity
+  impl_->bodies.vel[i].v = v;
+}
+
+void World::SetAngularVelocity(BodyId id, Real w) {
+  const int i = impl_->Dense(id);
+  Require(IsFinite(w), "SetAngularVelocity: angular velocity is not finite");
+  if (impl_->bodies.type[i] == BodyType::kStatic || !impl_->def.effects.rotation) return;
+  impl_->bodies.vel[i].w = w;
+}
+
+void World::SetTransform(BodyId id, Vec2 position, Real angle) {
+  Impl& w = *impl_;
+  const int i = w.Dense(id);
+  Require(IsFinite(position) && IsFinite(angle), "SetTransform: position or angle is not finite");
+  Require(std::abs(position.x) <= kMaxCoordinate && std::abs(position.y) <= kMaxCoordinate,
+          "SetTransform: position is beyond the coordinate limit of 1e6 m");
+  w.bodies.xf[i] = Transform{position, MakeRot(angle)};
+  w.bodies.center[i] = TransformPoint(w.bodies.xf[i], w.bodies.localCenter[i]);
+  w.UpdateAABB(i, 0);
+}
+
+void World::ApplyLinearImpulse(BodyId id, Vec2 impulse, Vec2 worldPoint) {
+  Impl& w = *impl_;
+  const int i = w.Dense(id);
+  Require(IsFinite(impulse) && IsFinite(worldPoint), "ApplyLinearImpulse: impulse or point is not finite");
+  if (w.bodies.type[i] != BodyType::kDynamic) return;
+  w.bodies.vel[i].v += w.bodies.inv[i].invMass * impulse;
+  if (w.def.effects.rotation) w.bodies.vel[i].w += w.bodies.inv[i].invInertia * Cross(worldPoint - w.bodies.center[i], impulse);
+}
+
+int World::GetBodyCount() const { return impl_->bodies.Count(); }
+
+std::vector<BodyId> World::GetBodyIds() const {
+  std::vector<BodyId> ids;
+  ids.reserve(impl_->bodies.Count());
+  for (uint32_t slot : impl_->bodies.slot) ids.push_back(BodyId{slot, impl_->generation[slot]});
+  return ids;
+}
+
+const WorldDef& World::GetDef() const { return impl_->def; }
+const Profile& World::GetProfile() const { return impl_->profile; }
+const Counters& World::GetCounters() const { return impl_->counters; }
+
+std::vector<ContactInfo> World::GetContacts() const {
+  const Impl& w = *impl_;
+  std::vector<ContactInfo> out;
+  out.reserve(w.contacts.size());
+  for (const Contact& c : w.contacts) {
+    ContactInfo info;
+    const uint32_t sa = w.bodies.slot[c.a], sb = w.bodies.slot[c.b];
+    info.bodyA = BodyId{sa, w.generation[sa]};
+    info.bodyB = BodyId{sb, w.generation[sb]};
+    info.normal = c.manifold.normal;
+    info.pointCount = c.manifold.pointCount;
+    for (int k = 0; k < c.manifold.pointCount; ++k) {
+      info.points[k] = c.manifold.points[k].point;
+      info.separations[k] = c.manifold.points[k].separation;
+      info.normalImpulses[k] = c.manifold.points[k].normalImpulse;
+      info.tangentImpulses[k] = c.manifold.points[k].tangentImpulse;
+    }
+    out.push_back(info);
+  }
+  return out;
+}
+
+uint64_t World::StateHash() const { return HashBodies(impl_->bodies); }
+
+}  // namespace quadrant

@@ -1,0 +1,66 @@
+// The world's data, shared by the stages. Dense arrays indexed by body (no per-body heap
+// objects), split by who touches them: the solver reads and writes only `vel` and `inv`,
+// integration `center`, `xf`, `vel`, and the broad phase only `aabb` and `dynamic`.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "narrow_phase.h"
+#include "quadrant/world.h"
+
+namespace quadrant {
+
+struct BodyVelocity {
+  Vec2 v;
+  Real w = 0;
+};
+
+struct BodyInverseMass {
+  Real invMass = 0;
+  Real invInertia = 0;
+};
+
+/// Dense body arrays. Index i is a body's dense index; ids map to it through the world's slots.
+struct Bodies {
+  std::vector<BodyType> type;
+  std::vector<Transform> xf;           ///< body origin and rotation
+  std::vector<Vec2> center;            ///< world centre of mass
+  std::vector<Vec2> localCenter;       ///< centre of mass in body coordinates
+  std::vector<BodyVelocity> vel;
+  std::vector<BodyInverseMass> inv;
+  std::vector<Real> mass;
+  std::vector<Real> inertia;
+  std::vector<Real> linearDamping;
+  std::vector<Real> angularDamping;
+  std::vector<ShapeDef> shape;
+  std::vector<Real> boundRadius;       ///< farthest shape point from the centre of mass
+  std::vector<AABB> aabb;
+  std::vector<uint8_t> dynamic;        ///< 1 for dynamic bodies: pairs need at least one
+  std::vector<uint32_t> slot;          ///< dense index -> id slot
+
+  int Count() const { return static_cast<int>(type.size()); }
+};
+
+/// A touching or speculative contact between two bodies (dense indices, a < b).
+struct Contact {
+  int32_t a = 0;
+  int32_t b = 0;
+  Real friction = 0;
+  Real restitution = 0;
+  Manifold manifold;
+
+  uint64_t Key() const { return (uint64_t(uint32_t(a)) << 32) | uint32_t(b); }
+};
+
+/// What a solver needs for one (sub-)step.
+struct StepContext {
+  Real dt = 0;
+  const WorldDef* def = nullptr;
+  Bodies* bodies = nullptr;
+  std::span<Contact> contacts;
+  Profile* profile = nullptr;
+};
+
+}  // namespace quadrant
