@@ -1,0 +1,73 @@
+// The adapter interface: one per engine, all driven through the same scene description.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "scene.h"
+
+namespace quadrant::scene {
+
+/// Thrown by Adapter::Load when a scene needs what the engine cannot do (an effect it cannot
+/// honour or switch off, more threads than it runs). The suite reports it; it never runs the
+/// scene differently in silence.
+class Unsupported : public std::runtime_error {
+ public:
+  explicit Unsupported(const std::string& what) : std::runtime_error(what) {}
+};
+
+struct Capabilities {
+  int maxThreads = 1;          ///< threads the engine really uses
+  bool sleep = false;
+  bool continuous = false;
+  bool disableRotation = false;  ///< can run with rotation off
+  bool disableFriction = true;
+  bool disableWarmStarting = false;
+  bool damping = false;
+  std::string notes;           ///< mixing rules, settings, limitations: printed with results
+};
+
+/// Per-body state as read back, in scene body order.
+struct BodyState {
+  Vec2 position;
+  Real angle = 0;
+  Vec2 velocity;
+  Real angularVelocity = 0;
+};
+
+class Adapter {
+ public:
+  virtual ~Adapter() = default;
+  virtual std::string Name() const = 0;
+  virtual Capabilities Caps() const = 0;
+  /// Builds the engine's world for `scene` with `threads` threads. Throws Unsupported if the
+  /// engine cannot run the scene as described, quadrant::Error if the scene is invalid.
+  virtual void Load(const Scene& scene, int threads) = 0;
+  /// Exactly one fixed step of scene.timeStep (runs the scene's driver first, if any).
+  virtual void Step() = 0;
+  virtual int BodyCount() const = 0;
+  /// Fills `out` with one entry per scene body, in scene order.
+  virtual void ReadBodies(std::vector<BodyState>& out) const = 0;
+  /// Touching contacts (manifolds with at least one point) after the last step.
+  virtual int ContactCount() const = 0;
+  /// Sets a body's velocity (for drivers and validation cases).
+  virtual void SetVelocity(int body, Vec2 velocity, Real angularVelocity) = 0;
+  /// 64-bit hash of the state; Quadrant returns World::StateHash, others hash ReadBodies.
+  virtual uint64_t StateHash() const;
+};
+
+/// Engine names: "quadrant", "box2d", "bullet", "chipmunk" (and solver/scheme variants of
+/// quadrant written "quadrant:<variant>"). Throws quadrant::Error for an unknown name.
+std::unique_ptr<Adapter> MakeAdapter(std::string_view name);
+std::vector<std::string> AdapterNames();
+
+// Read-back measures shared by every engine (computed from ReadBodies and the scene's masses).
+double KineticEnergy(const Scene& scene, const std::vector<BodyState>& states);
+Vec2 LinearMomentum(const Scene& scene, const std::vector<BodyState>& states);
+uint64_t HashStates(const std::vector<BodyState>& states);
+
+}  // namespace quadrant::scene

@@ -1,0 +1,196 @@
+// The Box2D 2.4.1 adapter (Debian's libbox2d): the reference engine for validation.
+//
+// Everything is translated once in Load; Step is the driver plus one b2World::Step, so a timed
+// loop measures Box2D and nothing of ours.
+#include <box2d/box2d.h>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "adapter.h"
+#include "adapter_factories.h"
+#include "quadrant/error.h"
+
+namespace quadrant::scene {
+namespace {
+
+constexpr char kName[] = "box2d";
+
+b2Vec2 ToB2(Vec2 v) { return {static_cast<float>(v.x), static_cast<float>(v.y)}; }
+Vec2 FromB2(const b2Vec2& v) { return {Real(v.x), Real(v.y)}; }
+
+// Box2D welds polygon vertices closer than half its linear slop and, if fewer than three are
+// left, silently replaces the polygon by a 2 m box. Refuse such a polygon instead of
+// simulating a different body.
+void RequireWeldSafePolygon(const BodyDesc& body, int index) {
+  const float minDistance = 0.5f * b2_linearSlop;
+  const size_t n = body.vertices.size();
+  for (size_t i = 0; i < n; ++i) {
+    for (size_t j = i + 1; j < n; ++j) {
+      b2Vec2 d = ToB2(body.vertices[j]) - ToB2(body.vertices[i]);
+      if (d.LengthSquared() < minDistance * minDistance) {
+        throw Unsupported("box2d: scene body " + std::to_string(index) +
+                          " has polygon vertices closer than Box2D's weld distance (" +
+                          std::to_string(minDistance) + " m)");
+      }
+    }
+  }
+}
+
+class Box2dAdapter final : public Adapter {
+ public:
+  std::string Name() const override { return kName; }
+
+  Capabilities Caps() const override {
+    Capabilities caps;
+    caps.maxThreads = 1;
+    caps.sleep = true;
+    caps.continuous = true;
+    caps.disableRotation = true;
+    caps.disableFriction = true;
+    caps.disableWarmStarting = true;
+    caps.damping = false;
+    caps.notes =
+        "Box2D 2.4.1 (Debian), single-threaded. Friction mixing sqrt(f1*f2), restitution "
+        "mixing max(e1, e2); restitution threshold set per fixture from the scene (default "
+        "1 m/s). Velocity/position iterations from the scene (defaults 8/3); scene sub-steps "
+        "are ignored (one b2World::Step per step). Continuous physics (dynamic vs static TOI) "
+        "follows the scene's continuous effect (Box2D's own default is on). Warm starting "
+        "follows the scene. Polygons carry Box2D's 0.01 m skin (b2_polygonRadius), so they "
+        "collide 0.01 m larger than the scene says; mass comes from density (exact, skin "
+        "excluded). Sleep uses Box2D's defaults (0.5 s below 0.01 m/s and 2 deg/s). Rotation "
+        "off = SetFixedRotation. Damping not supported yet (the scene has no damping values).";
+    return caps;
+  }
+
+  void Load(const Scene& scene, int threads) override {
+    ValidateScene(scene);
+    // Refuse before touching the current world, so a refused Load leaves it usable.
+    if (threads != 1) {
+      throw Unsupported("box2d: Box2D 2.4.1 is single-threaded; asked for " +
+                        std::to_string(threads) + " threads");
+    }
+    if (scene.effects.damping) {
+      throw Unsupported("box2d: damping is not supported yet (scene bodies carry no damping)");
+    }
+    for (int i = 0; i < static_cast<int>(scene.bodies.size()); ++i) {
+      if (scene.bodies[i].shape == ShapeKind::kPolygon) RequireWeldSafePolygon(scene.bodies[i], i);
+    }
+
+    bodies_.clear();
+    world_.reset();
+
+    const Effects& fx = scene.effects;
+    world_ = std::make_unique<b2World>(fx.gravity ? ToB2(scene.gravity) : b2Vec2(0.0f, 0.0f));
+    world_->SetAllowSleeping(fx.sleep);
+    world_->SetWarmStarting(fx.warmStarting);
+    world_->SetContinuousPhysics(fx.continuous);
+
+    timeStep_ = static_cast<float>(scene.timeStep);
+    velocityIterations_ = scene.velocityIterations;
+    positionIterations_ = scene.positionIterations;
+    driver_ = scene.driver;
+    stepIndex_ = 0;
+    rotation_ = fx.rotation;
+
+    bodies_.reserve(scene.bodies.size());
+    for (const BodyDesc& desc : scene.bodies) {
+      b2BodyDef def;
+      def.type = desc.dynamic ? b2_dynamicBody : b2_staticBody;
+      def.position = ToB2(desc.position);
+      def.angle = static_cast<float>(desc.angle);
+      def.allowSleep = fx.sleep;
+      def.fixedRotation = !fx.rotation;
+      b2Body* body = world_->CreateBody(&def);
+
+      b2CircleShape circle;
+      b2PolygonShape polygon;
+      b2FixtureDef fixture;
+      if (desc.shape == ShapeKind::kCircle) {
+        circle.m_radius = static_cast<float>(desc.radius);
+        fixture.shape = &circle;
+      } else {
+        std::vector<b2Vec2> points;
+        points.reserve(desc.vertices.size());
+        for (Vec2 v : desc.vertices) points.push_back(ToB2(v));
+        polygon.Set(points.data(), static_cast<int32>(points.size()));
+        fixture.shape = &polygon;
+      }
+      fixture.density = desc.dynamic ? static_cast<float>(desc.density) : 0.0f;
+      fixture.friction = fx.friction ? static_cast<float>(desc.friction) : 0.0f;
+      fixture.restitution = fx.restitution ? static_cast<float>(desc.restitution) : 0.0f;
+      fixture.restitutionThreshold = static_cast<float>(scene.restitutionThreshold);
+      body->CreateFixture(&fixture);
+
+      // Set after the fixture: b2BodyDef's velocity would be taken as the origin's and shifted
+      // when the centre of mass moves, while the scene gives the centre of mass's.
+      if (desc.dynamic) {
+        body->SetLinearVelocity(ToB2(desc.velocity));
+        body->SetAngularVelocity(fx.rotation ? static_cast<float>(desc.angularVelocity) : 0.0f);
+      }
+      bodies_.push_back(body);
+    }
+  }
+
+  void Step() override {
+    if (!world_) throw Error("box2d: Step before Load");
+    if (driver_) driver_(stepIndex_, *this);
+    world_->Step(timeStep_, velocityIterations_, positionIterations_);
+    ++stepIndex_;
+  }
+
+  int BodyCount() const override { return static_cast<int>(bodies_.size()); }
+
+  void ReadBodies(std::vector<BodyState>& out) const override {
+    out.resize(bodies_.size());
+    for (size_t i = 0; i < bodies_.size(); ++i) {
+      const b2Body* body = bodies_[i];
+      out[i].position = FromB2(body->GetPosition());
+      out[i].angle = Real(body->GetAngle());
+      out[i].velocity = FromB2(body->GetLinearVelocity());
+      out[i].angularVelocity = Real(body->GetAngularVelocity());
+    }
+  }
+
+  int ContactCount() const override {
+    if (!world_) return 0;
+    int touching = 0;
+    for (const b2Contact* c = world_->GetContactList(); c != nullptr; c = c->GetNext()) {
+      if (c->IsTouching()) ++touching;
+    }
+    return touching;
+  }
+
+  void SetVelocity(int body, Vec2 velocity, Real angularVelocity) override {
+    if (body < 0 || body >= BodyCount()) {
+      throw Error("box2d: SetVelocity body index " + std::to_string(body) + " out of range [0, " +
+                  std::to_string(BodyCount()) + ")");
+    }
+    if (!IsFinite(velocity) || !IsFinite(angularVelocity)) {
+      throw Error("box2d: SetVelocity with a non-finite velocity");
+    }
+    // Box2D ignores velocities of static bodies; so does every adapter.
+    b2Body* b = bodies_[static_cast<size_t>(body)];
+    b->SetLinearVelocity(ToB2(velocity));
+    // With rotation off every engine keeps angular velocity at zero (Quadrant's definition);
+    // Box2D's fixed rotation would otherwise integrate a set angular velocity forever.
+    b->SetAngularVelocity(rotation_ ? static_cast<float>(angularVelocity) : 0.0f);
+  }
+
+ private:
+  std::unique_ptr<b2World> world_;  // owns every body and fixture
+  std::vector<b2Body*> bodies_;     // scene body index -> Box2D body
+  float timeStep_ = 1.0f / 60.0f;
+  int velocityIterations_ = 8;
+  int positionIterations_ = 3;
+  Driver driver_;
+  int stepIndex_ = 0;
+  bool rotation_ = true;
+};
+
+}  // namespace
+
+std::unique_ptr<Adapter> MakeBox2dAdapter() { return std::make_unique<Box2dAdapter>(); }
+
+}  // namespace quadrant::scene

@@ -1,0 +1,389 @@
+// Bullet 3.24 run as a 2D engine: its 2D-constrained mode (linear factor (1,1,0), angular factor
+// (0,0,1)) with the 2D convex collision algorithms registered, as Bullet's Planar2D example does.
+//
+// Everything is translated once in Load; Step is one stepSimulation call. Bullet keeps a body at
+// its centre of mass, so polygons whose centroid is off the scene's body origin are built around
+// the centroid and converted back to the origin on read-back.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <numbers>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <btBulletDynamicsCommon.h>
+#include <BulletCollision/CollisionDispatch/btBox2dBox2dCollisionAlgorithm.h>
+#include <BulletCollision/CollisionDispatch/btConvex2dConvex2dAlgorithm.h>
+#include <BulletCollision/CollisionShapes/btConvex2dShape.h>
+#include <BulletCollision/NarrowPhaseCollision/btGjkEpaPenetrationDepthSolver.h>
+#include <BulletCollision/NarrowPhaseCollision/btVoronoiSimplexSolver.h>
+#include <LinearMath/btPoolAllocator.h>
+
+#include "adapter.h"
+#include "adapter_factories.h"
+#include "quadrant/error.h"
+
+namespace quadrant::scene {
+namespace {
+
+constexpr const char* kName = "bullet";
+
+// Half-thickness of the slab a polygon is extruded to. An in-plane overlap deeper than this
+// makes GJK/EPA pick the z axis as the separating normal, which the linear factor then cancels,
+// and the bodies stay stuck; 0.5 m is deeper than any overlap the scenes produce.
+constexpr btScalar kHalfThickness = btScalar(0.5);
+
+// Bullet's default convex margin. Keeping it (and moving the hull inward to compensate) means
+// shallow contacts are found by GJK on the cores, which is exact, instead of by the
+// penetration-depth solver, which is iterative and costlier.
+constexpr Real kHullMargin = Real(0.04);
+// Below this a polygon is too small for an inset hull; it then keeps its vertices and this
+// margin, which makes it at most this much larger than the scene says.
+constexpr Real kMinHullMargin = Real(0.001);
+
+constexpr int kMinPoolSize = 4096;
+
+Unsupported SerialOnly() {
+  return Unsupported("Debian's Bullet is built without BT_THREADSAFE: serial only");
+}
+
+// Moves every edge of a convex counter-clockwise polygon inward by `margin` (each vertex along
+// its bisector). Returns false if an edge would collapse or flip, i.e. the polygon is too small
+// for that margin.
+bool InsetPolygon(const std::vector<Vec2>& in, Real margin, std::vector<Vec2>& out) {
+  const size_t n = in.size();
+  std::vector<Vec2> normals(n);
+  for (size_t i = 0; i < n; ++i) normals[i] = Normalize(RightPerp(in[(i + 1) % n] - in[i]));
+  out.resize(n);
+  for (size_t i = 0; i < n; ++i) {
+    const Vec2 nPrev = normals[(i + n - 1) % n];
+    const Vec2 nNext = normals[i];
+    const Real denom = Real(1) + Dot(nPrev, nNext);
+    if (denom <= Real(1e-6)) return false;
+    // The offset d = s (nPrev + nNext) with s chosen so that d.nPrev = d.nNext = margin.
+    out[i] = in[i] - (margin / denom) * (nPrev + nNext);
+  }
+  for (size_t i = 0; i < n; ++i) {
+    const Vec2 before = in[(i + 1) % n] - in[i];
+    const Vec2 after = out[(i + 1) % n] - out[i];
+    if (Dot(before, after) <= Real(1e-6) * Dot(before, before)) return false;
+  }
+  return true;
+}
+
+// Distance from the local origin to the nearest edge line: the largest circle about the centre
+// of mass that the shape contains, used as the swept sphere of continuous collision.
+Real InnerRadius(const std::vector<Vec2>& vertices) {
+  Real best = std::numeric_limits<Real>::max();
+  const size_t n = vertices.size();
+  for (size_t i = 0; i < n; ++i) {
+    const Vec2 normal = Normalize(RightPerp(vertices[(i + 1) % n] - vertices[i]));
+    best = std::min(best, Dot(normal, vertices[i]));
+  }
+  return best;
+}
+
+Real NormalizeAngle(double angle) {
+  constexpr double kPi = std::numbers::pi;
+  while (angle > kPi) angle -= 2 * kPi;
+  while (angle <= -kPi) angle += 2 * kPi;
+  return Real(angle);
+}
+
+// One loaded scene. Members are declared so that the implicit destruction order is the order
+// Bullet needs: the world first (its destructor still reads the bodies' broadphase proxies and
+// uses the broadphase and dispatcher), then bodies, shapes, solver, broadphase, dispatcher,
+// configuration, and last the algorithm factories and solvers the dispatcher pointed to.
+struct BulletWorld {
+  btVoronoiSimplexSolver simplexSolver;
+  // EPA rather than Planar2D's Minkowski sampling solver: with the sampling solver two boxes
+  // overlapping by 40 % or more of their width often get no contact point at all and stay
+  // stuck inside each other; EPA separates them.
+  btGjkEpaPenetrationDepthSolver penetrationSolver;
+  std::unique_ptr<btConvex2dConvex2dAlgorithm::CreateFunc> convex2dCreate;
+  std::unique_ptr<btBox2dBox2dCollisionAlgorithm::CreateFunc> box2dCreate;
+  std::unique_ptr<btDefaultCollisionConfiguration> configuration;
+  std::unique_ptr<btCollisionDispatcher> dispatcher;
+  std::unique_ptr<btDbvtBroadphase> broadphase;
+  std::unique_ptr<btSequentialImpulseConstraintSolver> solver;
+  std::vector<std::unique_ptr<btCollisionShape>> shapes;
+  std::vector<std::unique_ptr<btRigidBody>> bodies;
+  std::unique_ptr<btDiscreteDynamicsWorld> world;
+
+  std::vector<Vec2> localCenters;  ///< body origin to centre of mass, body frame, per body
+  std::vector<bool> dynamic;
+  bool rotation = true;
+  btScalar timeStep = 0;
+  Driver driver;
+};
+
+class BulletAdapter final : public Adapter {
+ public:
+  std::string Name() const override { return kName; }
+
+  Capabilities Caps() const override {
+    Capabilities caps;
+    caps.maxThreads = 1;
+    caps.sleep = true;
+    caps.continuous = true;
+    caps.disableRotation = true;
+    caps.disableFriction = true;
+    caps.disableWarmStarting = true;
+    caps.damping = false;
+    caps.notes =
+        "serial only (Debian's Bullet is built without BT_THREADSAFE); "
+        "2D-constrained mode: linear factor (1,1,0), angular factor (0,0,1), "
+        "btConvex2dConvex2dAlgorithm + GJK/EPA penetration solver for polygon pairs; "
+        "circles are btSphereShape with z inertia m r^2/2 set explicitly; "
+        "polygons are btConvex2dShape around a btConvexHullShape extruded to z = +-0.5 m, "
+        "vertices moved inward by the 0.04 m hull margin so edges lie on the scene's edges "
+        "(corners rounded by 0.04 m; smaller margin on polygons too small for it); "
+        "mass and inertia from the scene's exact mass properties; "
+        "friction and restitution are multiplied (f1*f2, e1*e2); "
+        "restitution threshold = scene's; iterations = scene's velocity iterations, "
+        "no position iterations: Bullet's defaults (split impulse for penetration deeper than "
+        "0.04 m, Baumgarte 0.2 folded into the velocities for shallower, which adds energy to "
+        "elastic collisions); "
+        "continuous: per-body swept-sphere CCD (sphere = inner radius, threshold = inner "
+        "radius); sleep: Bullet's thresholds 0.8 m/s, 1 rad/s, 2 s; "
+        "contacts = manifolds with a point at distance <= 0";
+    return caps;
+  }
+
+  void Load(const Scene& scene, int threads) override {
+    ValidateScene(scene);
+    if (threads != 1) throw SerialOnly();
+    if (scene.effects.damping) {
+      throw Unsupported("bullet: scene bodies carry no damping values to give Bullet");
+    }
+    // Built aside and swapped in at the end, so a throwing Load keeps the previous world.
+    auto next = std::make_unique<BulletWorld>();
+    BuildWorld(scene, *next);
+    for (size_t i = 0; i < scene.bodies.size(); ++i) AddBody(scene, scene.bodies[i], *next);
+    world_ = std::move(next);
+    stepIndex_ = 0;
+  }
+
+  void Step() override {
+    if (!world_) throw Error("bullet: Step before Load");
+    if (world_->driver) world_->driver(stepIndex_, *this);
+    world_->world->stepSimulation(world_->timeStep, 0);
+    ++stepIndex_;
+  }
+
+  int BodyCount() const override {
+    return world_ ? static_cast<int>(world_->bodies.size()) : 0;
+  }
+
+  void ReadBodies(std::vector<BodyState>& out) const override {
+    if (!world_) {
+      out.clear();
+      return;
+    }
+    const size_t n = world_->bodies.size();
+    out.resize(n);
+    for (size_t i = 0; i < n; ++i) {
+      const btRigidBody& body = *world_->bodies[i];
+      const btTransform& xf = body.getCenterOfMassTransform();
+      const btQuaternion q = xf.getRotation();
+      const Vec2 lc = world_->localCenters[i];
+      const btVector3 origin = xf.getOrigin() - xf.getBasis() * btVector3(lc.x, lc.y, 0);
+      BodyState& s = out[i];
+      s.position = {Real(origin.x()), Real(origin.y())};
+      s.angle = NormalizeAngle(2.0 * std::atan2(double(q.z()), double(q.w())));
+      s.velocity = {Real(body.getLinearVelocity().x()), Real(body.getLinearVelocity().y())};
+      s.angularVelocity = Real(body.getAngularVelocity().z());
+    }
+  }
+
+  int ContactCount() const override {
+    if (!world_) return 0;
+    // Bullet keeps points up to its contact breaking threshold apart; only count manifolds
+    // whose shapes really touch (distance includes the margins).
+    btCollisionDispatcher& dispatcher = *world_->dispatcher;
+    int count = 0;
+    for (int m = 0; m < dispatcher.getNumManifolds(); ++m) {
+      const btPersistentManifold* manifold = dispatcher.getManifoldByIndexInternal(m);
+      for (int p = 0; p < manifold->getNumContacts(); ++p) {
+        if (manifold->getContactPoint(p).getDistance() <= 0) {
+          ++count;
+          break;
+        }
+      }
+    }
+    return count;
+  }
+
+  void SetVelocity(int body, Vec2 velocity, Real angularVelocity) override {
+    if (!world_ || body < 0 || body >= static_cast<int>(world_->bodies.size())) {
+      throw Error("bullet: SetVelocity: no body " + std::to_string(body));
+    }
+    if (!IsFinite(velocity) || !IsFinite(angularVelocity)) {
+      throw Error("bullet: SetVelocity: velocity is not finite");
+    }
+    // A static body never moves (as in the other engines), and with rotation off the angular
+    // velocity stays 0: Bullet would otherwise integrate it despite the zero angular factor.
+    if (!world_->dynamic[body]) return;
+    btRigidBody& b = *world_->bodies[body];
+    b.setLinearVelocity(btVector3(velocity.x, velocity.y, 0));
+    b.setAngularVelocity(btVector3(0, 0, world_->rotation ? angularVelocity : Real(0)));
+    b.activate(true);
+  }
+
+  /// Largest departure from the plane over all bodies (z position and velocity, x and y of
+  /// the rotation and angular velocity); for tests.
+  double OutOfPlane() const {
+    double worst = 0;
+    if (!world_) return worst;
+    for (const auto& body : world_->bodies) {
+      const btTransform& xf = body->getCenterOfMassTransform();
+      const btQuaternion q = xf.getRotation();
+      for (double v : {double(xf.getOrigin().z()), double(body->getLinearVelocity().z()),
+                       double(q.x()), double(q.y()), double(body->getAngularVelocity().x()),
+                       double(body->getAngularVelocity().y())}) {
+        worst = std::max(worst, std::abs(v));
+      }
+    }
+    return worst;
+  }
+
+ private:
+  static void BuildWorld(const Scene& scene, BulletWorld& w) {
+    const int n = static_cast<int>(scene.bodies.size());
+    btDefaultCollisionConstructionInfo info;
+    info.m_defaultMaxPersistentManifoldPoolSize = std::max(kMinPoolSize, 4 * n);
+    info.m_defaultMaxCollisionAlgorithmPoolSize = std::max(kMinPoolSize, 4 * n);
+    w.configuration = std::make_unique<btDefaultCollisionConfiguration>(info);
+    // The pool's block size is set from the default algorithms; the dispatcher would write a
+    // larger algorithm past the end of its block rather than fail.
+    const int blockSize = w.configuration->getCollisionAlgorithmPool()->getElementSize();
+    if (blockSize < int(sizeof(btConvex2dConvex2dAlgorithm)) ||
+        blockSize < int(sizeof(btBox2dBox2dCollisionAlgorithm))) {
+      throw std::logic_error("bullet: collision algorithm pool blocks too small for 2D pairs");
+    }
+    w.dispatcher = std::make_unique<btCollisionDispatcher>(w.configuration.get());
+    w.convex2dCreate = std::make_unique<btConvex2dConvex2dAlgorithm::CreateFunc>(
+        &w.simplexSolver, &w.penetrationSolver);
+    w.box2dCreate = std::make_unique<btBox2dBox2dCollisionAlgorithm::CreateFunc>();
+    w.dispatcher->registerCollisionCreateFunc(CONVEX_2D_SHAPE_PROXYTYPE,
+                                              CONVEX_2D_SHAPE_PROXYTYPE, w.convex2dCreate.get());
+    w.dispatcher->registerCollisionCreateFunc(BOX_2D_SHAPE_PROXYTYPE, BOX_2D_SHAPE_PROXYTYPE,
+                                              w.box2dCreate.get());
+    w.broadphase = std::make_unique<btDbvtBroadphase>();
+    w.solver = std::make_unique<btSequentialImpulseConstraintSolver>();
+    w.world = std::make_unique<btDiscreteDynamicsWorld>(w.dispatcher.get(), w.broadphase.get(),
+                                                        w.solver.get(), w.configuration.get());
+    // Before any body is added: addRigidBody copies the world's gravity into each body.
+    const Effects& fx = scene.effects;
+    w.world->setGravity(fx.gravity ? btVector3(scene.gravity.x, scene.gravity.y, 0)
+                                   : btVector3(0, 0, 0));
+    btContactSolverInfo& solverInfo = w.world->getSolverInfo();
+    solverInfo.m_numIterations = scene.velocityIterations;
+    solverInfo.m_restitutionVelocityThreshold = scene.restitutionThreshold;
+    if (!fx.warmStarting) solverInfo.m_solverMode &= ~SOLVER_USE_WARMSTARTING;
+
+    w.rotation = fx.rotation;
+    w.timeStep = scene.timeStep;
+    w.driver = scene.driver;
+    w.bodies.reserve(scene.bodies.size());
+    w.localCenters.reserve(scene.bodies.size());
+    w.dynamic.reserve(scene.bodies.size());
+  }
+
+  // Returns the shape (owned by w.shapes) and its inner radius about the centre of mass.
+  static btCollisionShape* MakeShape(const BodyDesc& desc, Vec2 localCenter, BulletWorld& w,
+                                     Real& innerRadius) {
+    if (desc.shape == ShapeKind::kCircle) {
+      innerRadius = desc.radius;
+      w.shapes.push_back(std::make_unique<btSphereShape>(desc.radius));
+      return w.shapes.back().get();
+    }
+    std::vector<Vec2> centred(desc.vertices.size());
+    for (size_t i = 0; i < centred.size(); ++i) centred[i] = desc.vertices[i] - localCenter;
+    innerRadius = InnerRadius(centred);
+
+    // Bullet adds the margin outside the hull: shrink the hull by it so the rounded result has
+    // the scene's edges. Halve the margin for polygons too small to shrink by the full one.
+    std::vector<Vec2> core;
+    Real margin = kHullMargin;
+    while (margin >= kMinHullMargin && !InsetPolygon(centred, margin, core)) margin *= Real(0.5);
+    if (margin < kMinHullMargin) {
+      margin = kMinHullMargin;
+      core = centred;
+    }
+    auto hull = std::make_unique<btConvexHullShape>();
+    hull->setMargin(margin);
+    for (Vec2 v : core) {
+      hull->addPoint(btVector3(v.x, v.y, -kHalfThickness), false);
+      hull->addPoint(btVector3(v.x, v.y, kHalfThickness), false);
+    }
+    hull->recalcLocalAabb();
+    auto flat = std::make_unique<btConvex2dShape>(hull.get());
+    w.shapes.push_back(std::move(hull));
+    w.shapes.push_back(std::move(flat));
+    return w.shapes.back().get();
+  }
+
+  static void AddBody(const Scene& scene, const BodyDesc& desc, BulletWorld& w) {
+    const Effects& fx = scene.effects;
+    // Static polygons are built around their own origin: they never rotate, and their density
+    // may be 0.
+    MassProperties mp;
+    if (desc.dynamic) mp = ComputeMassProperties(desc);
+    const Vec2 lc = desc.dynamic && desc.shape == ShapeKind::kPolygon ? mp.localCenter : Vec2{};
+    Real innerRadius = 0;
+    btCollisionShape* shape = MakeShape(desc, lc, w, innerRadius);
+
+    const btScalar mass = desc.dynamic ? btScalar(mp.mass) : btScalar(0);
+    // Bullet's own inertia is 2/5 m r^2 for a sphere and a bounding-box guess for a hull; the
+    // scene's is exact. Only z matters (the angular factor zeroes x and y), but x and y must be
+    // positive for Bullet's inverse.
+    const btScalar inertia = desc.dynamic ? btScalar(mp.inertia) : btScalar(0);
+    btRigidBody::btRigidBodyConstructionInfo info(mass, nullptr, shape,
+                                                  btVector3(inertia, inertia, inertia));
+    const btQuaternion rotation(btVector3(0, 0, 1), desc.angle);
+    const btTransform frame(rotation, btVector3(desc.position.x, desc.position.y, 0));
+    const btVector3 centre = frame * btVector3(lc.x, lc.y, 0);
+    info.m_startWorldTransform = btTransform(rotation, centre);
+    info.m_friction = fx.friction ? desc.friction : Real(0);
+    info.m_restitution = fx.restitution ? desc.restitution : Real(0);
+    info.m_linearDamping = 0;
+    info.m_angularDamping = 0;
+
+    auto body = std::make_unique<btRigidBody>(info);
+    if (desc.dynamic) {
+      body->setLinearFactor(btVector3(1, 1, 0));
+      body->setAngularFactor(fx.rotation ? btVector3(0, 0, 1) : btVector3(0, 0, 0));
+      body->setLinearVelocity(btVector3(desc.velocity.x, desc.velocity.y, 0));
+      body->setAngularVelocity(btVector3(0, 0, fx.rotation ? desc.angularVelocity : Real(0)));
+      if (fx.continuous) {
+        body->setCcdMotionThreshold(innerRadius);
+        body->setCcdSweptSphereRadius(innerRadius);
+      }
+    }
+    if (!fx.sleep) body->setActivationState(DISABLE_DEACTIVATION);
+    w.world->addRigidBody(body.get());
+    w.bodies.push_back(std::move(body));
+    w.localCenters.push_back(lc);
+    w.dynamic.push_back(desc.dynamic);
+  }
+
+  std::unique_ptr<BulletWorld> world_;
+  int stepIndex_ = 0;
+};
+
+}  // namespace
+
+std::unique_ptr<Adapter> MakeBulletAdapter() { return std::make_unique<BulletAdapter>(); }
+
+/// Test hook (declared by the Bullet adapter tests, not in a header): how far the adapter's
+/// bodies have left the z = 0 plane. Throws quadrant::Error for an adapter of another engine.
+double BulletOutOfPlane(const Adapter& adapter) {
+  const auto* bullet = dynamic_cast<const BulletAdapter*>(&adapter);
+  if (!bullet) throw Error("BulletOutOfPlane: not a Bullet adapter");
+  return bullet->OutOfPlane();
+}
+
+}  // namespace quadrant::scene

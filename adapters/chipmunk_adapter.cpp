@@ -1,0 +1,288 @@
+// The Chipmunk 7.0.3 adapter (Debian's libchipmunk): the fastest packaged peer on sparse scenes.
+//
+// Everything is translated once in Load; Step is the driver plus one space step. Chipmunk takes
+// body mass, moment and centre of gravity as given, so it gets the scene's exact values.
+#include <chipmunk/chipmunk.h>
+// cpHastySpace.h lacks the C linkage block the other headers carry.
+extern "C" {
+#include <chipmunk/cpHastySpace.h>
+}
+
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <unordered_set>
+#include <vector>
+
+#include "adapter.h"
+#include "adapter_factories.h"
+#include "quadrant/error.h"
+
+namespace quadrant::scene {
+namespace {
+
+constexpr char kName[] = "chipmunk";
+// Chipmunk's default slop (0.1) is meant for pixel units; 0.005 m is Box2D's linear slop.
+constexpr cpFloat kCollisionSlop = 0.005;
+// Box2D's sleep settings, so sleeping scenes compare like with like.
+constexpr cpFloat kSleepTime = 0.5;
+constexpr cpFloat kIdleSpeed = 0.01;
+constexpr int kMaxThreads = 2;  // cpHastySpace runs at most two solver threads
+constexpr int kWarmUpBodies = 64;
+constexpr int kWarmUpSteps = 100;
+
+cpVect ToCp(Vec2 v) { return cpv(cpFloat(v.x), cpFloat(v.y)); }
+Vec2 FromCp(cpVect v) { return {Real(v.x), Real(v.y)}; }
+
+// Debian's Chipmunk (built with assertions on) prints a banner on stdout when the first space
+// of the process is made; tools that write results to stdout would get it mixed in. Send it to
+// stderr, where it still tells the reader that this Chipmunk runs its assertion checks.
+cpSpace* NewFirstSpaceBannerToStderr() {
+  std::fflush(stdout);
+  const int saved = dup(STDOUT_FILENO);
+  const bool redirected = saved >= 0 && dup2(STDERR_FILENO, STDOUT_FILENO) >= 0;
+  cpSpace* space = cpSpaceNew();
+  std::fflush(stdout);
+  if (redirected) dup2(saved, STDOUT_FILENO);
+  if (saved >= 0) close(saved);
+  return space;
+}
+
+// The first space stepped in a process runs 1.5-2x slower (allocator and cache warm-up), which
+// would land on whichever scene a benchmark happens to load first. Pay it once, untimed.
+void WarmUpOnce() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    cpSpace* space = NewFirstSpaceBannerToStderr();
+    cpSpaceSetGravity(space, cpv(0, -10));
+    cpSpaceSetCollisionSlop(space, kCollisionSlop);
+    std::vector<cpBody*> bodies;
+    std::vector<cpShape*> shapes;
+    cpShape* ground = cpSegmentShapeNew(cpSpaceGetStaticBody(space), cpv(-20, 0), cpv(20, 0), 0);
+    cpSpaceAddShape(space, ground);
+    shapes.push_back(ground);
+    for (int i = 0; i < kWarmUpBodies; ++i) {
+      const cpFloat radius = 0.5;
+      const cpFloat mass = CP_PI * radius * radius;
+      cpBody* body = cpSpaceAddBody(space, cpBodyNew(mass, cpMomentForCircle(mass, 0, radius,
+                                                                             cpvzero)));
+      cpBodySetPosition(body, cpv(-8.0 + (i % 16), 1.0 + (i / 16) * 1.1));
+      bodies.push_back(body);
+      shapes.push_back(cpSpaceAddShape(space, cpCircleShapeNew(body, radius, cpvzero)));
+    }
+    for (int i = 0; i < kWarmUpSteps; ++i) cpSpaceStep(space, 1.0 / 60.0);
+    cpSpaceFree(space);
+    for (cpShape* s : shapes) cpShapeFree(s);
+    for (cpBody* b : bodies) cpBodyFree(b);
+  });
+}
+
+class ChipmunkAdapter final : public Adapter {
+ public:
+  ~ChipmunkAdapter() override { Release(); }
+
+  std::string Name() const override { return kName; }
+
+  Capabilities Caps() const override {
+    Capabilities caps;
+    caps.maxThreads = kMaxThreads;
+    caps.sleep = true;
+    caps.continuous = false;
+    caps.disableRotation = true;
+    caps.disableFriction = true;
+    caps.disableWarmStarting = false;
+    caps.damping = false;
+    caps.notes =
+        "Chipmunk 7.0.3 (Debian, built with assertions on), doubles. Friction and elasticity "
+        "mixing: multiplied (f1*f2, e1*e2); no restitution threshold (elasticity applies at "
+        "every approach speed). Collision slop 0.005 m (metre units), default collision bias; "
+        "cpSpaceSetIterations = scene velocity iterations; no position iterations or "
+        "sub-steps. Mass, moment and centre of gravity set to the scene's exact values; "
+        "polygons have radius 0. Rotation off = infinite moment. Sleep: 0.5 s below "
+        "0.01 m/s (Box2D's values); a sleeping body reads back the velocity it fell asleep with "
+        "(Box2D zeroes it). Threads: 1 = cpSpace, 2 = cpHastySpace with 2 threads "
+        "(only the impulse solver threaded, nondeterministic). No continuous collision, "
+        "warm starting cannot be switched off, no damping values yet.";
+    return caps;
+  }
+
+  void Load(const Scene& scene, int threads) override {
+    ValidateScene(scene);
+    // Refuse before touching the current space, so a refused Load leaves it usable.
+    if (threads != 1 && threads != kMaxThreads) {
+      throw Unsupported("chipmunk: runs 1 or 2 threads (cpHastySpace); asked for " +
+                        std::to_string(threads));
+    }
+    const Effects& fx = scene.effects;
+    if (fx.continuous) throw Unsupported("chipmunk: no continuous collision detection");
+    if (!fx.warmStarting) throw Unsupported("chipmunk: warm starting cannot be switched off");
+    if (fx.damping) {
+      throw Unsupported("chipmunk: damping is not supported yet (scene bodies carry no damping)");
+    }
+
+    WarmUpOnce();
+    Release();
+
+    hasty_ = threads == kMaxThreads;
+    if (hasty_) {
+      space_ = cpHastySpaceNew();
+      cpHastySpaceSetThreads(space_, kMaxThreads);
+    } else {
+      space_ = cpSpaceNew();
+    }
+    cpSpaceSetGravity(space_, fx.gravity ? ToCp(scene.gravity) : cpvzero);
+    cpSpaceSetIterations(space_, scene.velocityIterations);
+    cpSpaceSetCollisionSlop(space_, kCollisionSlop);
+    cpSpaceSetSleepTimeThreshold(space_, fx.sleep ? kSleepTime : INFINITY);
+    cpSpaceSetIdleSpeedThreshold(space_, kIdleSpeed);
+
+    timeStep_ = cpFloat(scene.timeStep);
+    driver_ = scene.driver;
+    stepIndex_ = 0;
+    rotation_ = fx.rotation;
+
+    bodies_.reserve(scene.bodies.size());
+    shapes_.reserve(scene.bodies.size());
+    for (const BodyDesc& desc : scene.bodies) {
+      cpBody* body;
+      if (desc.dynamic) {
+        const MassProperties mp = ComputeMassProperties(desc);
+        body = cpBodyNew(cpFloat(mp.mass), fx.rotation ? cpFloat(mp.inertia) : INFINITY);
+        // Chipmunk keeps the centre of gravity's world position fixed when the angle or the
+        // centre changes, so the centre goes first, then the angle, then the origin position.
+        cpBodySetCenterOfGravity(body, ToCp(mp.localCenter));
+      } else {
+        body = cpBodyNewStatic();
+      }
+      bodies_.push_back(body);  // owned from here on, even if a later call throws
+      cpBodySetAngle(body, cpFloat(desc.angle));
+      cpBodySetPosition(body, ToCp(desc.position));
+      if (desc.dynamic) {
+        cpBodySetVelocity(body, ToCp(desc.velocity));
+        cpBodySetAngularVelocity(body, fx.rotation ? cpFloat(desc.angularVelocity) : 0.0);
+      }
+      // Static bodies are placed before their shapes are added, which caches the shapes'
+      // bounds once at the right transform; Chipmunk never reindexes static shapes itself.
+      cpSpaceAddBody(space_, body);
+
+      cpShape* shape;
+      if (desc.shape == ShapeKind::kCircle) {
+        shape = cpCircleShapeNew(body, cpFloat(desc.radius), cpvzero);
+      } else {
+        std::vector<cpVect> verts;
+        verts.reserve(desc.vertices.size());
+        for (Vec2 v : desc.vertices) verts.push_back(ToCp(v));
+        shape = cpPolyShapeNew(body, static_cast<int>(verts.size()), verts.data(),
+                               cpTransformIdentity, 0.0);
+      }
+      shapes_.push_back(shape);
+      cpShapeSetFriction(shape, fx.friction ? cpFloat(desc.friction) : 0.0);
+      cpShapeSetElasticity(shape, fx.restitution ? cpFloat(desc.restitution) : 0.0);
+      cpSpaceAddShape(space_, shape);
+    }
+  }
+
+  void Step() override {
+    if (space_ == nullptr) throw Error("chipmunk: Step before Load");
+    if (driver_) driver_(stepIndex_, *this);
+    if (hasty_) {
+      cpHastySpaceStep(space_, timeStep_);
+    } else {
+      cpSpaceStep(space_, timeStep_);
+    }
+    ++stepIndex_;
+  }
+
+  int BodyCount() const override { return static_cast<int>(bodies_.size()); }
+
+  void ReadBodies(std::vector<BodyState>& out) const override {
+    out.resize(bodies_.size());
+    for (size_t i = 0; i < bodies_.size(); ++i) {
+      const cpBody* body = bodies_[i];
+      out[i].position = FromCp(cpBodyGetPosition(body));  // the origin, not the centre
+      out[i].angle = Real(cpBodyGetAngle(body));
+      out[i].velocity = FromCp(cpBodyGetVelocity(body));  // of the centre of gravity
+      out[i].angularVelocity = Real(cpBodyGetAngularVelocity(body));
+    }
+  }
+
+  int ContactCount() const override {
+    // Every touching arbiter has a dynamic body (static pairs never collide), and sleeping
+    // bodies keep their arbiters threaded, so walking the dynamic bodies finds them all; a
+    // pair of dynamic bodies lists its arbiter twice, hence the set.
+    std::unordered_set<const cpArbiter*> touching;
+    for (cpBody* body : bodies_) {
+      if (cpBodyGetType(body) != CP_BODY_TYPE_DYNAMIC) continue;
+      cpBodyEachArbiter(
+          body,
+          [](cpBody*, cpArbiter* arbiter, void* data) {
+            if (cpArbiterGetCount(arbiter) > 0) {
+              static_cast<std::unordered_set<const cpArbiter*>*>(data)->insert(arbiter);
+            }
+          },
+          &touching);
+    }
+    return static_cast<int>(touching.size());
+  }
+
+  void SetVelocity(int body, Vec2 velocity, Real angularVelocity) override {
+    if (body < 0 || body >= BodyCount()) {
+      throw Error("chipmunk: SetVelocity body index " + std::to_string(body) +
+                  " out of range [0, " + std::to_string(BodyCount()) + ")");
+    }
+    if (!IsFinite(velocity) || !IsFinite(angularVelocity)) {
+      throw Error("chipmunk: SetVelocity with a non-finite velocity");
+    }
+    cpBody* b = bodies_[static_cast<size_t>(body)];
+    // A static body with a velocity would act as a moving surface in Chipmunk's solver; Box2D
+    // ignores velocities of static bodies, and so does every adapter.
+    if (cpBodyGetType(b) != CP_BODY_TYPE_DYNAMIC) return;
+    cpBodySetVelocity(b, ToCp(velocity));  // also wakes a sleeping body
+    // With rotation off the moment is infinite: a set spin would never stop, while every
+    // engine keeps angular velocity at zero then (Quadrant's definition).
+    cpBodySetAngularVelocity(b, rotation_ ? cpFloat(angularVelocity) : 0.0);
+  }
+
+ private:
+  // The space does not own bodies or shapes; it must go first because freeing it wakes
+  // every sleeping body, which touches them.
+  void Release() {
+    if (space_ != nullptr) {
+      // Chipmunk 7.0.3's space teardown wakes sleeping components from inside its own body
+      // iteration, which misses some of them and leaks the contacts they saved (found with
+      // LeakSanitizer, two sleeping piles). Waking them here, outside any iteration, frees them.
+      for (cpBody* b : bodies_) {
+        if (cpBodyGetType(b) == CP_BODY_TYPE_DYNAMIC) cpBodyActivate(b);
+      }
+      if (hasty_) {
+        cpHastySpaceFree(space_);
+      } else {
+        cpSpaceFree(space_);
+      }
+      space_ = nullptr;
+    }
+    for (cpShape* s : shapes_) cpShapeFree(s);
+    for (cpBody* b : bodies_) cpBodyFree(b);
+    shapes_.clear();
+    bodies_.clear();
+  }
+
+  cpSpace* space_ = nullptr;
+  bool hasty_ = false;
+  std::vector<cpBody*> bodies_;  // scene body index -> Chipmunk body (owned)
+  std::vector<cpShape*> shapes_;  // owned
+  cpFloat timeStep_ = 1.0 / 60.0;
+  Driver driver_;
+  int stepIndex_ = 0;
+  bool rotation_ = true;
+};
+
+}  // namespace
+
+std::unique_ptr<Adapter> MakeChipmunkAdapter() { return std::make_unique<ChipmunkAdapter>(); }
+
+}  // namespace quadrant::scene

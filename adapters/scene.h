@@ -1,0 +1,81 @@
+// The engine-neutral scene description: built once, loaded into any engine by an adapter.
+//
+// A scene says everything an engine needs to simulate it the same way as every other engine:
+// the world settings, the effects it calls for, and its bodies. Adapters translate it at load
+// time; nothing of it is consulted per step.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "quadrant/math.h"
+
+namespace quadrant::scene {
+
+enum class ShapeKind : uint8_t { kCircle, kPolygon };
+
+/// Effects a scene calls for. An adapter whose engine cannot honour one that is on (or
+/// cannot switch one off) reports the scene as unsupported.
+struct Effects {
+  bool gravity = true;
+  bool friction = true;
+  bool restitution = true;
+  bool rotation = true;
+  bool warmStarting = true;
+  bool sleep = false;
+  bool continuous = false;
+  bool damping = false;
+};
+
+struct BodyDesc {
+  bool dynamic = true;
+  ShapeKind shape = ShapeKind::kCircle;
+  Real radius = Real(0.5);          ///< circles (m), centred on the body origin
+  std::vector<Vec2> vertices;       ///< polygons: convex, counter-clockwise, body coordinates
+  Vec2 position;                    ///< body origin (m)
+  Real angle = 0;                   ///< rad
+  Vec2 velocity;                    ///< m/s
+  Real angularVelocity = 0;         ///< rad/s
+  Real density = 1;                 ///< kg/m^2
+  Real friction = Real(0.6);
+  Real restitution = 0;
+};
+
+class Adapter;
+
+/// Called before every step with the step index (0-based); may push or spawn nothing else
+/// than what the Adapter interface offers. Used by scenes that drive bodies.
+using Driver = std::function<void(int step, Adapter& adapter)>;
+
+struct Scene {
+  std::string name;
+  Vec2 gravity{0, Real(-10)};
+  Real timeStep = Real(1.0 / 60.0);   ///< s, fixed
+  int subSteps = 1;                   ///< Quadrant sub-steps per step
+  int velocityIterations = 8;         ///< Box2D 2.4 and Quadrant pgs
+  int positionIterations = 3;
+  Real restitutionThreshold = Real(1);///< m/s; approach speeds below it do not bounce
+  Effects effects;
+  AABB bounds;                        ///< region that holds every body (the box of stress scenes)
+  std::vector<BodyDesc> bodies;
+  Driver driver;                      ///< optional
+  uint64_t seed = 0;                  ///< the seed it was generated with (0 = hand-built)
+};
+
+/// Exact mass (kg) and rotational inertia about the centre of mass (kg m^2) of a body as the
+/// scene defines it; every adapter gives its engine these values where the engine lets it.
+struct MassProperties {
+  Real mass = 0;
+  Real inertia = 0;
+  Vec2 localCenter;
+};
+MassProperties ComputeMassProperties(const BodyDesc& body);
+
+/// Validates a whole scene (finite numbers, positive sizes and densities, convex CCW polygons
+/// of 3..8 vertices, time step > 0, iterations >= 1); throws quadrant::Error naming the
+/// first bad body or field.
+void ValidateScene(const Scene& scene);
+
+}  // namespace quadrant::scene
