@@ -6,6 +6,7 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "scene.h"
@@ -58,6 +59,10 @@ class Adapter {
   virtual void SetVelocity(int body, Vec2 velocity, Real angularVelocity) = 0;
   /// 64-bit hash of the state; Quadrant returns World::StateHash, others hash ReadBodies.
   virtual uint64_t StateHash() const;
+  /// Milliseconds per pipeline stage summed over the steps since Load, for engines that time
+  /// their stages (Quadrant: broad_phase, narrow_phase, persistence, solve, integrate, total).
+  /// Empty for engines that do not.
+  virtual std::vector<std::pair<std::string, double>> StageTotals() const { return {}; }
 };
 
 /// Engine names: "quadrant", "box2d", "bullet", "chipmunk" (and solver/scheme variants of

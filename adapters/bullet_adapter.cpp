@@ -356,6 +356,7 @@ class BulletAdapter final : public Adapter {
     if (desc.dynamic) {
       body->setLinearFactor(btVector3(1, 1, 0));
       body->setAngularFactor(fx.rotation ? btVector3(0, 0, 1) : btVector3(0, 0, 0));
+      // Scene and read-back velocities are the centre of mass's, as in Quadrant and Box2D.
       body->setLinearVelocity(btVector3(desc.velocity.x, desc.velocity.y, 0));
       body->setAngularVelocity(btVector3(0, 0, fx.rotation ? desc.angularVelocity : Real(0)));
       if (fx.continuous) {

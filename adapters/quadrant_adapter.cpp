@@ -91,12 +91,26 @@ class QuadrantAdapter final : public Adapter {
     subSteps_ = scene.subSteps;
     driver_ = scene.driver;
     step_ = 0;
+    totals_ = Profile{};
   }
 
   void Step() override {
     if (driver_) driver_(step_, *this);
     world_->Step(dt_, subSteps_);
+    const Profile& p = world_->GetProfile();
+    totals_.broadPhase += p.broadPhase;
+    totals_.narrowPhase += p.narrowPhase;
+    totals_.persistence += p.persistence;
+    totals_.solve += p.solve;
+    totals_.integrate += p.integrate;
+    totals_.total += p.total;
     ++step_;
+  }
+
+  std::vector<std::pair<std::string, double>> StageTotals() const override {
+    return {{"broad_phase", totals_.broadPhase}, {"narrow_phase", totals_.narrowPhase},
+            {"persistence", totals_.persistence}, {"solve", totals_.solve},
+            {"integrate", totals_.integrate},     {"total", totals_.total}};
   }
 
   int BodyCount() const override { return world_ ? world_->GetBodyCount() : 0; }
@@ -132,6 +146,7 @@ class QuadrantAdapter final : public Adapter {
   Real dt_ = Real(1.0 / 60.0);
   int subSteps_ = 1;
   int step_ = 0;
+  Profile totals_;
 };
 
 }  // namespace

@@ -14,19 +14,30 @@ inline size_t Slot(uint64_t key, size_t mask) { return size_t((key * 0x9E3779B97
 void ContactCache::Clear() { table_.clear(); }
 
 void ContactCache::Store(std::span<const Contact> contacts) {
+  // Only contacts that carry something to the next step are stored: in sparse scenes most
+  // speculative contacts end the step with zero impulses.
+  auto carries = [](const Contact& c) {
+    for (int k = 0; k < c.manifold.pointCount; ++k) {
+      const ManifoldPoint& p = c.manifold.points[k];
+      if (p.normalImpulse != 0 || p.tangentImpulse != 0) return true;
+    }
+    return false;
+  };
+  size_t stored = 0;
+  for (const Contact& c : contacts) stored += carries(c) ? 1 : 0;
   size_t capacity = 16;
-  while (capacity < 2 * contacts.size()) capacity <<= 1;
+  while (capacity < 2 * stored) capacity <<= 1;
   // Re-use the buffer: assign only re-allocates when the capacity grows.
-  table_.assign(capacity, Entry{kEmpty, 0, {0, 0}, {0, 0}, {0, 0}, {0, 0}});
+  table_.assign(capacity, Entry{kEmpty, 0, {0, 0}, {0, 0}, {0, 0}});
   const size_t mask = capacity - 1;
   for (const Contact& c : contacts) {
+    if (!carries(c)) continue;
     const Manifold& m = c.manifold;
-    Entry e{c.Key(), m.pointCount, {0, 0}, {0, 0}, {0, 0}, {0, 0}};
+    Entry e{c.Key(), m.pointCount, {0, 0}, {0, 0}, {0, 0}};
     for (int k = 0; k < m.pointCount; ++k) {
       e.ids[k] = m.points[k].id;
       e.normalImpulse[k] = m.points[k].normalImpulse;
       e.tangentImpulse[k] = m.points[k].tangentImpulse;
-      e.carriedApproach[k] = m.points[k].carriedApproach;
     }
     size_t s = Slot(e.key, mask);
     while (table_[s].key != kEmpty) s = (s + 1) & mask;
@@ -43,7 +54,7 @@ const ContactCache::Entry* ContactCache::Find(uint64_t key) const {
   }
 }
 
-int ContactCache::Restore(std::span<Contact> contacts, bool impulses) const {
+int ContactCache::Restore(std::span<Contact> contacts) const {
   int matched = 0;
   for (Contact& c : contacts) {
     const Entry* e = Find(c.Key());
@@ -52,11 +63,8 @@ int ContactCache::Restore(std::span<Contact> contacts, bool impulses) const {
       ManifoldPoint& p = c.manifold.points[k];
       for (int j = 0; j < e->pointCount; ++j) {
         if (e->ids[j] == p.id) {
-          if (impulses) {
-            p.normalImpulse = e->normalImpulse[j];
-            p.tangentImpulse = e->tangentImpulse[j];
-          }
-          p.carriedApproach = e->carriedApproach[j];
+          p.normalImpulse = e->normalImpulse[j];
+          p.tangentImpulse = e->tangentImpulse[j];
           ++matched;
           break;
         }

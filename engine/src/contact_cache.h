@@ -12,9 +12,9 @@ namespace quadrant {
 
 class ContactCache {
  public:
-  /// Copies last step's impulses (if `impulses`) and carried approach speeds into the points of
-  /// `contacts` whose pair and feature id match. Returns the number of points matched.
-  int Restore(std::span<Contact> contacts, bool impulses) const;
+  /// Copies last step's impulses into the points of `contacts` whose pair and feature id match.
+  /// Returns the number of points matched.
+  int Restore(std::span<Contact> contacts) const;
   /// Remembers the impulses of `contacts` for the next step (replacing what was stored).
   void Store(std::span<const Contact> contacts);
   void Clear();
@@ -26,7 +26,6 @@ class ContactCache {
     uint32_t ids[2];
     Real normalImpulse[2];
     Real tangentImpulse[2];
-    Real carriedApproach[2];
   };
   static constexpr uint64_t kEmpty = ~uint64_t(0);
   const Entry* Find(uint64_t key) const;

@@ -27,9 +27,6 @@ struct ManifoldPoint {
   uint32_t id = 0;        ///< feature id
   Real normalImpulse = 0; ///< accumulated by the solver (N s)
   Real tangentImpulse = 0;
-  /// Relative normal velocity (negative) with which this point closed a speculative gap last
-  /// step; it bounces from contact this step with that speed (see solver_pgs.cpp). 0 if none.
-  Real carriedApproach = 0;
 };
 
 struct Manifold {

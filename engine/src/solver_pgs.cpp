@@ -32,7 +32,7 @@ struct PointConstraint {
   Real normalImpulse, tangentImpulse;
   Real separation;        // at collision time
   Real relativeVelocity;  // normal approach speed before the solve
-  Real carriedApproach;   // from last step: closed a speculative gap at this speed (<= 0)
+  Real bounceShift;       // early-bounce correction (m) applied after integration, 0 if none
 };
 
 struct ContactConstraint {
@@ -73,13 +73,17 @@ class PgsSolver final : public Solver {
     if (def.effects.warmStarting) WarmStart<kRotation>(bodies);
     const Real invDt = Real(1) / dt;
     for (int it = 0; it < def.velocityIterations; ++it) SolveVelocities<kRotation, kFriction>(bodies, invDt);
-    if (def.effects.restitution) ApplyRestitution<kRotation>(bodies, def.restitutionThreshold);
+    hasBounceShift_ = false;
+    if (def.effects.restitution) {
+      for (int it = 0; it < def.restitutionIterations; ++it) ApplyRestitution<kRotation>(bodies, def.restitutionThreshold);
+    }
     StoreImpulses(ctx.contacts);
     auto t2 = Clock::now();
 
     const bool correct = def.positionIterations > 0 && !constraints_.empty();
     if (correct) Snapshot(bodies);
     IntegratePositions(bodies, def, dt);
+    if (hasBounceShift_) ApplyBounceShifts(bodies);
     auto t3 = Clock::now();
     if (correct) {
       for (int it = 0; it < def.positionIterations; ++it) SolvePositions<kRotation>(bodies, def);
@@ -136,7 +140,7 @@ class PgsSolver final : public Solver {
         pc.tangentImpulse = mp.tangentImpulse;
         pc.separation = mp.separation;
         pc.relativeVelocity = Dot(dv, n);
-        pc.carriedApproach = mp.carriedApproach;
+        pc.bounceShift = 0;
       }
     }
   }
@@ -212,31 +216,54 @@ class PgsSolver final : public Solver {
     }
   }
 
-  // Restitution after the iterations, from the approach speed measured before them. A point
-  // that was still apart (speculative) and closed its gap this step does not bounce yet: the
-  // body has only just reached the surface, and bouncing now would reverse it up to v*dt short
-  // of it (energy-neutral but the rebound would start early, overshooting by (1 + e) times the
-  // gap). It carries its approach speed to the next step instead and bounces from contact.
+  // Restitution after the iterations, from the approach speed measured before them (as Box2D 3
+  // does), so the bounce does not depend on which step the gap closed in.
+  //
+  // A speculative point (still apart by s) that bounces reverses this step although the true
+  // impact happens s/|vn| into it: integrated with the bounce velocity for the whole step, the
+  // pair would end (1 + e) s farther apart than the exact motion puts it. Speed and energy are
+  // right; the position is not, and it would raise every rebound (a ball dropped from 3 m came
+  // back 10 cm higher). The point records that distance and ApplyBounceShifts moves the pair
+  // back by it after integration, which makes an isolated collision exact in both.
   template <bool kRotation>
   void ApplyRestitution(Bodies& bodies, Real threshold) {
     for (ContactConstraint& cc : constraints_) {
       if (cc.restitution == 0) continue;
       for (int k = 0; k < cc.pointCount; ++k) {
         PointConstraint& pc = cc.points[k];
-        if (pc.separation > 0) {
-          pc.carriedApproach = pc.normalImpulse > 0 ? pc.relativeVelocity : Real(0);
-          continue;
-        }
-        const Real approach = std::min(pc.relativeVelocity, pc.carriedApproach);
-        pc.carriedApproach = 0;
         // Only points that approached fast enough and actually pushed bounce.
-        if (approach > -threshold || pc.normalImpulse == 0) continue;
+        if (pc.relativeVelocity > -threshold || pc.normalImpulse == 0) continue;
         const Real vn = Dot(RelativeVelocity<kRotation>(bodies.vel[cc.a], bodies.vel[cc.b], pc), cc.normal);
-        const Real target = -cc.restitution * approach;
+        const Real target = -cc.restitution * pc.relativeVelocity;
         const Real newImpulse = std::max(pc.normalImpulse - pc.normalMass * (vn - target), Real(0));
         const Real lambda = newImpulse - pc.normalImpulse;
         pc.normalImpulse = newImpulse;
         ApplyImpulse<kRotation>(bodies, cc, pc, lambda * cc.normal);
+        if (pc.separation > 0) {
+          pc.bounceShift = (Real(1) + cc.restitution) * pc.separation;
+          hasBounceShift_ = true;
+        }
+      }
+    }
+  }
+
+  // Moves each pair that bounced early back together along the normal by its recorded
+  // distance, split by inverse mass (the linear part only: enough for the bounce, and it cannot
+  // spin a body). Only bodies that move are touched.
+  void ApplyBounceShifts(Bodies& bodies) {
+    for (const ContactConstraint& cc : constraints_) {
+      Real shift = 0;
+      for (int k = 0; k < cc.pointCount; ++k) shift = std::max(shift, cc.points[k].bounceShift);
+      const Real sum = cc.invMassA + cc.invMassB;
+      if (shift == 0 || sum == 0) continue;
+      const Vec2 d = (shift / sum) * cc.normal;
+      if (cc.invMassA > 0) {
+        bodies.center[cc.a] += cc.invMassA * d;
+        SyncTransform(bodies, cc.a);
+      }
+      if (cc.invMassB > 0) {
+        bodies.center[cc.b] -= cc.invMassB * d;
+        SyncTransform(bodies, cc.b);
       }
     }
   }
@@ -246,7 +273,6 @@ class PgsSolver final : public Solver {
       for (int k = 0; k < constraints_[c].pointCount; ++k) {
         contacts[c].manifold.points[k].normalImpulse = constraints_[c].points[k].normalImpulse;
         contacts[c].manifold.points[k].tangentImpulse = constraints_[c].points[k].tangentImpulse;
-        contacts[c].manifold.points[k].carriedApproach = constraints_[c].points[k].carriedApproach;
       }
     }
   }
@@ -297,6 +323,7 @@ class PgsSolver final : public Solver {
   }
 
   std::vector<ContactConstraint> constraints_;
+  bool hasBounceShift_ = false;
   std::vector<Vec2> center0_;
   std::vector<Rot> rot0_;
 };

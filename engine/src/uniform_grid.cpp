@@ -1,10 +1,14 @@
 // A uniform grid broad phase, the alternative to the quad-tree behind the same interface.
 //
-// Rebuilt each step by a counting sort of bodies into every cell their AABB touches. A pair is
-// reported only by the cell holding the lower corner of the two AABBs' intersection, so a pair
-// sharing several cells is reported once without a hash set. The cell size follows the mean
-// size of the movable bodies, and the grid covers only the region they occupy: static bodies
-// outside it cannot touch them.
+// Rebuilt each step. Each ordinary body is put in exactly one cell, the one holding the lower
+// corner of its AABB, and cells are at least as large as any ordinary body. Two overlapping
+// AABBs then have lower corners less than one cell apart on each axis, so a body only needs the
+// bodies of its own cell and of the 3x3 block around it; scanning half of that block (own cell,
+// right, and the three cells above) reports every pair exactly once, with no duplicate check.
+//
+// Oversized bodies (longer than a few mean body sizes: walls, ground, a huge obstacle) would
+// force huge cells, so they are kept out of the grid and instead query the cells their AABB
+// covers, and are tested against each other directly.
 #include <algorithm>
 #include <cmath>
 
@@ -20,101 +24,148 @@ class UniformGrid final : public BroadPhase {
   void FindPairs(std::span<const AABB> aabbs, std::span<const uint8_t> movable,
                  std::vector<CandidatePair>& out) override {
     out.clear();
-    const int n = static_cast<int>(aabbs.size());
-    if (n < 2 || !Layout(aabbs, movable)) return;
+    if (aabbs.size() < 2 || !Layout(aabbs, movable)) return;
+    Bucket(aabbs);
+    ScanCells(movable, out);
+    ScanLarge(aabbs, movable, out);
+  }
 
+ private:
+  static double Extent(const AABB& b) { return std::max(b.upper.x - b.lower.x, b.upper.y - b.lower.y); }
+
+  // Chooses the grid: the region of the movable bodies (grown by one cell), the threshold
+  // between ordinary and oversized bodies, and the cell size.
+  bool Layout(std::span<const AABB> aabbs, std::span<const uint8_t> movable) {
+    const size_t n = aabbs.size();
+    double meanExtent = 0;
+    int moving = 0;
+    AABB box{};
+    for (size_t i = 0; i < n; ++i) {
+      if (!movable[i]) continue;
+      box = moving == 0 ? aabbs[i] : Union(box, aabbs[i]);
+      meanExtent += Extent(aabbs[i]);
+      ++moving;
+    }
+    if (moving == 0) return false;
+    meanExtent /= moving;
+    largeThreshold_ = 4.0 * meanExtent;
+    double cell = 1e-3;
+    for (size_t i = 0; i < n; ++i) {
+      const double e = Extent(aabbs[i]);
+      if (e <= largeThreshold_ && (movable[i] || Overlaps(aabbs[i], box))) cell = std::max(cell, e);
+    }
+    const double w = std::max<double>(box.upper.x - box.lower.x, 1e-6);
+    const double h = std::max<double>(box.upper.y - box.lower.y, 1e-6);
+    // A few cells per body at most, so a sparse scene does not allocate a huge grid.
+    const double maxCells = 4.0 * double(n) + 64.0;
+    while ((w / cell + 3) * (h / cell + 3) > maxCells) cell *= 1.5;
+    inv_ = 1.0 / cell;
+    originX_ = box.lower.x - cell;
+    originY_ = box.lower.y - cell;
+    cols_ = int(w * inv_) + 3;
+    rows_ = int(h * inv_) + 3;
+    region_ = {{Real(originX_), Real(originY_)}, {Real(originX_ + cols_ * cell), Real(originY_ + rows_ * cell)}};
+    return true;
+  }
+
+  int CellX(double v) const { return std::clamp(int(std::floor((v - originX_) * inv_)), 0, cols_ - 1); }
+  int CellY(double v) const { return std::clamp(int(std::floor((v - originY_) * inv_)), 0, rows_ - 1); }
+
+  // Counting sort of ordinary bodies by cell; their AABBs are copied in cell order so the pair
+  // scan reads memory sequentially.
+  void Bucket(std::span<const AABB> aabbs) {
+    const int n = static_cast<int>(aabbs.size());
+    cellOf_.resize(n);
+    large_.clear();
     cellStart_.assign(size_t(cols_) * rows_ + 1, 0);
-    ranges_.resize(n);
     for (int i = 0; i < n; ++i) {
-      Range r = RangeOf(aabbs[i]);
-      ranges_[i] = r;
-      if (r.x0 > r.x1 || r.y0 > r.y1) continue;  // entirely outside the movable region
-      for (int y = r.y0; y <= r.y1; ++y) {
-        for (int x = r.x0; x <= r.x1; ++x) ++cellStart_[size_t(y) * cols_ + x + 1];
+      const AABB& b = aabbs[i];
+      if (Extent(b) > largeThreshold_) {
+        cellOf_[i] = -1;
+        large_.push_back(i);
+        continue;
       }
+      if (!Overlaps(b, region_)) {  // cannot touch any movable body
+        cellOf_[i] = -2;
+        continue;
+      }
+      const int cell = CellY(b.lower.y) * cols_ + CellX(b.lower.x);
+      cellOf_[i] = cell;
+      ++cellStart_[cell + 1];
     }
     for (size_t c = 0; c + 1 < cellStart_.size(); ++c) cellStart_[c + 1] += cellStart_[c];
+    const int placed = cellStart_.back();
+    sortedIndex_.resize(placed);
+    sortedBox_.resize(placed);
     fill_.assign(cellStart_.begin(), cellStart_.end() - 1);
-    items_.resize(cellStart_.back());
     for (int i = 0; i < n; ++i) {
-      const Range r = ranges_[i];
-      for (int y = r.y0; y <= r.y1; ++y) {
-        for (int x = r.x0; x <= r.x1; ++x) items_[fill_[size_t(y) * cols_ + x]++] = i;
-      }
+      if (cellOf_[i] < 0) continue;
+      const int slot = fill_[cellOf_[i]]++;
+      sortedIndex_[slot] = i;
+      sortedBox_[slot] = aabbs[i];
     }
+  }
 
+  void Emit(int i, int j, std::span<const uint8_t> movable, std::vector<CandidatePair>& out) const {
+    if (!(movable[i] | movable[j])) return;
+    out.push_back(i < j ? CandidatePair{i, j} : CandidatePair{j, i});
+  }
+
+  void ScanCells(std::span<const uint8_t> movable, std::vector<CandidatePair>& out) const {
+    // Own cell (later bodies only), then right, upper-left, up, upper-right.
+    const int dx[4] = {1, -1, 0, 1};
+    const int dy[4] = {0, 1, 1, 1};
     for (int y = 0; y < rows_; ++y) {
       for (int x = 0; x < cols_; ++x) {
-        const size_t cell = size_t(y) * cols_ + x;
-        const int end = cellStart_[cell + 1];
-        for (int k = cellStart_[cell]; k < end; ++k) {
-          const int i = items_[k];
-          const AABB& a = aabbs[i];
+        const int cell = y * cols_ + x;
+        const int begin = cellStart_[cell], end = cellStart_[cell + 1];
+        for (int k = begin; k < end; ++k) {
+          const AABB& a = sortedBox_[k];
+          const int i = sortedIndex_[k];
           for (int l = k + 1; l < end; ++l) {
-            const int j = items_[l];
-            if (!(movable[i] | movable[j])) continue;
-            const AABB& b = aabbs[j];
-            if (!Overlaps(a, b)) continue;
-            // Report only from the cell of the intersection's lower corner.
-            if (Clamp(CellX(std::max(a.lower.x, b.lower.x))) != x) continue;
-            if (Clamp(CellY(std::max(a.lower.y, b.lower.y)), rows_) != y) continue;
-            out.push_back(i < j ? CandidatePair{i, j} : CandidatePair{j, i});
+            if (Overlaps(a, sortedBox_[l])) Emit(i, sortedIndex_[l], movable, out);
+          }
+          for (int d = 0; d < 4; ++d) {
+            const int nx = x + dx[d], ny = y + dy[d];
+            if (nx < 0 || nx >= cols_ || ny >= rows_) continue;
+            const int other = ny * cols_ + nx;
+            for (int l = cellStart_[other]; l < cellStart_[other + 1]; ++l) {
+              if (Overlaps(a, sortedBox_[l])) Emit(i, sortedIndex_[l], movable, out);
+            }
           }
         }
       }
     }
   }
 
- private:
-  struct Range {
-    int x0, y0, x1, y1;
-  };
-
-  bool Layout(std::span<const AABB> aabbs, std::span<const uint8_t> movable) {
-    bool any = false;
-    AABB box{};
-    double extent = 0;
-    int count = 0;
-    for (size_t i = 0; i < aabbs.size(); ++i) {
-      if (!movable[i]) continue;
-      box = any ? Union(box, aabbs[i]) : aabbs[i];
-      any = true;
-      extent += std::max(aabbs[i].upper.x - aabbs[i].lower.x, aabbs[i].upper.y - aabbs[i].lower.y);
-      ++count;
+  void ScanLarge(std::span<const AABB> aabbs, std::span<const uint8_t> movable, std::vector<CandidatePair>& out) const {
+    for (size_t k = 0; k < large_.size(); ++k) {
+      const int i = large_[k];
+      const AABB& a = aabbs[i];
+      for (size_t l = k + 1; l < large_.size(); ++l) {
+        if (Overlaps(a, aabbs[large_[l]])) Emit(i, large_[l], movable, out);
+      }
+      if (!Overlaps(a, region_)) continue;
+      // Ordinary bodies are filed by their lower corner, which lies at most one cell below
+      // or left of any point they cover.
+      const int x0 = CellX(a.lower.x - 1.0 / inv_), x1 = CellX(a.upper.x);
+      const int y0 = CellY(a.lower.y - 1.0 / inv_), y1 = CellY(a.upper.y);
+      for (int y = y0; y <= y1; ++y) {
+        for (int x = x0; x <= x1; ++x) {
+          const int cell = y * cols_ + x;
+          for (int l = cellStart_[cell]; l < cellStart_[cell + 1]; ++l) {
+            if (Overlaps(a, sortedBox_[l])) Emit(i, sortedIndex_[l], movable, out);
+          }
+        }
+      }
     }
-    if (!any) return false;
-    // Cells about twice the mean body size: most bodies then touch one to four cells and a
-    // cell holds a handful of bodies at the stress scenes' density.
-    double cell = std::max(2.0 * extent / count, 1e-3);
-    const double w = std::max<double>(box.upper.x - box.lower.x, 1e-6);
-    const double h = std::max<double>(box.upper.y - box.lower.y, 1e-6);
-    // Bound the cell count by a few per body, so a sparse scene does not allocate a huge grid.
-    const double maxCells = 4.0 * count + 64.0;
-    while ((std::floor(w / cell) + 1) * (std::floor(h / cell) + 1) > maxCells) cell *= 1.5;
-    inv_ = 1.0 / cell;
-    originX_ = box.lower.x;
-    originY_ = box.lower.y;
-    cols_ = int(std::floor(w * inv_)) + 1;
-    rows_ = int(std::floor(h * inv_)) + 1;
-    return true;
   }
 
-  int CellX(double v) const { return int(std::floor((v - originX_) * inv_)); }
-  int CellY(double v) const { return int(std::floor((v - originY_) * inv_)); }
-  int Clamp(int c) const { return std::clamp(c, 0, cols_ - 1); }
-  int Clamp(int c, int limit) const { return std::clamp(c, 0, limit - 1); }
-
-  Range RangeOf(const AABB& b) const {
-    int x0 = CellX(b.lower.x), x1 = CellX(b.upper.x);
-    int y0 = CellY(b.lower.y), y1 = CellY(b.upper.y);
-    if (x1 < 0 || y1 < 0 || x0 >= cols_ || y0 >= rows_) return {0, 0, -1, -1};
-    return {Clamp(x0), Clamp(y0, rows_), Clamp(x1), Clamp(y1, rows_)};
-  }
-
-  double originX_ = 0, originY_ = 0, inv_ = 1;
+  double originX_ = 0, originY_ = 0, inv_ = 1, largeThreshold_ = 0;
   int cols_ = 0, rows_ = 0;
-  std::vector<int> cellStart_, fill_, items_;
-  std::vector<Range> ranges_;
+  AABB region_{};
+  std::vector<int> cellOf_, cellStart_, fill_, sortedIndex_, large_;
+  std::vector<AABB> sortedBox_;
 };
 
 }  // namespace
