@@ -1,0 +1,256 @@
+// Tests for the broad phases (engine/src/broad_phase.h): quad tree and uniform grid must both
+// report exactly the brute-force set of overlapping pairs.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <memory>
+#include <random>
+#include <set>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "broad_phase.h"
+#include "test_helpers.h"
+
+namespace quadrant {
+namespace {
+
+using PairSet = std::set<std::pair<int32_t, int32_t>>;
+
+struct Input {
+  std::vector<AABB> aabbs;
+  std::vector<uint8_t> movable;
+};
+
+/// The reference: every pair a < b whose boxes overlap (touching counts) with at least one
+/// movable body.
+PairSet BruteForce(const Input& in) {
+  PairSet out;
+  const int n = int(in.aabbs.size());
+  for (int a = 0; a < n; ++a) {
+    for (int b = a + 1; b < n; ++b) {
+      if (!in.movable[a] && !in.movable[b]) continue;
+      if (Overlaps(in.aabbs[a], in.aabbs[b])) out.insert({a, b});
+    }
+  }
+  return out;
+}
+
+/// Runs the broad phase and checks the raw output's form: a < b, indices in range, no pair
+/// twice. Returns the pairs as a set.
+PairSet FindAll(BroadPhase& bp, const Input& in, std::vector<CandidatePair>* raw = nullptr) {
+  std::vector<CandidatePair> out = {{7, 3}};  // stale content: FindPairs must clear it
+  bp.FindPairs(in.aabbs, in.movable, out);
+  PairSet set;
+  const int n = int(in.aabbs.size());
+  for (const CandidatePair& p : out) {
+    EXPECT_LT(p.a, p.b) << bp.Name();
+    EXPECT_GE(p.a, 0) << bp.Name();
+    EXPECT_LT(p.b, n) << bp.Name();
+    bool inserted = set.insert({p.a, p.b}).second;
+    EXPECT_TRUE(inserted) << bp.Name() << ": pair (" << p.a << ", " << p.b << ") reported twice";
+  }
+  if (raw) *raw = out;
+  return set;
+}
+
+/// Reports the first few differences between the engine's and the reference's pair sets.
+::testing::AssertionResult SameSet(const PairSet& got, const PairSet& want, const Input& in) {
+  if (got == want) return ::testing::AssertionSuccess();
+  auto fail = ::testing::AssertionFailure();
+  fail << "got " << got.size() << " pairs, want " << want.size() << ".";
+  int shown = 0;
+  auto show = [&](const std::pair<int32_t, int32_t>& p, const char* what) {
+    const AABB& a = in.aabbs[p.first];
+    const AABB& b = in.aabbs[p.second];
+    fail << "\n  " << what << " (" << p.first << ", " << p.second << "): [" << a.lower.x << ","
+         << a.lower.y << " - " << a.upper.x << "," << a.upper.y << "] m=" << int(in.movable[p.first])
+         << " vs [" << b.lower.x << "," << b.lower.y << " - " << b.upper.x << "," << b.upper.y
+         << "] m=" << int(in.movable[p.second]);
+  };
+  for (const auto& p : want) {
+    if (!got.count(p) && shown++ < 8) show(p, "missing");
+  }
+  for (const auto& p : got) {
+    if (!want.count(p) && shown++ < 16) show(p, "extra");
+  }
+  return fail;
+}
+
+/// A random scene: `n` boxes of sizes 0.05..5 m in a +-range square, some snapped onto
+/// power-of-two coordinates (0, +-1, +-2, +-4, ...), some static, one huge box covering
+/// everything, and a few exact touching/identical pairs.
+Input RandomInput(uint32_t seed, int n, Real range) {
+  std::mt19937 rng(seed);
+  auto uni = [&](double lo, double hi) {
+    return lo + (hi - lo) * (double(rng()) / double(std::mt19937::max()));
+  };
+  const double pow2[] = {0, 1, -1, 2, -2, 4, -4, 8, -8, 16, -16, 0.5, -0.5};
+  Input in;
+  for (int i = 0; i < n; ++i) {
+    // Sizes log-uniform between 0.05 and 5 m.
+    double w = 0.05 * std::pow(100.0, uni(0, 1));
+    double h = 0.05 * std::pow(100.0, uni(0, 1));
+    double x = uni(-range, range - w);
+    double y = uni(-range, range - h);
+    int snap = int(rng() % 6);
+    if (snap == 0) x = pow2[rng() % 13];           // lower edge on a boundary
+    if (snap == 1) x = pow2[rng() % 13] - w;       // upper edge on a boundary
+    if (snap == 2) y = pow2[rng() % 13];
+    if (snap == 3) { x = pow2[rng() % 13]; y = pow2[rng() % 13] - h; }
+    AABB box{{Real(x), Real(y)}, {Real(x + w), Real(y + h)}};
+    in.aabbs.push_back(box);
+    in.movable.push_back(rng() % 5 == 0 ? 0 : 1);  // ~20 % static
+  }
+  // Exact touching: a box whose lower x is another's upper x, and one sharing only a corner.
+  if (n >= 2) {
+    AABB a = in.aabbs[0];
+    AABB t{{a.upper.x, a.lower.y}, {a.upper.x + Real(0.5), a.upper.y}};
+    AABB c{{a.upper.x, a.upper.y}, {a.upper.x + Real(0.25), a.upper.y + Real(0.25)}};
+    in.aabbs.push_back(t);
+    in.movable.push_back(1);
+    in.aabbs.push_back(c);
+    in.movable.push_back(1);
+    in.aabbs.push_back(in.aabbs[1]);  // an identical copy
+    in.movable.push_back(1);
+  }
+  // One huge movable box over everything (mid list, so both a < huge and huge < b occur).
+  AABB huge{{-range * 2, -range * 2}, {range * 2, range * 2}};
+  in.aabbs.insert(in.aabbs.begin() + in.aabbs.size() / 2, huge);
+  in.movable.insert(in.movable.begin() + in.movable.size() / 2, 1);
+  return in;
+}
+
+struct Factory {
+  const char* name;
+  std::unique_ptr<BroadPhase> (*make)();
+};
+
+std::unique_ptr<BroadPhase> MakeQt() { return MakeQuadTree(8); }
+std::unique_ptr<BroadPhase> MakeGrid() { return MakeUniformGrid(); }
+
+class BroadPhaseTest : public ::testing::TestWithParam<Factory> {};
+
+TEST_P(BroadPhaseTest, EmptyInputGivesNoPairs) {
+  auto bp = GetParam().make();
+  Input in;
+  std::vector<CandidatePair> out = {{0, 1}};
+  bp->FindPairs(in.aabbs, in.movable, out);
+  EXPECT_TRUE(out.empty());
+  // A single box has nobody to pair with.
+  in.aabbs.push_back({{0, 0}, {1, 1}});
+  in.movable.push_back(1);
+  bp->FindPairs(in.aabbs, in.movable, out);
+  EXPECT_TRUE(out.empty());
+}
+
+TEST_P(BroadPhaseTest, HandMadeTouchingAndStaticCases) {
+  auto bp = GetParam().make();
+  Input in;
+  in.aabbs = {
+      {{0, 0}, {1, 1}},                          // 0 movable
+      {{1, 0}, {2, 1}},                          // 1 touches 0 along x = 1
+      {{2, 1}, {3, 2}},                          // 2 touches 1 at the corner (2, 1)
+      {{Real(3.001), 0}, {4, 1}},                // 3 just apart from 2
+      {{-1, -1}, {Real(0.5), Real(0.5)}},        // 4 static, overlaps 0
+      {{-1, -1}, {Real(0.5), Real(0.5)}},        // 5 static, identical to 4: static-static
+      {{Real(0.25), Real(0.25)}, {Real(0.75), Real(0.75)}},  // 6 inside 0
+  };
+  in.movable = {1, 1, 1, 1, 0, 0, 1};
+  PairSet want = BruteForce(in);
+  PairSet expected = {{0, 1}, {1, 2}, {0, 4}, {0, 5}, {0, 6}, {4, 6}, {5, 6}};
+  ASSERT_EQ(want, expected);  // the reference itself
+  EXPECT_TRUE(SameSet(FindAll(*bp, in), want, in));
+}
+
+TEST_P(BroadPhaseTest, AllStaticGivesNoPairs) {
+  auto bp = GetParam().make();
+  Input in = RandomInput(7, 50, 10);
+  std::fill(in.movable.begin(), in.movable.end(), uint8_t(0));
+  EXPECT_TRUE(FindAll(*bp, in).empty());
+}
+
+TEST_P(BroadPhaseTest, RandomSetsMatchBruteForce) {
+  auto bp = GetParam().make();
+  for (uint32_t seed = 1; seed <= 20; ++seed) {
+    Input in = RandomInput(seed, 20 + int(seed) * 10, Real(4 + seed));
+    EXPECT_TRUE(SameSet(FindAll(*bp, in), BruteForce(in), in)) << GetParam().name << " seed " << seed;
+  }
+}
+
+TEST_P(BroadPhaseTest, ReusedInstanceAcrossDifferentInputs) {
+  // Implementations keep buffers between calls; a big input followed by a small one (and
+  // back) must not leak state.
+  auto bp = GetParam().make();
+  Input big = RandomInput(100, 300, 20);
+  Input small = RandomInput(101, 10, 2);
+  EXPECT_TRUE(SameSet(FindAll(*bp, big), BruteForce(big), big));
+  EXPECT_TRUE(SameSet(FindAll(*bp, small), BruteForce(small), small));
+  EXPECT_TRUE(SameSet(FindAll(*bp, big), BruteForce(big), big));
+}
+
+TEST_P(BroadPhaseTest, DeterministicOutput) {
+  Input in = RandomInput(42, 400, 25);
+  auto bp = GetParam().make();
+  std::vector<CandidatePair> first, second, fresh;
+  FindAll(*bp, in, &first);
+  FindAll(*bp, in, &second);
+  auto other = GetParam().make();
+  FindAll(*other, in, &fresh);
+  ASSERT_EQ(first.size(), second.size());
+  ASSERT_EQ(first.size(), fresh.size());
+  for (size_t i = 0; i < first.size(); ++i) {
+    EXPECT_TRUE(first[i].a == second[i].a && first[i].b == second[i].b) << "index " << i;
+    EXPECT_TRUE(first[i].a == fresh[i].a && first[i].b == fresh[i].b) << "index " << i;
+  }
+}
+
+TEST_P(BroadPhaseTest, ThousandsOfRandomAabbs) {
+  auto bp = GetParam().make();
+  Input in = RandomInput(2024, 1500, 60);
+  PairSet want = BruteForce(in);
+  ASSERT_GT(want.size(), 1500u);  // the huge box alone pairs with everyone
+  EXPECT_TRUE(SameSet(FindAll(*bp, in), want, in));
+}
+
+TEST_P(BroadPhaseTest, FarAwayAndNegativeCoordinates) {
+  auto bp = GetParam().make();
+  Input in;
+  std::mt19937 rng(5);
+  for (int i = 0; i < 200; ++i) {
+    Real x = Real(int(rng() % 2000) - 1000) * Real(0.5);  // multiples of 0.5 in +-500
+    Real y = Real(int(rng() % 40) - 20) * Real(0.5);
+    Real w = Real(1 + rng() % 4) * Real(0.25);
+    in.aabbs.push_back({{x, y}, {x + w, y + w}});  // many exact touches on the 0.25 lattice
+    in.movable.push_back(rng() % 3 ? 1 : 0);
+  }
+  EXPECT_TRUE(SameSet(FindAll(*bp, in), BruteForce(in), in));
+}
+
+INSTANTIATE_TEST_SUITE_P(Both, BroadPhaseTest,
+                         ::testing::Values(Factory{"QuadTree", &MakeQt}, Factory{"UniformGrid", &MakeGrid}),
+                         [](const ::testing::TestParamInfo<Factory>& info) { return std::string(info.param.name); });
+
+TEST(BroadPhaseFactoryTest, MakeBroadPhaseGivesBothKinds) {
+  auto qt = MakeBroadPhase(BroadPhaseType::kQuadTree, 8);
+  auto grid = MakeBroadPhase(BroadPhaseType::kUniformGrid, 8);
+  ASSERT_NE(qt, nullptr);
+  ASSERT_NE(grid, nullptr);
+  EXPECT_STRNE(qt->Name(), grid->Name());
+  Input in = RandomInput(9, 200, 10);
+  EXPECT_EQ(FindAll(*qt, in), FindAll(*grid, in));
+}
+
+TEST(BroadPhaseFactoryTest, ShallowQuadTreeStillExact) {
+  // Depth 1 puts almost everything in the root; depth 12 is the documented maximum.
+  for (int depth : {1, 12}) {
+    auto qt = MakeQuadTree(depth);
+    Input in = RandomInput(77, 300, 30);
+    EXPECT_TRUE(SameSet(FindAll(*qt, in), BruteForce(in), in)) << "depth " << depth;
+  }
+}
+
+}  // namespace
+}  // namespace quadrant

@@ -1,0 +1,280 @@
+// Tests for the narrow phase (engine/src/narrow_phase.h): contact manifolds per shape pair.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "narrow_phase.h"
+#include "quadrant/shapes.h"
+#include "test_helpers.h"
+
+namespace quadrant {
+namespace {
+
+using test::VecNear;
+
+constexpr Real kSpec = Real(0.02);  // speculative distance (m), the world's default
+// Geometry here is O(1) m in float32: a few roundings of ~1e-7 relative each. 1e-4 m is a
+// thousand times that and still 50x smaller than the smallest feature these tests probe
+// (1e-2 m penetrations), so a wrong sign, axis or offset cannot slip through.
+constexpr double kTol = 1e-4;
+
+Transform Xf(Real x, Real y, Real angle = 0) { return {{x, y}, MakeRot(angle)}; }
+
+void ExpectUnit(Vec2 n) {
+  EXPECT_TRUE(IsFinite(n));
+  EXPECT_NEAR(Length(n), 1.0, 1e-5);
+}
+
+Real MinSeparation(const Manifold& m) {
+  Real s = m.points[0].separation;
+  for (int i = 1; i < m.pointCount; ++i) s = std::min(s, m.points[i].separation);
+  return s;
+}
+
+// ---------------------------------------------------------------- circle vs circle
+
+TEST(NarrowPhaseCircles, SeparatedBeyondSpeculativeGivesNoPoints) {
+  Circle a{{0, 0}, Real(0.5)};
+  Circle b{{0, 0}, Real(0.5)};
+  Manifold m = CollideCircles(a, Xf(0, 0), b, Xf(Real(1.1), 0), kSpec);  // gap 0.1 m
+  EXPECT_EQ(m.pointCount, 0);
+  m = CollideCircles(a, Xf(0, 0), b, Xf(Real(1.03), 0), kSpec);  // gap 0.03 m > 0.02 m
+  EXPECT_EQ(m.pointCount, 0);
+}
+
+TEST(NarrowPhaseCircles, WithinSpeculativeGivesPositiveSeparation) {
+  Circle a{{0, 0}, Real(0.5)};
+  Circle b{{0, 0}, Real(0.25)};
+  Manifold m = CollideCircles(a, Xf(0, 0), b, Xf(0, Real(0.76)), kSpec);  // gap 0.01 m
+  ASSERT_EQ(m.pointCount, 1);
+  EXPECT_NEAR(m.points[0].separation, 0.01, kTol);
+  EXPECT_TRUE(VecNear(m.normal, Vec2{0, 1}, 1e-5));
+}
+
+TEST(NarrowPhaseCircles, TouchingGivesOnePointZeroSeparationNormalAToB) {
+  Circle a{{0, 0}, Real(0.5)};
+  Circle b{{0, 0}, Real(0.5)};
+  // Centres 1 m apart along (0.6, 0.8).
+  Manifold m = CollideCircles(a, Xf(1, 2), b, Xf(Real(1.6), Real(2.8)), kSpec);
+  ASSERT_EQ(m.pointCount, 1);
+  EXPECT_NEAR(m.points[0].separation, 0.0, kTol);
+  EXPECT_TRUE(VecNear(m.normal, Vec2{Real(0.6), Real(0.8)}, 1e-5));
+  ExpectUnit(m.normal);
+  EXPECT_TRUE(VecNear(m.points[0].point, Vec2{Real(1.3), Real(2.4)}, kTol));
+}
+
+TEST(NarrowPhaseCircles, DeepOverlapSeparationIsDistanceMinusRadii) {
+  Circle a{{0, 0}, 1};
+  Circle b{{0, 0}, Real(0.5)};
+  // d = 1, rA + rB = 1.5 -> separation -0.5; normal (-0.8, 0.6) from A to B.
+  Manifold m = CollideCircles(a, Xf(1, 1), b, Xf(Real(0.2), Real(1.6)), kSpec);
+  ASSERT_EQ(m.pointCount, 1);
+  EXPECT_NEAR(m.points[0].separation, -0.5, kTol);
+  EXPECT_TRUE(VecNear(m.normal, Vec2{Real(-0.8), Real(0.6)}, 1e-5));
+  // Halfway between A's surface point (0.2, 1.6) and B's surface point (0.6, 1.3).
+  EXPECT_TRUE(VecNear(m.points[0].point, Vec2{Real(0.4), Real(1.45)}, kTol));
+}
+
+TEST(NarrowPhaseCircles, OffsetCentreIsTransformed) {
+  // B's circle sits 0.5 m along its local x; B (origin at (0, 1)) is rotated a quarter
+  // turn, so the circle is at (0, 1.5) in world: d = 1.5, rA + rB = 1.6 -> separation -0.1.
+  Circle a{{0, 0}, Real(0.6)};
+  Circle b{{Real(0.5), 0}, 1};
+  Manifold m = CollideCircles(a, Xf(0, 0), b, Xf(0, 1, Real(test::kPi / 2)), kSpec);
+  ASSERT_EQ(m.pointCount, 1);
+  EXPECT_NEAR(m.points[0].separation, -0.1, kTol);
+  EXPECT_TRUE(VecNear(m.normal, Vec2{0, 1}, 1e-5));
+}
+
+TEST(NarrowPhaseCircles, CoincidentCentresGiveFiniteUnitNormal) {
+  Circle a{{0, 0}, Real(0.5)};
+  Circle b{{0, 0}, Real(0.3)};
+  Manifold m = CollideCircles(a, Xf(2, 3), b, Xf(2, 3), kSpec);
+  ASSERT_EQ(m.pointCount, 1);
+  ExpectUnit(m.normal);
+  EXPECT_NEAR(m.points[0].separation, -0.8, kTol);
+  EXPECT_TRUE(IsFinite(m.points[0].point));
+}
+
+// ---------------------------------------------------------------- polygon vs circle
+
+TEST(NarrowPhasePolygonCircle, FaceRegion) {
+  Polygon box = MakeBox(1, 1);
+  Circle c{{0, 0}, Real(0.5)};
+  // Centre 1.4 above the box centre: top face at 1, circle bottom at 0.9 -> sep -0.1.
+  Manifold m = CollidePolygonAndCircle(box, Xf(0, 0), c, Xf(Real(0.3), Real(1.4)), kSpec);
+  ASSERT_EQ(m.pointCount, 1);
+  EXPECT_TRUE(VecNear(m.normal, Vec2{0, 1}, 1e-5));
+  EXPECT_NEAR(m.points[0].separation, -0.1, kTol);
+  EXPECT_TRUE(VecNear(m.points[0].point, Vec2{Real(0.3), Real(0.95)}, kTol));
+}
+
+TEST(NarrowPhasePolygonCircle, FaceRegionWithRotatedTranslatedBox) {
+  Polygon box = MakeBox(1, Real(0.5));
+  Circle c{{0, 0}, Real(0.5)};
+  Transform xfA = Xf(5, -2, Real(test::kPi / 2));  // local +y face now faces world -x
+  Vec2 centre = TransformPoint(xfA, Vec2{Real(0.2), Real(0.95)});  // 0.45 above the face
+  Manifold m = CollidePolygonAndCircle(box, xfA, c, {centre, MakeRot(0)}, kSpec);
+  ASSERT_EQ(m.pointCount, 1);
+  EXPECT_TRUE(VecNear(m.normal, Vec2{-1, 0}, 1e-5));
+  EXPECT_NEAR(m.points[0].separation, -0.05, kTol);
+}
+
+TEST(NarrowPhasePolygonCircle, VertexRegion) {
+  Polygon box = MakeBox(1, 1);
+  Circle c{{0, 0}, Real(0.6)};
+  // Centre (1.3, 1.4) is beyond corner (1, 1) at distance 0.5 along (0.6, 0.8).
+  Manifold m = CollidePolygonAndCircle(box, Xf(0, 0), c, Xf(Real(1.3), Real(1.4)), kSpec);
+  ASSERT_EQ(m.pointCount, 1);
+  EXPECT_TRUE(VecNear(m.normal, Vec2{Real(0.6), Real(0.8)}, 1e-4));
+  EXPECT_NEAR(m.points[0].separation, -0.1, kTol);
+}
+
+TEST(NarrowPhasePolygonCircle, VertexRegionOutOfRangeGivesNoPoints) {
+  // Same centre, radius 0.45: 0.05 m from the corner (beyond the speculative 0.02), although
+  // the distance to the top face's line alone (0.4 - 0.45 = -0.05) would suggest overlap.
+  Polygon box = MakeBox(1, 1);
+  Circle c{{0, 0}, Real(0.45)};
+  Manifold m = CollidePolygonAndCircle(box, Xf(0, 0), c, Xf(Real(1.3), Real(1.4)), kSpec);
+  EXPECT_EQ(m.pointCount, 0);
+}
+
+TEST(NarrowPhasePolygonCircle, CentreInsideUsesDeepestFace) {
+  Polygon box = MakeBox(1, 1);
+  Circle c{{0, 0}, Real(0.5)};
+  // Centre (0.2, 0.7): 0.3 below the top face (the nearest), 0.8 from the right face.
+  Manifold m = CollidePolygonAndCircle(box, Xf(0, 0), c, Xf(Real(0.2), Real(0.7)), kSpec);
+  ASSERT_EQ(m.pointCount, 1);
+  EXPECT_TRUE(VecNear(m.normal, Vec2{0, 1}, 1e-5));
+  EXPECT_NEAR(m.points[0].separation, -0.8, kTol);
+  // Centre (0.8, 0.1): the right face is nearest (0.2).
+  m = CollidePolygonAndCircle(box, Xf(0, 0), c, Xf(Real(0.8), Real(0.1)), kSpec);
+  ASSERT_EQ(m.pointCount, 1);
+  EXPECT_TRUE(VecNear(m.normal, Vec2{1, 0}, 1e-5));
+  EXPECT_NEAR(m.points[0].separation, -0.7, kTol);
+}
+
+// ---------------------------------------------------------------- polygon vs polygon
+
+TEST(NarrowPhasePolygons, BoxRestingOnBoxGivesTwoPoints) {
+  Polygon ground = MakeBox(2, Real(0.5));
+  Polygon box = MakeBox(Real(0.5), Real(0.5));
+  // Box bottom at 0.49: 0.01 m into the ground's top face at 0.5.
+  Manifold m = CollidePolygons(ground, Xf(0, 0), box, Xf(Real(0.3), Real(0.99)), kSpec);
+  ASSERT_EQ(m.pointCount, 2);
+  EXPECT_TRUE(VecNear(m.normal, Vec2{0, 1}, 1e-5));
+  Real xs[2];
+  for (int i = 0; i < 2; ++i) {
+    EXPECT_NEAR(m.points[i].separation, -0.01, kTol);
+    EXPECT_NEAR(m.points[i].point.y, 0.495, kTol);  // halfway between the two surfaces
+    xs[i] = m.points[i].point.x;
+  }
+  EXPECT_NEAR(std::min(xs[0], xs[1]), -0.2, kTol);
+  EXPECT_NEAR(std::max(xs[0], xs[1]), 0.8, kTol);
+  EXPECT_NE(m.points[0].id, m.points[1].id);
+}
+
+TEST(NarrowPhasePolygons, SwappedOrderFlipsNormal) {
+  Polygon ground = MakeBox(2, Real(0.5));
+  Polygon box = MakeBox(Real(0.5), Real(0.5));
+  Manifold m = CollidePolygons(box, Xf(Real(0.3), Real(0.99)), ground, Xf(0, 0), kSpec);
+  ASSERT_EQ(m.pointCount, 2);
+  EXPECT_TRUE(VecNear(m.normal, Vec2{0, -1}, 1e-5));
+  for (int i = 0; i < 2; ++i) EXPECT_NEAR(m.points[i].separation, -0.01, kTol);
+}
+
+TEST(NarrowPhasePolygons, SeparatedAndSpeculative) {
+  Polygon ground = MakeBox(2, Real(0.5));
+  Polygon box = MakeBox(Real(0.5), Real(0.5));
+  Manifold far = CollidePolygons(ground, Xf(0, 0), box, Xf(0, Real(1.1)), kSpec);  // gap 0.1
+  EXPECT_EQ(far.pointCount, 0);
+  Manifold near = CollidePolygons(ground, Xf(0, 0), box, Xf(0, Real(1.01)), kSpec);  // gap 0.01
+  ASSERT_EQ(near.pointCount, 2);
+  for (int i = 0; i < 2; ++i) EXPECT_NEAR(near.points[i].separation, 0.01, kTol);
+  EXPECT_TRUE(VecNear(near.normal, Vec2{0, 1}, 1e-5));
+}
+
+TEST(NarrowPhasePolygons, FeatureIdsPersistUnderSmallMotion) {
+  Polygon ground = MakeBox(2, Real(0.5));
+  Polygon box = MakeBox(Real(0.5), Real(0.5));
+  Manifold m0 = CollidePolygons(ground, Xf(0, 0), box, Xf(Real(0.3), Real(0.99)), kSpec);
+  Manifold m1 = CollidePolygons(ground, Xf(0, 0), box, Xf(Real(0.35), Real(0.993), Real(0.002)), kSpec);
+  ASSERT_EQ(m0.pointCount, 2);
+  ASSERT_EQ(m1.pointCount, 2);
+  EXPECT_NE(m0.points[0].id, m0.points[1].id);
+  // Match points by which box corner they come from (left or right) and compare ids.
+  auto leftIndex = [](const Manifold& m) { return m.points[0].point.x < m.points[1].point.x ? 0 : 1; };
+  int l0 = leftIndex(m0), l1 = leftIndex(m1);
+  EXPECT_EQ(m0.points[l0].id, m1.points[l1].id);
+  EXPECT_EQ(m0.points[1 - l0].id, m1.points[1 - l1].id);
+}
+
+TEST(NarrowPhasePolygons, RotatedBoxCornerIntoFace) {
+  Polygon ground = MakeBox(2, Real(0.5));
+  Polygon box = MakeBox(Real(0.5), Real(0.5));
+  // Box turned 45 degrees: its lowest corner is 0.5*sqrt(2) below its centre. Put that
+  // corner 0.05 m into the ground's top face (y = 0.5). The side corners are then
+  // 0.5*sqrt(2) - 0.05 = 0.657 m above the face, far beyond the speculative distance.
+  const double h = 0.5 * std::sqrt(2.0);
+  Manifold m = CollidePolygons(ground, Xf(0, 0), box, Xf(Real(0.1), Real(0.5 + h - 0.05), Real(test::kPi / 4)), kSpec);
+  ASSERT_GE(m.pointCount, 1);
+  EXPECT_TRUE(VecNear(m.normal, Vec2{0, 1}, 1e-5));
+  EXPECT_NEAR(MinSeparation(m), -0.05, kTol);
+  int deepest = (m.pointCount == 2 && m.points[1].separation < m.points[0].separation) ? 1 : 0;
+  // Halfway between the corner (0.1, 0.45) and the face point (0.1, 0.5).
+  EXPECT_TRUE(VecNear(m.points[deepest].point, Vec2{Real(0.1), Real(0.475)}, kTol));
+  for (int i = 0; i < m.pointCount; ++i) EXPECT_LE(m.points[i].separation, kSpec + 1e-6);
+  EXPECT_EQ(m.pointCount, 1);  // the other incident vertex is 0.657 m away: not kept
+}
+
+TEST(NarrowPhasePolygons, SlightlyTiltedBoxKeepsBothPointsWithHandComputedSeparations) {
+  Polygon ground = MakeBox(2, Real(0.5));
+  Polygon box = MakeBox(Real(0.5), Real(0.5));
+  const double t = 0.02;  // rad
+  // Corner heights below the centre: 0.5(cos t + sin t) (deepest) and 0.5(cos t - sin t).
+  const double deep = 0.5 * (std::cos(t) + std::sin(t));
+  const double yc = 0.5 + deep - 0.01;  // deepest corner 0.01 m into the face
+  Manifold m = CollidePolygons(ground, Xf(0, 0), box, Xf(0, Real(yc), Real(t)), kSpec);
+  ASSERT_EQ(m.pointCount, 2);
+  EXPECT_TRUE(VecNear(m.normal, Vec2{0, 1}, 1e-5));
+  Real lo = std::min(m.points[0].separation, m.points[1].separation);
+  Real hi = std::max(m.points[0].separation, m.points[1].separation);
+  EXPECT_NEAR(lo, -0.01, kTol);
+  EXPECT_NEAR(hi, -0.01 + std::sin(t), kTol);  // = +0.00999 m: speculative, kept
+}
+
+// ---------------------------------------------------------------- dispatch
+
+TEST(NarrowPhaseCollide, CirclePolygonIsFlippedSoNormalPointsFromAToB) {
+  ShapeDef circle = ShapeDef::MakeCircle(Real(0.5));
+  ShapeDef box = ShapeDef::Box(1, 1);
+  // Circle A above box B: the normal from A to B points down.
+  Manifold m = Collide(circle, Xf(Real(0.3), Real(1.4)), box, Xf(0, 0), kSpec);
+  ASSERT_EQ(m.pointCount, 1);
+  EXPECT_TRUE(VecNear(m.normal, Vec2{0, -1}, 1e-5));
+  EXPECT_NEAR(m.points[0].separation, -0.1, kTol);
+  EXPECT_TRUE(VecNear(m.points[0].point, Vec2{Real(0.3), Real(0.95)}, kTol));
+  // And the unflipped order points up.
+  Manifold r = Collide(box, Xf(0, 0), circle, Xf(Real(0.3), Real(1.4)), kSpec);
+  ASSERT_EQ(r.pointCount, 1);
+  EXPECT_TRUE(VecNear(r.normal, Vec2{0, 1}, 1e-5));
+  EXPECT_NEAR(r.points[0].separation, -0.1, kTol);
+}
+
+TEST(NarrowPhaseCollide, DispatchesCirclesAndPolygons) {
+  ShapeDef c1 = ShapeDef::MakeCircle(Real(0.5));
+  ShapeDef c2 = ShapeDef::MakeCircle(Real(0.5));
+  Manifold cc = Collide(c1, Xf(0, 0), c2, Xf(Real(0.9), 0), kSpec);
+  ASSERT_EQ(cc.pointCount, 1);
+  EXPECT_NEAR(cc.points[0].separation, -0.1, kTol);
+  EXPECT_TRUE(VecNear(cc.normal, Vec2{1, 0}, 1e-5));
+  ShapeDef b1 = ShapeDef::Box(2, Real(0.5));
+  ShapeDef b2 = ShapeDef::Box(Real(0.5), Real(0.5));
+  Manifold pp = Collide(b1, Xf(0, 0), b2, Xf(0, Real(0.99)), kSpec);
+  EXPECT_EQ(pp.pointCount, 2);
+  EXPECT_TRUE(VecNear(pp.normal, Vec2{0, 1}, 1e-5));
+}
+
+}  // namespace
+}  // namespace quadrant
