@@ -32,7 +32,8 @@ void IntegratePositions(Bodies& bodies, const WorldDef& def, Real dt) {
     const Real speed2 = LengthSquared(bv.v);
     if (speed2 > maxSpeed2) bv.v = (def.maxLinearSpeed / std::sqrt(speed2)) * bv.v;
     bodies.center[i] += dt * bv.v;
-    if (rotation) bodies.xf[i].q = IntegrateRot(bodies.xf[i].q, dt * bv.w);
+    // Most bodies of frictionless scenes never spin: skip the renormalisation for them.
+    if (rotation && bv.w != 0) bodies.xf[i].q = IntegrateRot(bodies.xf[i].q, dt * bv.w);
     SyncTransform(bodies, i);
   }
 }

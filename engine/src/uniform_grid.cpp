@@ -40,10 +40,12 @@ class UniformGrid final : public BroadPhase {
     double meanExtent = 0;
     int moving = 0;
     AABB box{};
+    extent_.resize(n);
     for (size_t i = 0; i < n; ++i) {
+      extent_[i] = Real(Extent(aabbs[i]));
       if (!movable[i]) continue;
       box = moving == 0 ? aabbs[i] : Union(box, aabbs[i]);
-      meanExtent += Extent(aabbs[i]);
+      meanExtent += extent_[i];
       ++moving;
     }
     if (moving == 0) return false;
@@ -51,7 +53,7 @@ class UniformGrid final : public BroadPhase {
     largeThreshold_ = 4.0 * meanExtent;
     double cell = 1e-3;
     for (size_t i = 0; i < n; ++i) {
-      const double e = Extent(aabbs[i]);
+      const double e = extent_[i];
       if (e <= largeThreshold_ && (movable[i] || Overlaps(aabbs[i], box))) cell = std::max(cell, e);
     }
     const double w = std::max<double>(box.upper.x - box.lower.x, 1e-6);
@@ -68,8 +70,10 @@ class UniformGrid final : public BroadPhase {
     return true;
   }
 
-  int CellX(double v) const { return std::clamp(int(std::floor((v - originX_) * inv_)), 0, cols_ - 1); }
-  int CellY(double v) const { return std::clamp(int(std::floor((v - originY_) * inv_)), 0, rows_ - 1); }
+  // Truncation instead of floor: it differs only below the origin, where the clamp to 0 makes
+  // both agree.
+  int CellX(double v) const { return std::clamp(int((v - originX_) * inv_), 0, cols_ - 1); }
+  int CellY(double v) const { return std::clamp(int((v - originY_) * inv_), 0, rows_ - 1); }
 
   // Counting sort of ordinary bodies by cell; their AABBs are copied in cell order so the pair
   // scan reads memory sequentially.
@@ -80,7 +84,7 @@ class UniformGrid final : public BroadPhase {
     cellStart_.assign(size_t(cols_) * rows_ + 1, 0);
     for (int i = 0; i < n; ++i) {
       const AABB& b = aabbs[i];
-      if (Extent(b) > largeThreshold_) {
+      if (extent_[i] > largeThreshold_) {
         cellOf_[i] = -1;
         large_.push_back(i);
         continue;
@@ -97,12 +101,14 @@ class UniformGrid final : public BroadPhase {
     const int placed = cellStart_.back();
     sortedIndex_.resize(placed);
     sortedBox_.resize(placed);
+    sortedCell_.resize(placed);
     fill_.assign(cellStart_.begin(), cellStart_.end() - 1);
     for (int i = 0; i < n; ++i) {
       if (cellOf_[i] < 0) continue;
       const int slot = fill_[cellOf_[i]]++;
       sortedIndex_[slot] = i;
       sortedBox_[slot] = aabbs[i];
+      sortedCell_[slot] = cellOf_[i];
     }
   }
 
@@ -112,29 +118,38 @@ class UniformGrid final : public BroadPhase {
   }
 
   void ScanCells(std::span<const uint8_t> movable, std::vector<CandidatePair>& out) const {
-    // Own cell (later bodies only), then right, upper-left, up, upper-right.
-    const int dx[4] = {1, -1, 0, 1};
-    const int dy[4] = {0, 1, 1, 1};
-    for (int y = 0; y < rows_; ++y) {
-      for (int x = 0; x < cols_; ++x) {
-        const int cell = y * cols_ + x;
-        const int begin = cellStart_[cell], end = cellStart_[cell + 1];
-        for (int k = begin; k < end; ++k) {
-          const AABB& a = sortedBox_[k];
-          const int i = sortedIndex_[k];
-          for (int l = k + 1; l < end; ++l) {
-            if (Overlaps(a, sortedBox_[l])) Emit(i, sortedIndex_[l], movable, out);
-          }
-          for (int d = 0; d < 4; ++d) {
-            const int nx = x + dx[d], ny = y + dy[d];
-            if (nx < 0 || nx >= cols_ || ny >= rows_) continue;
-            const int other = ny * cols_ + nx;
-            for (int l = cellStart_[other]; l < cellStart_[other + 1]; ++l) {
-              if (Overlaps(a, sortedBox_[l])) Emit(i, sortedIndex_[l], movable, out);
-            }
-          }
-        }
+    // Own cell (later bodies only), then right, upper-left, up, upper-right. Walking the bodies
+    // in cell order (not the cells) skips the many empty cells of a sparse scene.
+    const int placed = static_cast<int>(sortedIndex_.size());
+    for (int k = 0; k < placed; ++k) {
+      const AABB& a = sortedBox_[k];
+      const int i = sortedIndex_[k];
+      const int cell = sortedCell_[k];
+      for (int l = k + 1; l < placed && sortedCell_[l] == cell; ++l) {
+        if (Overlaps(a, sortedBox_[l])) Emit(i, sortedIndex_[l], movable, out);
       }
+      const int x = cell % cols_;
+      const int y = cell / cols_;
+      const int right = x + 1 < cols_ ? cell + 1 : -1;
+      if (right >= 0) ScanCell(right, a, i, movable, out);
+      if (y + 1 < rows_) {
+        const int up = cell + cols_;
+        ScanRow(x > 0 ? up - 1 : up, x + 1 < cols_ ? up + 1 : up, a, i, movable, out);
+      }
+    }
+  }
+
+  void ScanCell(int cell, const AABB& a, int i, std::span<const uint8_t> movable, std::vector<CandidatePair>& out) const {
+    for (int l = cellStart_[cell]; l < cellStart_[cell + 1]; ++l) {
+      if (Overlaps(a, sortedBox_[l])) Emit(i, sortedIndex_[l], movable, out);
+    }
+  }
+
+  // Cells first..last of one row are contiguous in cell order, so their bodies are too.
+  void ScanRow(int first, int last, const AABB& a, int i, std::span<const uint8_t> movable,
+               std::vector<CandidatePair>& out) const {
+    for (int l = cellStart_[first]; l < cellStart_[last + 1]; ++l) {
+      if (Overlaps(a, sortedBox_[l])) Emit(i, sortedIndex_[l], movable, out);
     }
   }
 
@@ -164,8 +179,9 @@ class UniformGrid final : public BroadPhase {
   double originX_ = 0, originY_ = 0, inv_ = 1, largeThreshold_ = 0;
   int cols_ = 0, rows_ = 0;
   AABB region_{};
-  std::vector<int> cellOf_, cellStart_, fill_, sortedIndex_, large_;
+  std::vector<int> cellOf_, cellStart_, fill_, sortedIndex_, sortedCell_, large_;
   std::vector<AABB> sortedBox_;
+  std::vector<Real> extent_;
 };
 
 }  // namespace

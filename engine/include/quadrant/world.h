@@ -79,7 +79,7 @@ enum class SolverType : uint8_t {
 
 enum class BroadPhaseType : uint8_t {
   kQuadTree,     ///< the thesis's region quad-tree (body in the smallest node holding its AABB)
-  kUniformGrid,  ///< a uniform grid rebuilt each step, cell size from the median body size
+  kUniformGrid,  ///< a uniform grid rebuilt each step, cells sized by the bodies (see uniform_grid.cpp)
 };
 
 /// Effects a world simulates. A disabled effect's work is not done at all: the step picks a

@@ -1,0 +1,545 @@
+// quadrant_bench: the Google Benchmark suite that runs identical scenes on every engine.
+//
+// One benchmark per scene x body count x thread count x engine, registered at run time and
+// named `<scene>/<engine>/n:<N>/threads:<T>` (Google Benchmark appends
+// `/iterations:1/real_time` to the reported name, and `_mean`, `_median`, ... to aggregates).
+// Engines are registered interleaved (for each scene, N and T, every engine in turn) so that
+// machine drift hits all engines alike; `--benchmark_enable_random_interleaving=true` goes
+// further and shuffles the repetitions of all benchmarks.
+//
+// Each benchmark (and each repetition of it: the setup is inside the benchmark function)
+// builds the scene, makes and loads a fresh adapter, runs `--warmup` untimed steps and then
+// times exactly `--steps` steps in one iteration, in real (wall-clock) time. The JSON output
+// (--benchmark_out=... --benchmark_out_format=json) is the record of the run: its context
+// holds the commit, compiler, flags, machine, settings, scene descriptions, engine notes and
+// the combinations that were not run (and why).
+//
+// Per benchmark: real_time (the timed steps), counters steps_per_second (steps / real time),
+// ms_per_step, bodies, contacts (touching manifolds after the last step), engine_threads,
+// steps, warmup, memory_mb (peak RSS growth while making, loading and warming up the adapter)
+// and heap_mb (malloc bytes still held after warm-up); label = final state hash (16 hex digits).
+//
+// Own flags (parsed and removed before Google Benchmark sees the command line):
+//   --scenes a,b      scenes to run            (default circle_stress,polygon_stress)
+//   --engines a,b     engines to run           (default: every adapter)
+//   --counts 1000,... body counts              (default 1000,2000,4000,8000,16000)
+//   --threads 1,2,... engine thread counts     (default 1,2,3,4)
+//   --steps S         timed steps              (default 120)
+//   --warmup W        untimed steps before timing (default 30)
+//   --seed X          scene seed               (default 42)
+// Everything else (--benchmark_repetitions, --benchmark_out, --benchmark_filter, ...) goes to
+// Google Benchmark.
+
+#include <benchmark/benchmark.h>
+#include <fmt/format.h>
+#include <malloc.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <exception>
+#include <fstream>
+#include <memory>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <thread>
+#include <vector>
+
+#include "adapter.h"
+#include "quadrant/error.h"
+#include "scene.h"
+#include "scenes.h"
+
+#ifndef QUADRANT_CXX_FLAGS
+#define QUADRANT_CXX_FLAGS "unknown"
+#endif
+#ifndef QUADRANT_BUILD_TYPE
+#define QUADRANT_BUILD_TYPE "unknown"
+#endif
+
+namespace {
+
+namespace qs = quadrant::scene;
+
+struct Options {
+  std::vector<std::string> scenes{"circle_stress", "polygon_stress"};
+  std::vector<std::string> engines;  // empty: every adapter
+  std::vector<int> counts{1000, 2000, 4000, 8000, 16000};
+  std::vector<int> threads{1, 2, 3, 4};
+  int steps = 120;
+  int warmup = 30;
+  uint64_t seed = 42;
+};
+
+/// A command-line mistake: reported with the usage hint, exit code 2.
+struct UsageError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+void PrintUsage(std::FILE* out) {
+  std::fputs(
+      "quadrant_bench: the engine comparison suite (Google Benchmark).\n"
+      "\n"
+      "Own flags (the rest goes to Google Benchmark, e.g. --benchmark_repetitions=3\n"
+      "--benchmark_out=bench.json --benchmark_out_format=json\n"
+      "--benchmark_enable_random_interleaving=true):\n"
+      "  --scenes a,b       scenes (default circle_stress,polygon_stress)\n"
+      "  --engines a,b      engines (default: all adapters)\n"
+      "  --counts 1000,...  body counts (default 1000,2000,4000,8000,16000)\n"
+      "  --threads 1,2,...  engine thread counts (default 1,2,3,4)\n"
+      "  --steps S          timed steps per run (default 120)\n"
+      "  --warmup W         untimed steps before timing (default 30)\n"
+      "  --seed X           scene seed (default 42)\n"
+      "Benchmarks are named <scene>/<engine>/n:<N>/threads:<T>. Combinations an engine cannot\n"
+      "run are listed as 'unsupported: <name>: <reason>' on stderr and in the JSON context.\n",
+      out);
+}
+
+std::vector<std::string> SplitList(std::string_view text, char sep = ',') {
+  std::vector<std::string> out;
+  size_t start = 0;
+  while (start <= text.size()) {
+    size_t end = text.find(sep, start);
+    if (end == std::string_view::npos) end = text.size();
+    std::string item(text.substr(start, end - start));
+    if (!item.empty()) out.push_back(std::move(item));
+    start = end + 1;
+  }
+  return out;
+}
+
+long long ParseInteger(const std::string& flag, const std::string& text, long long lo,
+                       long long hi) {
+  errno = 0;
+  char* end = nullptr;
+  long long value = std::strtoll(text.c_str(), &end, 10);
+  if (text.empty() || end == nullptr || *end != '\0' || errno != 0 || value < lo || value > hi)
+    throw UsageError(fmt::format("{}: '{}' is not an integer in [{}, {}]", flag, text, lo, hi));
+  return value;
+}
+
+std::vector<int> ParseIntList(const std::string& flag, const std::string& text, int lo, int hi) {
+  std::vector<int> out;
+  for (const std::string& item : SplitList(text)) out.push_back(int(ParseInteger(flag, item, lo, hi)));
+  if (out.empty()) throw UsageError(fmt::format("{}: empty list", flag));
+  return out;
+}
+
+template <typename T>
+std::string JoinList(const std::vector<T>& items, std::string_view sep = ",") {
+  std::string out;
+  for (size_t i = 0; i < items.size(); ++i) {
+    if (i) out += sep;
+    out += fmt::format("{}", items[i]);
+  }
+  return out;
+}
+
+/// Parses and removes the suite's own flags from argv (both "--flag value" and
+/// "--flag=value"); leaves everything else for benchmark::Initialize.
+Options ParseOwnFlags(int& argc, char** argv) {
+  Options opts;
+  static const char* const kOwn[] = {"--scenes", "--engines", "--counts", "--threads",
+                                     "--steps",  "--warmup",  "--seed"};
+  int write = 1;
+  for (int read = 1; read < argc; ++read) {
+    std::string arg = argv[read];
+    std::string flag = arg, value;
+    bool own = false;
+    for (const char* name : kOwn) {
+      const size_t len = std::strlen(name);
+      if (arg == name) {
+        if (read + 1 >= argc) throw UsageError(fmt::format("{} needs a value", name));
+        flag = name;
+        value = argv[++read];
+        own = true;
+      } else if (arg.compare(0, len, name) == 0 && arg.size() > len && arg[len] == '=') {
+        flag = name;
+        value = arg.substr(len + 1);
+        own = true;
+      }
+      if (own) break;
+    }
+    if (!own) {
+      argv[write++] = argv[read];
+      continue;
+    }
+    if (flag == "--scenes") {
+      opts.scenes = SplitList(value);
+      if (opts.scenes.empty()) throw UsageError("--scenes: empty list");
+    } else if (flag == "--engines") {
+      opts.engines = SplitList(value);
+      if (opts.engines.empty()) throw UsageError("--engines: empty list");
+    } else if (flag == "--counts") {
+      opts.counts = ParseIntList(flag, value, 1, 10'000'000);
+    } else if (flag == "--threads") {
+      opts.threads = ParseIntList(flag, value, 1, 1024);
+    } else if (flag == "--steps") {
+      opts.steps = int(ParseInteger(flag, value, 1, 100'000'000));
+    } else if (flag == "--warmup") {
+      opts.warmup = int(ParseInteger(flag, value, 0, 100'000'000));
+    } else if (flag == "--seed") {
+      opts.seed = uint64_t(ParseInteger(flag, value, 0, INT64_MAX));
+    }
+  }
+  argc = write;
+  argv[argc] = nullptr;
+  return opts;
+}
+
+/// Value of a Google Benchmark flag still on the command line ("--name=value"), if given.
+std::optional<std::string> PeekFlag(int argc, char** argv, std::string_view name) {
+  const std::string prefix = fmt::format("--{}=", name);
+  std::optional<std::string> found;
+  for (int i = 1; i < argc; ++i) {
+    std::string_view arg = argv[i];
+    if (arg.substr(0, prefix.size()) == prefix) found = std::string(arg.substr(prefix.size()));
+  }
+  return found;
+}
+
+// ---- Machine description -------------------------------------------------------------------
+
+std::string CpuModel() {
+  std::ifstream in("/proc/cpuinfo");
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.rfind("model name", 0) == 0) {
+      size_t colon = line.find(':');
+      if (colon != std::string::npos) {
+        size_t start = line.find_first_not_of(" \t", colon + 1);
+        return start == std::string::npos ? std::string() : line.substr(start);
+      }
+    }
+  }
+  return "unknown";
+}
+
+std::string HostName() {
+  char buf[256] = {};
+  if (gethostname(buf, sizeof buf - 1) != 0) return "unknown";
+  return buf;
+}
+
+std::string EnvOr(const char* name, std::string fallback) {
+  const char* value = std::getenv(name);
+  return (value != nullptr && *value != '\0') ? std::string(value) : fallback;
+}
+
+// ---- Memory measurement --------------------------------------------------------------------
+
+/// A field of /proc/self/status in kB (VmRSS, VmHWM), or -1.
+long StatusKb(std::string_view key) {
+  std::ifstream in("/proc/self/status");
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.size() > key.size() && line.compare(0, key.size(), key) == 0 &&
+        line[key.size()] == ':')
+      return std::atol(line.c_str() + key.size() + 1);
+  }
+  return -1;
+}
+
+/// Peak growth of the process's resident memory (RSS) from Begin() to End(), in MB, plus the
+/// growth of malloc's bytes in use. Used around "make adapter + Load + warm-up": it measures
+/// what loading that scene into that engine and warming it up costs in resident memory.
+///
+/// Begin() first returns freed heap pages to the kernel (malloc_trim), so what earlier
+/// benchmarks freed is not reused silently, then resets the kernel's peak-RSS mark (VmHWM, via
+/// /proc/self/clear_refs, Linux >= 4.0). End() reads the peak: rss_mb = VmHWM - RSS before.
+/// Where the reset is refused it falls back to the RSS at End(). heap_mb is the growth of
+/// mallinfo2's bytes in use (main arena plus mmapped chunks: what the engine still holds after
+/// warm-up, without allocator slack; allocations by worker threads in their own arenas are not
+/// in it).
+class MemoryProbe {
+ public:
+  void Begin() {
+    malloc_trim(0);
+    baseKb_ = StatusKb("VmRSS");
+    std::ofstream clear("/proc/self/clear_refs");
+    clear << "5";
+    clear.flush();
+    peakReset_ = bool(clear);
+    const struct mallinfo2 info = mallinfo2();
+    baseHeap_ = double(info.uordblks) + double(info.hblkhd);
+  }
+  /// RSS growth (peak during the probe where measurable), MB.
+  double RssMb() const {
+    long now = peakReset_ ? StatusKb("VmHWM") : StatusKb("VmRSS");
+    if (now < 0 || baseKb_ < 0) return 0;
+    return std::max(0.0, double(now - baseKb_) / 1024.0);
+  }
+  /// Heap bytes in use, growth, MB.
+  double HeapMb() const {
+    const struct mallinfo2 info = mallinfo2();
+    double now = double(info.uordblks) + double(info.hblkhd);
+    return std::max(0.0, (now - baseHeap_) / (1024.0 * 1024.0));
+  }
+
+ private:
+  long baseKb_ = -1;
+  bool peakReset_ = false;
+  double baseHeap_ = 0;
+};
+
+// ---- Scenes --------------------------------------------------------------------------------
+
+/// One line saying how a scene is set up, computed from the scene itself.
+std::string DescribeScene(const qs::Scene& scene) {
+  double bodyArea = 0;
+  int dynamic = 0;
+  double fMin = 1e300, fMax = -1e300, eMin = 1e300, eMax = -1e300;
+  int circles = 0, polygons = 0;
+  for (const qs::BodyDesc& body : scene.bodies) {
+    if (!body.dynamic) continue;
+    ++dynamic;
+    (body.shape == qs::ShapeKind::kCircle ? circles : polygons)++;
+    if (body.density > 0) bodyArea += double(qs::ComputeMassProperties(body).mass) / double(body.density);
+    fMin = std::min(fMin, double(body.friction));
+    fMax = std::max(fMax, double(body.friction));
+    eMin = std::min(eMin, double(body.restitution));
+    eMax = std::max(eMax, double(body.restitution));
+  }
+  auto range = [](double lo, double hi) {
+    if (lo > hi) return std::string("n/a");
+    return lo == hi ? fmt::format("{:g}", lo) : fmt::format("{:g}..{:g}", lo, hi);
+  };
+  const double w = double(scene.bounds.upper.x) - double(scene.bounds.lower.x);
+  const double h = double(scene.bounds.upper.y) - double(scene.bounds.lower.y);
+  const double boxArea = w * h;
+  const qs::Effects& fx = scene.effects;
+  std::string effects;
+  auto add = [&](bool on, const char* name) {
+    if (!on) return;
+    if (!effects.empty()) effects += "+";
+    effects += name;
+  };
+  add(fx.gravity, "gravity");
+  add(fx.friction, "friction");
+  add(fx.restitution, "restitution");
+  add(fx.rotation, "rotation");
+  add(fx.warmStarting, "warm-starting");
+  add(fx.sleep, "sleep");
+  add(fx.continuous, "continuous");
+  add(fx.damping, "damping");
+  return fmt::format(
+      "dt {:.6g} s; {} dynamic bodies ({} circles, {} polygons) and {} static; box {:.4g} x "
+      "{:.4g} m; area fraction {}; restitution {}; friction {}; gravity ({:g}, {:g}); "
+      "restitution threshold {:g} m/s; velocity/position iterations {}/{}; substeps {}; "
+      "effects {}",
+      double(scene.timeStep), dynamic, circles, polygons, int(scene.bodies.size()) - dynamic, w,
+      h, boxArea > 0 ? fmt::format("{:.3f}", bodyArea / boxArea) : std::string("n/a"),
+      range(eMin, eMax), range(fMin, fMax), double(scene.gravity.x), double(scene.gravity.y),
+      double(scene.restitutionThreshold), scene.velocityIterations, scene.positionIterations,
+      scene.subSteps, effects.empty() ? std::string("none") : effects);
+}
+
+// ---- The benchmark -------------------------------------------------------------------------
+
+struct Job {
+  std::string scene;
+  std::string engine;
+  int count = 0;
+  int threads = 1;
+  int steps = 120;
+  int warmup = 30;
+  uint64_t seed = 42;
+  std::string name;
+};
+
+std::atomic<int> g_started{0};
+int g_total = 0;  // registered benchmarks x repetitions; 0 when unknown (a filter is in use)
+
+void RunJob(benchmark::State& state, const Job& job) {
+  const int k = ++g_started;
+  if (g_total > 0)
+    std::fprintf(stderr, "[%d/%d] %s\n", k, g_total, job.name.c_str());
+  else
+    std::fprintf(stderr, "[%d] %s\n", k, job.name.c_str());
+  std::fflush(stderr);
+
+  // Setup, untimed, repeated for every repetition so that repetitions are independent.
+  std::unique_ptr<qs::Adapter> adapter;
+  MemoryProbe memory;
+  try {
+    const qs::Scene scene = qs::MakeScene(job.scene, job.count, job.seed);
+    memory.Begin();
+    adapter = qs::MakeAdapter(job.engine);
+    adapter->Load(scene, job.threads);
+    for (int i = 0; i < job.warmup; ++i) adapter->Step();
+  } catch (const std::exception& e) {
+    state.SkipWithError(fmt::format("setup failed: {}", e.what()).c_str());
+    return;
+  }
+  const double memoryMb = memory.RssMb();
+  const double heapMb = memory.HeapMb();
+
+  // Timed: exactly job.steps steps in one iteration. The two clock reads give ms_per_step
+  // as a plain counter (Google Benchmark prints an inverted rate with an "s" suffix, which
+  // would mislabel milliseconds); it matches real_time / steps.
+  double elapsedMs = 0;
+  for (auto _ : state) {
+    const auto t0 = std::chrono::steady_clock::now();
+    try {
+      for (int i = 0; i < job.steps; ++i) adapter->Step();
+    } catch (const std::exception& e) {
+      state.SkipWithError(fmt::format("step failed: {}", e.what()).c_str());
+      break;
+    }
+    elapsedMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  }
+  if (state.error_occurred()) return;
+
+  using benchmark::Counter;
+  state.counters["steps_per_second"] = Counter(double(job.steps), Counter::kIsRate);
+  state.counters["ms_per_step"] = Counter(elapsedMs / double(job.steps));
+  state.counters["bodies"] = Counter(double(adapter->BodyCount()));
+  state.counters["contacts"] = Counter(double(adapter->ContactCount()));
+  // Not "threads": Google Benchmark writes its own "threads" (benchmark threads, always 1) in
+  // every JSON row, and a counter of that name would give the row a duplicate key.
+  state.counters["engine_threads"] = Counter(double(job.threads));
+  state.counters["steps"] = Counter(double(job.steps));
+  state.counters["warmup"] = Counter(double(job.warmup));
+  // RSS growth (peak) while making, loading and warming up this adapter, MB; see MemoryProbe.
+  state.counters["memory_mb"] = Counter(memoryMb);
+  state.counters["heap_mb"] = Counter(heapMb);
+  state.SetLabel(fmt::format("{:016x}", adapter->StateHash()));
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options opts;
+  bool help = false;
+  for (int i = 1; i < argc; ++i)
+    if (std::strcmp(argv[i], "--help") == 0 || std::strcmp(argv[i], "-h") == 0) help = true;
+  try {
+    opts = ParseOwnFlags(argc, argv);
+  } catch (const UsageError& e) {
+    std::fprintf(stderr, "quadrant_bench: %s\n\n", e.what());
+    PrintUsage(stderr);
+    return 2;
+  }
+  if (help) {
+    PrintUsage(stdout);
+    std::fputs("\nGoogle Benchmark flags:\n", stdout);
+    std::fflush(stdout);
+  }
+  // Progress total: every registered benchmark runs once per repetition (unless filtered).
+  // Read before Initialize, which removes the flags it knows from argv.
+  int repetitions = 1;
+  if (auto reps = PeekFlag(argc, argv, "benchmark_repetitions")) repetitions = std::max(1, std::atoi(reps->c_str()));
+  const bool filtered = PeekFlag(argc, argv, "benchmark_filter").has_value();
+  // Google Benchmark's flags first (prints its help and exits on --help), so that a mistyped
+  // flag is reported before the engines are probed.
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 2;
+
+  std::vector<std::string> unsupported;
+  std::vector<std::string> errors;
+  int registered = 0;
+  try {
+    if (opts.engines.empty()) opts.engines = qs::AdapterNames();
+
+    // Engines: made once here for their capabilities (and to reject unknown names early).
+    std::vector<qs::Capabilities> caps;
+    for (const std::string& engine : opts.engines) caps.push_back(qs::MakeAdapter(engine)->Caps());
+
+    // Scene descriptions for the context, from the smallest count (the settings do not depend
+    // on N; the body count and box size do).
+    const int smallest = *std::min_element(opts.counts.begin(), opts.counts.end());
+    for (const std::string& sceneName : opts.scenes) {
+      const qs::Scene scene = qs::MakeScene(sceneName, smallest, opts.seed);
+      benchmark::AddCustomContext(fmt::format("scene_{}", sceneName),
+                                  fmt::format("n={}: {}", smallest, DescribeScene(scene)));
+    }
+
+    // Registration order: for each scene, N and T, every engine in turn (interleaved).
+    for (const std::string& sceneName : opts.scenes) {
+      for (int count : opts.counts) {
+        const qs::Scene scene = qs::MakeScene(sceneName, count, opts.seed);
+        for (int threads : opts.threads) {
+          for (size_t e = 0; e < opts.engines.size(); ++e) {
+            const std::string& engine = opts.engines[e];
+            Job job{sceneName, engine, count, threads, opts.steps, opts.warmup, opts.seed,
+                    fmt::format("{}/{}/n:{}/threads:{}", sceneName, engine, count, threads)};
+            std::string reason;
+            if (threads > caps[e].maxThreads) {
+              reason = fmt::format("{} runs at most {} thread(s)", engine, caps[e].maxThreads);
+            } else {
+              // Probe: an engine says what it cannot run by throwing Unsupported from Load.
+              try {
+                auto probe = qs::MakeAdapter(engine);
+                probe->Load(scene, threads);
+              } catch (const qs::Unsupported& ex) {
+                reason = ex.what();
+              } catch (const std::exception& ex) {
+                errors.push_back(fmt::format("{}: {}", job.name, ex.what()));
+                std::fprintf(stderr, "error: %s: %s\n", job.name.c_str(), ex.what());
+                continue;
+              }
+            }
+            if (!reason.empty()) {
+              std::fprintf(stderr, "unsupported: %s: %s\n", job.name.c_str(), reason.c_str());
+              unsupported.push_back(fmt::format("{}: {}", job.name, reason));
+              continue;
+            }
+            benchmark::RegisterBenchmark(
+                job.name.c_str(), [job](benchmark::State& state) { RunJob(state, job); })
+                ->Iterations(1)
+                ->UseRealTime()
+                ->Unit(benchmark::kMillisecond);
+            ++registered;
+          }
+        }
+      }
+    }
+
+    // The record of the run.
+    benchmark::AddCustomContext("commit", EnvOr("QUADRANT_COMMIT", "unknown"));
+#if defined(__clang__)
+    benchmark::AddCustomContext("compiler", __VERSION__);  // "Debian Clang 14.0.6"
+#elif defined(__GNUC__)
+    benchmark::AddCustomContext("compiler", "GCC " __VERSION__);  // __VERSION__ is "12.2.0"
+#else
+    benchmark::AddCustomContext("compiler", __VERSION__);
+#endif
+    benchmark::AddCustomContext("cxx_flags", QUADRANT_CXX_FLAGS);
+    benchmark::AddCustomContext("build_type", QUADRANT_BUILD_TYPE);
+    benchmark::AddCustomContext("quadrant_real", sizeof(quadrant::Real) == 8 ? "double" : "float");
+    benchmark::AddCustomContext("cpu_model", CpuModel());
+    benchmark::AddCustomContext("cores", fmt::format("{}", std::thread::hardware_concurrency()));
+    benchmark::AddCustomContext("machine", EnvOr("QUADRANT_MACHINE", HostName()));
+    benchmark::AddCustomContext("hostname", HostName());
+    benchmark::AddCustomContext("scenes", JoinList(opts.scenes));
+    benchmark::AddCustomContext("engines", JoinList(opts.engines));
+    benchmark::AddCustomContext("counts", JoinList(opts.counts));
+    benchmark::AddCustomContext("thread_counts", JoinList(opts.threads));
+    benchmark::AddCustomContext("steps", fmt::format("{}", opts.steps));
+    benchmark::AddCustomContext("warmup", fmt::format("{}", opts.warmup));
+    benchmark::AddCustomContext("seed", fmt::format("{}", opts.seed));
+    for (size_t e = 0; e < opts.engines.size(); ++e) {
+      benchmark::AddCustomContext(fmt::format("engine_notes_{}", opts.engines[e]), caps[e].notes);
+      benchmark::AddCustomContext(fmt::format("engine_max_threads_{}", opts.engines[e]),
+                                  fmt::format("{}", caps[e].maxThreads));
+    }
+    benchmark::AddCustomContext("unsupported", JoinList(unsupported, ";"));
+    benchmark::AddCustomContext("errors", JoinList(errors, ";"));
+  } catch (const std::exception& e) {
+    // Unknown scene or engine names, bad counts: a usage error.
+    std::fprintf(stderr, "quadrant_bench: %s\n", e.what());
+    return 2;
+  }
+
+  g_total = filtered ? 0 : registered * repetitions;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return errors.empty() ? 0 : 1;
+}
