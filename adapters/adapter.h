@@ -40,6 +40,21 @@ struct BodyState {
   Real angularVelocity = 0;
 };
 
+/// One touching or speculative contact manifold as an engine reports it, for validation. Body
+/// indices are scene indices; the normal points from bodyA to bodyB; points and separations are
+/// the engine's own (Box2D: midway between the surfaces including its 0.01 m polygon skin).
+/// Impulses are those of the last step (N s).
+struct ContactReadback {
+  int bodyA = -1;
+  int bodyB = -1;
+  Vec2 normal;
+  int pointCount = 0;
+  Vec2 points[2];
+  Real separations[2] = {0, 0};
+  Real normalImpulses[2] = {0, 0};
+  Real tangentImpulses[2] = {0, 0};
+};
+
 class Adapter {
  public:
   virtual ~Adapter() = default;
@@ -63,6 +78,9 @@ class Adapter {
   /// their stages (Quadrant: broad_phase, narrow_phase, persistence, solve, integrate, total).
   /// Empty for engines that do not.
   virtual std::vector<std::pair<std::string, double>> StageTotals() const { return {}; }
+  /// Contact manifolds after the last step, for engines that can report them (Quadrant, Box2D);
+  /// empty for the others. Not for timed loops: it builds the list on every call.
+  virtual std::vector<ContactReadback> Contacts() const { return {}; }
 };
 
 /// Engine names: "quadrant", "box2d", "bullet", "chipmunk" (and solver/scheme variants of

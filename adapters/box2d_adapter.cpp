@@ -6,6 +6,7 @@
 
 #include <memory>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "adapter.h"
@@ -160,6 +161,33 @@ class Box2dAdapter final : public Adapter {
       if (c->IsTouching()) ++touching;
     }
     return touching;
+  }
+
+  std::vector<ContactReadback> Contacts() const override {
+    std::vector<ContactReadback> out;
+    if (!world_) return out;
+    // Scene indices by body; built per call, since this read-back is for validation only.
+    std::unordered_map<const b2Body*, int> index;
+    for (size_t i = 0; i < bodies_.size(); ++i) index[bodies_[i]] = static_cast<int>(i);
+    for (const b2Contact* c = world_->GetContactList(); c != nullptr; c = c->GetNext()) {
+      if (!c->IsTouching()) continue;
+      const b2Manifold* m = c->GetManifold();
+      b2WorldManifold wm;
+      c->GetWorldManifold(&wm);
+      ContactReadback r;
+      r.bodyA = index.at(c->GetFixtureA()->GetBody());
+      r.bodyB = index.at(c->GetFixtureB()->GetBody());
+      r.normal = FromB2(wm.normal);
+      r.pointCount = m->pointCount;
+      for (int k = 0; k < m->pointCount && k < 2; ++k) {
+        r.points[k] = FromB2(wm.points[k]);
+        r.separations[k] = Real(wm.separations[k]);
+        r.normalImpulses[k] = Real(m->points[k].normalImpulse);
+        r.tangentImpulses[k] = Real(m->points[k].tangentImpulse);
+      }
+      out.push_back(r);
+    }
+    return out;
   }
 
   void SetVelocity(int body, Vec2 velocity, Real angularVelocity) override {

@@ -1,8 +1,9 @@
 // The Quadrant adapter: a scene becomes a World once, at load time.
 //
 // Variants ("quadrant:<tokens>", tokens joined by '+'): solver "thesis" or "pgs", broad phase
-// "quadtree" or "grid". The default is pgs with the uniform grid, the combination the suite
-// measured fastest on the stress scenes (see README).
+// "quadtree" or "grid", parallel scheme "deterministic" or "quadrants". The default is pgs with
+// the uniform grid and the deterministic scheme, the combination the suite measured fastest
+// on the stress scenes (see README).
 #include <string>
 
 #include "adapter_factories.h"
@@ -26,8 +27,12 @@ class QuadrantAdapter final : public Adapter {
         broadPhase_ = BroadPhaseType::kQuadTree;
       } else if (token == "grid") {
         broadPhase_ = BroadPhaseType::kUniformGrid;
+      } else if (token == "deterministic") {
+        scheme_ = ParallelScheme::kDeterministic;
+      } else if (token == "quadrants") {
+        scheme_ = ParallelScheme::kQuadrants;
       } else {
-        throw Error("unknown quadrant variant '" + std::string(token) + "' (known: thesis, pgs, quadtree, grid)");
+        throw Error("unknown quadrant variant '" + std::string(token) + "' (known: thesis, pgs, quadtree, grid, deterministic, quadrants)");
       }
       if (end == std::string_view::npos) break;
       start = end + 1;
@@ -38,20 +43,20 @@ class QuadrantAdapter final : public Adapter {
 
   Capabilities Caps() const override {
     Capabilities c;
-    c.maxThreads = 1;
+    c.maxThreads = kMaxThreads;
     c.disableRotation = true;
     c.disableFriction = true;
     c.disableWarmStarting = true;
     c.notes = std::string("solver ") + (solver_ == SolverType::kThesis ? "thesis" : "pgs") +
               ", broad phase " + (broadPhase_ == BroadPhaseType::kQuadTree ? "quad-tree" : "uniform grid") +
               "; friction sqrt(f1*f2), restitution max(e1,e2) as Box2D; speculative contacts 0.02 m; "
-              "no polygon skin; single-threaded until the parallel schemes land";
+              "no polygon skin; scheme " + (scheme_ == ParallelScheme::kQuadrants ? "quadrants" : "deterministic");
     return c;
   }
 
   void Load(const Scene& scene, int threads) override {
     ValidateScene(scene);
-    if (threads != 1) throw Unsupported("quadrant runs 1 thread until the parallel schemes land");
+    if (threads < 1 || threads > kMaxThreads) throw Error("quadrant: threads must be in [1, 64]");
     if (scene.effects.sleep) throw Unsupported("quadrant has no sleeping yet");
     if (scene.effects.continuous) throw Unsupported("quadrant has no continuous collision yet");
     if (scene.effects.damping) throw Unsupported("scene bodies carry no damping values yet");
@@ -63,6 +68,7 @@ class QuadrantAdapter final : public Adapter {
     def.positionIterations = scene.positionIterations;
     def.restitutionThreshold = scene.restitutionThreshold;
     def.threadCount = threads;
+    def.scheme = scheme_;
     def.effects.gravity = scene.effects.gravity;
     def.effects.friction = scene.effects.friction;
     def.effects.restitution = scene.effects.restitution;
@@ -95,6 +101,7 @@ class QuadrantAdapter final : public Adapter {
   }
 
   void Step() override {
+    if (!world_) throw Error("quadrant: Step before Load");
     if (driver_) driver_(step_, *this);
     world_->Step(dt_, subSteps_);
     const Profile& p = world_->GetProfile();
@@ -104,13 +111,24 @@ class QuadrantAdapter final : public Adapter {
     totals_.solve += p.solve;
     totals_.integrate += p.integrate;
     totals_.total += p.total;
+    for (size_t k = 0; k < kStageCount; ++k) {
+      totals_.balance[k].workMs += p.balance[k].workMs;
+      totals_.balance[k].criticalMs += p.balance[k].criticalMs;
+    }
     ++step_;
   }
 
   std::vector<std::pair<std::string, double>> StageTotals() const override {
-    return {{"broad_phase", totals_.broadPhase}, {"narrow_phase", totals_.narrowPhase},
-            {"persistence", totals_.persistence}, {"solve", totals_.solve},
-            {"integrate", totals_.integrate},     {"total", totals_.total}};
+    std::vector<std::pair<std::string, double>> out = {
+        {"broad_phase", totals_.broadPhase}, {"narrow_phase", totals_.narrowPhase},
+        {"persistence", totals_.persistence}, {"solve", totals_.solve},
+        {"integrate", totals_.integrate},     {"total", totals_.total}};
+    // Load balance: thread CPU work and critical path per stage (see StageRunner).
+    for (size_t k = 0; k < kStageCount; ++k) {
+      out.push_back({std::string("work_") + kStageNames[k], totals_.balance[k].workMs});
+      out.push_back({std::string("critical_") + kStageNames[k], totals_.balance[k].criticalMs});
+    }
+    return out;
   }
 
   int BodyCount() const override { return world_ ? world_->GetBodyCount() : 0; }
@@ -125,8 +143,37 @@ class QuadrantAdapter final : public Adapter {
 
   int ContactCount() const override { return world_ ? world_->GetCounters().touchingContacts : 0; }
 
+  // Every manifold the world keeps, speculative ones (separation > 0) included.
+  std::vector<ContactReadback> Contacts() const override {
+    std::vector<ContactReadback> out;
+    if (!world_) return out;
+    auto sceneIndex = [this](BodyId id) {
+      for (size_t i = 0; i < ids_.size(); ++i) {
+        if (ids_[i] == id) return static_cast<int>(i);
+      }
+      return -1;
+    };
+    for (const ContactInfo& c : world_->GetContacts()) {
+      ContactReadback r;
+      r.bodyA = sceneIndex(c.bodyA);
+      r.bodyB = sceneIndex(c.bodyB);
+      r.normal = c.normal;
+      r.pointCount = c.pointCount;
+      for (int k = 0; k < c.pointCount && k < 2; ++k) {
+        r.points[k] = c.points[k];
+        r.separations[k] = c.separations[k];
+        r.normalImpulses[k] = c.normalImpulses[k];
+        r.tangentImpulses[k] = c.tangentImpulses[k];
+      }
+      out.push_back(r);
+    }
+    return out;
+  }
+
   void SetVelocity(int body, Vec2 velocity, Real angularVelocity) override {
     if (body < 0 || body >= static_cast<int>(ids_.size())) throw Error("SetVelocity: body index out of range");
+    // Both checked before either is set, so a refused call changes nothing.
+    if (!IsFinite(velocity) || !IsFinite(angularVelocity)) throw Error("SetVelocity: velocity is not finite");
     world_->SetLinearVelocity(ids_[body], velocity);
     world_->SetAngularVelocity(ids_[body], angularVelocity);
   }
@@ -139,6 +186,8 @@ class QuadrantAdapter final : public Adapter {
   std::string variant_;
   SolverType solver_ = SolverType::kPgs;
   BroadPhaseType broadPhase_ = BroadPhaseType::kUniformGrid;
+  ParallelScheme scheme_ = ParallelScheme::kDeterministic;
+  static constexpr int kMaxThreads = 64;
   std::unique_ptr<World> world_;
   std::vector<BodyId> ids_;
   const Scene* scene_ = nullptr;

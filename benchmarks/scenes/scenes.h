@@ -22,7 +22,8 @@ struct StressParams {
   Real areaFraction = Real(0.25);   ///< body area / box area, in (0, 0.9)
   Real minSpeed = 1;                ///< m/s
   Real maxSpeed = 5;
-  bool clumped = false;             ///< all bodies in one quadrant of the box (load-imbalance case)
+  bool clumped = false;             ///< all bodies in the lower-left quadrant of a box twice as wide
+                                    ///< (same density there; the load-imbalance case)
   uint64_t seed = 42;
 };
 
@@ -36,6 +37,60 @@ std::vector<std::string> SceneNames();
 /// Builds a named scene with `count` bodies (ignored by fixed-size scenes) and a seed.
 /// Throws quadrant::Error for unknown names or bad counts.
 Scene MakeScene(std::string_view name, int count, uint64_t seed = 42);
+
+// ---- The hard cases of anchors.md (hard_cases.cpp) ------------------------------------------
+//
+// Every hard case is at dt = 1/60 with 8 velocity and 3 position iterations, gravity (0, -10)
+// unless it says otherwise, no sleep, no continuous collision, settings written out in the
+// builder. Ground tops are at y = 0 (plus the offset where there is one). Body order is part of
+// each builder's contract (the checks in hard_case_checks.cpp rely on it).
+
+/// How an engine mixes two bodies' friction and restitution. No one material pair gives the same
+/// mixed value under both rules (only 0 and 1 do), so builders take the rule of the engine that
+/// will run them and choose per-body values that mix to the coefficient the case is about.
+enum class Mixing : uint8_t {
+  kBox2d,    ///< friction sqrt(f1 f2), restitution max(e1, e2): Box2D 2.4 and Quadrant
+  kProduct,  ///< friction f1 f2, restitution e1 e2: Bullet and Chipmunk
+};
+/// quadrant, quadrant:<variant>, box2d -> kBox2d; bullet, chipmunk -> kProduct. Throws
+/// quadrant::Error for other names.
+Mixing MixingOf(std::string_view engine);
+Real MixFriction(Mixing mixing, Real a, Real b);
+Real MixRestitution(Mixing mixing, Real a, Real b);
+
+/// Ground, then `count` 1 m boxes bottom to top (friction 0.3, x = +0.01, -0.01, ...).
+Scene MakeVerticalStack(int count = 15, Mixing mixing = Mixing::kBox2d);
+/// Ground, then base (base+1)/2 1 m boxes row by row from the bottom (friction 0.6, centres 1.1 m
+/// apart in a row, rows 1 m apart), everything shifted by `offset`. The last body is the apex.
+Scene MakePyramid(int base = 20, Vec2 offset = {}, Mixing mixing = Mixing::kBox2d);
+/// ratio 100: ground, a base-10 pyramid of 1 m boxes (density 1), then a 1 m box of density 100
+/// on its apex. ratio 400: ground, two 1 m boxes (1 kg) at x = -9 and 9, then a 20 m x 1 m plank
+/// of 400 kg (density 20) on them. Friction 0.6. Throws quadrant::Error for other ratios.
+Scene MakeMassRatio(int ratio, Mixing mixing = Mixing::kBox2d);
+/// Ground, then 17 voussoirs of a semicircular arch (inner radius 4 m, outer 5 m, centre on the
+/// ground at the origin, radial joints every pi/17), left to right; friction 0.6.
+Scene MakeArch(Mixing mixing = Mixing::kBox2d);
+/// Ground, then a card house of `levels` storeys (levels = 5: 30 leaning + 10 flat = 40 cards of
+/// 1 m x 0.02 m, friction 0.7), storey by storey from the bottom; the last two are the top pair.
+Scene MakeCardHouse(int levels = 5, Mixing mixing = Mixing::kBox2d);
+/// Five static ramps at 0.25 rad (friction 1) side by side, each with a 1 m box at rest on it that
+/// mixes with the ramp to friction 0.75, 0.5, 0.35, 0.1, 0. Bodies: ramp k = 2k, box k = 2k + 1.
+Scene MakeFrictionRamp(Mixing mixing = Mixing::kBox2d);
+/// Ground, then five balls (r = 0.5 m, bottom 2 m above the ground) that mix with the ground to
+/// restitution 0, 0.25, 0.5, 0.75, 1; friction off, restitution threshold 0.
+Scene MakeRestitutionDrop(Mixing mixing = Mixing::kBox2d);
+/// Ground, then a pyramid of 1 m boxes whose centres are 0.75 m apart in both directions (each box
+/// overlaps its neighbours by 25 %), bottom row resting on the ground; friction 0.6.
+Scene MakeOverlapRecovery(int base = 10, Mixing mixing = Mixing::kBox2d);
+/// Four walls of a closed 25 m x 25 m box, then side x side circles (r = 0.5 m) on a grid of
+/// 0.8 m pitch (each overlaps its neighbours by 0.2 m) with a seeded jitter of +-0.02 m; zero
+/// gravity, at rest, friction 0.6, restitution 0.
+Scene MakeConfined(int side = 25, uint64_t seed = 42, Mixing mixing = Mixing::kBox2d);
+/// MakePyramid(20) at (1e5, -8e4).
+Scene MakeFarFromOrigin(Mixing mixing = Mixing::kBox2d);
+/// Five touching balls (r = 0.5 m) in a row at x = 0, 1, 2, 3, 4, zero gravity, friction 0,
+/// restitution 1, threshold 0; body 0 moves at +1 m/s into the others, which are at rest.
+Scene MakeNewtonsCradle(Mixing mixing = Mixing::kBox2d);
 
 /// A small deterministic random source (splitmix64), so a seed gives the same scene with any
 /// standard library.

@@ -91,11 +91,13 @@ Scene MakeStressScene(const StressParams& p) {
       maxExtent = std::max(maxExtent, 2.0 * r);
     }
   }
-  const double side = std::sqrt(area / p.areaFraction);
+  // The clumped variant puts every body in the lower-left quadrant of a box twice as wide, at
+  // the same area fraction there: the quadrant looks like the uniform scene, the rest is empty
+  // (the load-imbalance case of the thesis's quadrant scheme).
+  const double side = std::sqrt(area / p.areaFraction) * (p.clumped ? 2.0 : 1.0);
   const double half = 0.5 * side;
 
-  // Place on a jittered grid so no two bodies start overlapping. The clumped variant packs
-  // every body into the lower-left quadrant (area fraction x4 there), to load one thread.
+  // Place on a jittered grid so no two bodies start overlapping.
   const double region = p.clumped ? half : side;
   const int perRow = static_cast<int>(std::ceil(std::sqrt(double(p.count))));
   const double cell = region / perRow;

@@ -3,6 +3,11 @@
 
 namespace quadrant {
 
+void MergePairs(std::vector<std::vector<CandidatePair>>& perWorker, std::vector<CandidatePair>& out) {
+  out.clear();
+  for (const auto& part : perWorker) out.insert(out.end(), part.begin(), part.end());
+}
+
 std::unique_ptr<BroadPhase> MakeBroadPhase(BroadPhaseType type, int quadTreeMaxDepth) {
   switch (type) {
     case BroadPhaseType::kQuadTree: return MakeQuadTree(quadTreeMaxDepth);

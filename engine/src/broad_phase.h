@@ -12,6 +12,7 @@
 
 #include "quadrant/math.h"
 #include "quadrant/world.h"
+#include "stage_runner.h"
 
 namespace quadrant {
 
@@ -26,11 +27,15 @@ class BroadPhase {
   virtual ~BroadPhase() = default;
   /// Writes every pair (a < b) whose AABBs overlap (touching counts) and of which at least
   /// one body has movable[i] != 0, each pair exactly once, into `out` (cleared first). The
-  /// order is deterministic for a given input.
+  /// order is deterministic for a given input and the same for any thread count of `run`
+  /// (parallel sections write per-worker buffers that are concatenated in worker order).
   virtual void FindPairs(std::span<const AABB> aabbs, std::span<const uint8_t> movable,
-                         std::vector<CandidatePair>& out) = 0;
+                         std::vector<CandidatePair>& out, StageRunner& run) = 0;
   virtual const char* Name() const = 0;
 };
+
+/// Concatenates per-worker pair buffers in worker order.
+void MergePairs(std::vector<std::vector<CandidatePair>>& perWorker, std::vector<CandidatePair>& out);
 
 std::unique_ptr<BroadPhase> MakeQuadTree(int maxDepth);
 std::unique_ptr<BroadPhase> MakeUniformGrid();

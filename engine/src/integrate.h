@@ -8,11 +8,14 @@
 namespace quadrant {
 
 /// v += dt * gravity (if the effect is on), then damping (if on): v *= 1 / (1 + dt * c).
-void IntegrateVelocities(Bodies& bodies, const WorldDef& def, Real dt);
+void IntegrateVelocities(Bodies& bodies, const WorldDef& def, Real dt, StageRunner& run);
 
 /// centre += dt * v, rotation += dt * w (if rotation is on); updates the origin transform.
 /// Speeds above def.maxLinearSpeed are scaled down to it (a numerical guard, as in Box2D).
-void IntegratePositions(Bodies& bodies, const WorldDef& def, Real dt);
+void IntegratePositions(Bodies& bodies, const WorldDef& def, Real dt, StageRunner& run);
+
+/// The same for bodies [begin, end), on the calling thread.
+void IntegratePositionsRange(Bodies& bodies, const WorldDef& def, Real dt, int begin, int end);
 
 /// Recomputes the origin transform of body i from its centre of mass and rotation.
 inline void SyncTransform(Bodies& bodies, int i) {

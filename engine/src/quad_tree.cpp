@@ -29,25 +29,37 @@ class QuadTree final : public BroadPhase {
   const char* Name() const override { return "quad_tree"; }
 
   void FindPairs(std::span<const AABB> aabbs, std::span<const uint8_t> movable,
-                 std::vector<CandidatePair>& out) override {
+                 std::vector<CandidatePair>& out, StageRunner& run) override {
     out.clear();
     const int n = static_cast<int>(aabbs.size());
     if (n < 2) return;
-    ChooseRegion(aabbs);
-    AssignNodes(aabbs);
-    Bucket(n);
-    for (int node = 0; node < nodeCount_; ++node) {
-      const int begin = start_[node];
-      const int end = start_[node + 1];
+    run.Serial(Stage::kBroadPhase, [&] {
+      ChooseRegion(aabbs);
+      AssignNodes(aabbs);
+      Bucket(n);
+    });
+    perWorker_.resize(run.Workers());
+    stacks_.resize(run.Workers());
+    for (auto& part : perWorker_) part.clear();
+    // Blocks of bodies in node order: each body pairs with its node's later bodies and with
+    // the bodies below it, so blocks are independent.
+    run.For(Stage::kBroadPhase, n, run.MinItems(), [&](int begin, int end, int worker) {
+      std::vector<CandidatePair>& part = perWorker_[worker];
+      int node = 0;
       for (int k = begin; k < end; ++k) {
+        while (start_[node + 1] <= k) ++node;
         const int i = items_[k];
-        for (int l = k + 1; l < end; ++l) TestPair(i, items_[l], aabbs, movable, out);
-        if (node < firstLeaf_) QueryDescendants(node, i, aabbs, movable, out);
+        for (int l = k + 1; l < start_[node + 1]; ++l) TestPair(i, items_[l], aabbs, movable, part);
+        if (node < firstLeaf_) QueryDescendants(node, i, aabbs, movable, part, stacks_[worker]);
       }
-    }
+    });
+    MergePairs(perWorker_, out);
   }
 
  private:
+  struct NodeRef {
+    int level, cx, cy;
+  };
   struct CellRange {
     int x0, y0, x1, y1;  // inclusive, at the finest level
   };
@@ -117,7 +129,7 @@ class QuadTree final : public BroadPhase {
   }
 
   void QueryDescendants(int node, int i, std::span<const AABB> aabbs, std::span<const uint8_t> movable,
-                        std::vector<CandidatePair>& out) {
+                        std::vector<CandidatePair>& out, std::vector<NodeRef>& stack_) const {
     const CellRange r = range_[i];
     // Decode (level, cx, cy) of the starting node.
     int level = 0;
@@ -150,10 +162,6 @@ class QuadTree final : public BroadPhase {
     out.push_back(i < j ? CandidatePair{i, j} : CandidatePair{j, i});
   }
 
-  struct NodeRef {
-    int level, cx, cy;
-  };
-
   int maxDepth_;
   int depth_ = 0;
   int nodeCount_ = 1;
@@ -162,7 +170,8 @@ class QuadTree final : public BroadPhase {
   std::vector<int> node_;
   std::vector<CellRange> range_;
   std::vector<int> start_, fill_, subtree_, items_;
-  std::vector<NodeRef> stack_;
+  std::vector<std::vector<CandidatePair>> perWorker_;
+  std::vector<std::vector<NodeRef>> stacks_;
 };
 
 }  // namespace

@@ -13,7 +13,14 @@
 //
 // The kernels are templates on the effects (rotation, friction): a world with an effect off
 // runs a path without its rows or terms instead of multiplying them by zero.
+//
+// Parallelism: constraints are coloured greedily (in contact order) so that no two of one
+// colour share a dynamic body, and solved colour by colour. Within a colour the constraints
+// are independent, so splitting a colour across threads gives exactly the serial result: the
+// solve is bit-identical for any thread count. Static and kinematic bodies are read, never
+// written, so they do not constrain the colouring (as in Box2D 3's constraint graph).
 #include <algorithm>
+#include <bit>
 #include <chrono>
 #include <vector>
 
@@ -36,6 +43,7 @@ struct PointConstraint {
 };
 
 struct ContactConstraint {
+  int contact;  // index in ctx.contacts (constraints are stored in colour order)
   int a, b;
   Vec2 normal;
   Real friction, restitution;
@@ -59,52 +67,123 @@ class PgsSolver final : public Solver {
   }
 
  private:
+  // Colours beyond this share one overflow group solved on one thread (rare: a body would
+  // need 64 simultaneous contacts).
+  static constexpr int kColors = 64;
+
   template <bool kRotation, bool kFriction>
   void Run(StepContext& ctx) {
     const WorldDef& def = *ctx.def;
     Bodies& bodies = *ctx.bodies;
+    StageRunner& run = *ctx.run;
     const Real dt = ctx.dt;
 
     auto t0 = Clock::now();
-    IntegrateVelocities(bodies, def, dt);
+    IntegrateVelocities(bodies, def, dt, run);
     auto t1 = Clock::now();
 
-    Prepare<kRotation>(ctx);
-    if (def.effects.warmStarting) WarmStart<kRotation>(bodies);
+    run.Serial(Stage::kSolve, [&] { Color(ctx); });
+    const int m = static_cast<int>(constraints_.size());
+    run.For(Stage::kSolve, m, run.MinItems(), [&](int b, int e, int) { Prepare<kRotation>(ctx, b, e); });
+    if (def.effects.warmStarting) ForEachColor(run, [&](int b, int e) { WarmStart<kRotation>(bodies, b, e); });
     const Real invDt = Real(1) / dt;
-    for (int it = 0; it < def.velocityIterations; ++it) SolveVelocities<kRotation, kFriction>(bodies, invDt);
-    hasBounceShift_ = false;
-    if (def.effects.restitution) {
-      for (int it = 0; it < def.restitutionIterations; ++it) ApplyRestitution<kRotation>(bodies, def.restitutionThreshold);
+    for (int it = 0; it < def.velocityIterations; ++it) {
+      ForEachColor(run, [&](int b, int e) { SolveVelocities<kRotation, kFriction>(bodies, invDt, b, e); });
     }
-    StoreImpulses(ctx.contacts);
+    if (def.effects.restitution) {
+      for (int it = 0; it < def.restitutionIterations; ++it) {
+        ForEachColor(run, [&](int b, int e) { ApplyRestitution<kRotation>(bodies, def.restitutionThreshold, b, e); });
+      }
+    }
+    run.For(Stage::kSolve, m, run.MinItems(), [&](int b, int e, int) { StoreImpulses(ctx.contacts, b, e); });
     auto t2 = Clock::now();
 
-    const bool correct = def.positionIterations > 0 && !constraints_.empty();
-    if (correct) Snapshot(bodies);
-    IntegratePositions(bodies, def, dt);
-    if (hasBounceShift_) ApplyBounceShifts(bodies);
+    const bool correct = def.positionIterations > 0 && m > 0;
+    if (correct) {
+      center0_.resize(bodies.Count());
+      rot0_.resize(bodies.Count());
+      run.For(Stage::kSolve, bodies.Count(), run.MinItems(), [&](int b, int e, int) {
+        for (int i = b; i < e; ++i) {
+          center0_[i] = bodies.center[i];
+          rot0_[i] = bodies.xf[i].q;
+        }
+      });
+    }
+    IntegratePositions(bodies, def, dt, run);
+    if (def.effects.restitution && m > 0) ForEachColor(run, [&](int b, int e) { ApplyBounceShifts(bodies, b, e); });
     auto t3 = Clock::now();
     if (correct) {
-      for (int it = 0; it < def.positionIterations; ++it) SolvePositions<kRotation>(bodies, def);
-      // Only bodies that can move: re-deriving a static body's origin would change its bits.
-      for (const ContactConstraint& cc : constraints_) {
-        if (cc.invMassA > 0) SyncTransform(bodies, cc.a);
-        if (cc.invMassB > 0) SyncTransform(bodies, cc.b);
+      for (int it = 0; it < def.positionIterations; ++it) {
+        ForEachColor(run, [&](int b, int e) { SolvePositions<kRotation>(bodies, def, b, e); });
       }
+      // Re-derive the origins of the bodies the pass moved (only dynamic ones: re-deriving a
+      // static body's origin could change its bits).
+      ForEachColor(run, [&](int b, int e) {
+        for (int k = b; k < e; ++k) {
+          const ContactConstraint& cc = constraints_[k];
+          if (cc.invMassA > 0) SyncTransform(bodies, cc.a);
+          if (cc.invMassB > 0) SyncTransform(bodies, cc.b);
+        }
+      });
     }
     auto t4 = Clock::now();
     ctx.profile->integrate += Ms(t0, t1) + Ms(t2, t3);
     ctx.profile->solve += Ms(t1, t2) + Ms(t3, t4);
   }
 
-  template <bool kRotation>
-  void Prepare(StepContext& ctx) {
+  // Greedy colouring in contact order (deterministic): each constraint takes the lowest colour
+  // that neither of its dynamic bodies has yet. Then the constraints' order is grouped by colour.
+  void Color(const StepContext& ctx) {
     const Bodies& bodies = *ctx.bodies;
-    constraints_.resize(ctx.contacts.size());
-    for (size_t c = 0; c < ctx.contacts.size(); ++c) {
-      const Contact& contact = ctx.contacts[c];
-      ContactConstraint& cc = constraints_[c];
+    const int m = static_cast<int>(ctx.contacts.size());
+    bodyColors_.resize(bodies.Count(), 0);
+    colorOf_.resize(m);
+    int counts[kColors + 1] = {};
+    for (int c = 0; c < m; ++c) {
+      const int a = ctx.contacts[c].a, b = ctx.contacts[c].b;
+      const bool dynA = bodies.inv[a].invMass > 0, dynB = bodies.inv[b].invMass > 0;
+      const uint64_t used = (dynA ? bodyColors_[a] : 0) | (dynB ? bodyColors_[b] : 0);
+      const int color = used == ~uint64_t(0) ? kColors : std::countr_one(used);
+      colorOf_[c] = color;
+      ++counts[color];
+      if (color < kColors) {
+        if (dynA) bodyColors_[a] |= uint64_t(1) << color;
+        if (dynB) bodyColors_[b] |= uint64_t(1) << color;
+      }
+    }
+    for (int c = 0; c < m; ++c) {  // leave the masks zeroed for the next step
+      bodyColors_[ctx.contacts[c].a] = 0;
+      bodyColors_[ctx.contacts[c].b] = 0;
+    }
+    colorStart_.assign(kColors + 2, 0);
+    for (int k = 0; k <= kColors; ++k) colorStart_[k + 1] = colorStart_[k] + counts[k];
+    order_.resize(m);
+    std::vector<int>& fill = fill_;
+    fill.assign(colorStart_.begin(), colorStart_.end() - 1);
+    for (int c = 0; c < m; ++c) order_[fill[colorOf_[c]]++] = c;
+    constraints_.resize(m);
+  }
+
+  template <class Fn>
+  void ForEachColor(StageRunner& run, Fn&& fn) {
+    for (int color = 0; color < kColors; ++color) {
+      const int begin = colorStart_[color], count = colorStart_[color + 1] - begin;
+      if (count == 0) continue;
+      // A constraint pass is cheap per item but the small colours that follow the first one
+      // would otherwise stay serial: an eighth of the grain (64 by default).
+      run.For(Stage::kSolve, count, std::max(1, run.MinItems() / 8), [&](int b, int e, int) { fn(begin + b, begin + e); });
+    }
+    const int begin = colorStart_[kColors], end = colorStart_[kColors + 1];
+    if (begin < end) run.Serial(Stage::kSolve, [&] { fn(begin, end); });
+  }
+
+  template <bool kRotation>
+  void Prepare(StepContext& ctx, int begin, int end) {
+    const Bodies& bodies = *ctx.bodies;
+    for (int k = begin; k < end; ++k) {
+      const Contact& contact = ctx.contacts[order_[k]];
+      ContactConstraint& cc = constraints_[k];
+      cc.contact = order_[k];
       cc.a = contact.a;
       cc.b = contact.b;
       cc.normal = contact.manifold.normal;
@@ -145,21 +224,26 @@ class PgsSolver final : public Solver {
     }
   }
 
+  // Static and kinematic bodies (inverse mass 0) are never written: other threads may be
+  // reading them for constraints of the same colour.
   template <bool kRotation>
   static void ApplyImpulse(Bodies& bodies, const ContactConstraint& cc, const PointConstraint& pc, Vec2 P) {
-    BodyVelocity& va = bodies.vel[cc.a];
-    BodyVelocity& vb = bodies.vel[cc.b];
-    va.v -= cc.invMassA * P;
-    vb.v += cc.invMassB * P;
-    if constexpr (kRotation) {
-      va.w -= cc.invIA * Cross(pc.rA, P);
-      vb.w += cc.invIB * Cross(pc.rB, P);
+    if (cc.invMassA > 0) {
+      BodyVelocity& va = bodies.vel[cc.a];
+      va.v -= cc.invMassA * P;
+      if constexpr (kRotation) va.w -= cc.invIA * Cross(pc.rA, P);
+    }
+    if (cc.invMassB > 0) {
+      BodyVelocity& vb = bodies.vel[cc.b];
+      vb.v += cc.invMassB * P;
+      if constexpr (kRotation) vb.w += cc.invIB * Cross(pc.rB, P);
     }
   }
 
   template <bool kRotation>
-  void WarmStart(Bodies& bodies) {
-    for (const ContactConstraint& cc : constraints_) {
+  void WarmStart(Bodies& bodies, int begin, int end) {
+    for (int k = begin; k < end; ++k) {
+      const ContactConstraint& cc = constraints_[k];
       const Vec2 t = RightPerp(cc.normal);
       for (int k = 0; k < cc.pointCount; ++k) {
         const PointConstraint& pc = cc.points[k];
@@ -176,8 +260,9 @@ class PgsSolver final : public Solver {
   }
 
   template <bool kRotation, bool kFriction>
-  void SolveVelocities(Bodies& bodies, Real invDt) {
-    for (ContactConstraint& cc : constraints_) {
+  void SolveVelocities(Bodies& bodies, Real invDt, int begin, int end) {
+    for (int c = begin; c < end; ++c) {
+      ContactConstraint& cc = constraints_[c];
       const Vec2 n = cc.normal;
       BodyVelocity va = bodies.vel[cc.a];
       BodyVelocity vb = bodies.vel[cc.b];
@@ -211,8 +296,8 @@ class PgsSolver final : public Solver {
         pc.normalImpulse = newImpulse;
         apply(pc, lambda * n);
       }
-      bodies.vel[cc.a] = va;
-      bodies.vel[cc.b] = vb;
+      if (cc.invMassA > 0) bodies.vel[cc.a] = va;
+      if (cc.invMassB > 0) bodies.vel[cc.b] = vb;
     }
   }
 
@@ -226,8 +311,9 @@ class PgsSolver final : public Solver {
   // back 10 cm higher). The point records that distance and ApplyBounceShifts moves the pair
   // back by it after integration, which makes an isolated collision exact in both.
   template <bool kRotation>
-  void ApplyRestitution(Bodies& bodies, Real threshold) {
-    for (ContactConstraint& cc : constraints_) {
+  void ApplyRestitution(Bodies& bodies, Real threshold, int begin, int end) {
+    for (int c = begin; c < end; ++c) {
+      ContactConstraint& cc = constraints_[c];
       if (cc.restitution == 0) continue;
       for (int k = 0; k < cc.pointCount; ++k) {
         PointConstraint& pc = cc.points[k];
@@ -239,10 +325,7 @@ class PgsSolver final : public Solver {
         const Real lambda = newImpulse - pc.normalImpulse;
         pc.normalImpulse = newImpulse;
         ApplyImpulse<kRotation>(bodies, cc, pc, lambda * cc.normal);
-        if (pc.separation > 0) {
-          pc.bounceShift = (Real(1) + cc.restitution) * pc.separation;
-          hasBounceShift_ = true;
-        }
+        if (pc.separation > 0) pc.bounceShift = (Real(1) + cc.restitution) * pc.separation;
       }
     }
   }
@@ -250,8 +333,9 @@ class PgsSolver final : public Solver {
   // Moves each pair that bounced early back together along the normal by its recorded
   // distance, split by inverse mass (the linear part only: enough for the bounce, and it cannot
   // spin a body). Only bodies that move are touched.
-  void ApplyBounceShifts(Bodies& bodies) {
-    for (const ContactConstraint& cc : constraints_) {
+  void ApplyBounceShifts(Bodies& bodies, int begin, int end) {
+    for (int c = begin; c < end; ++c) {
+      const ContactConstraint& cc = constraints_[c];
       Real shift = 0;
       for (int k = 0; k < cc.pointCount; ++k) shift = std::max(shift, cc.points[k].bounceShift);
       const Real sum = cc.invMassA + cc.invMassB;
@@ -268,27 +352,24 @@ class PgsSolver final : public Solver {
     }
   }
 
-  void StoreImpulses(std::span<Contact> contacts) const {
-    for (size_t c = 0; c < contacts.size(); ++c) {
-      for (int k = 0; k < constraints_[c].pointCount; ++k) {
-        contacts[c].manifold.points[k].normalImpulse = constraints_[c].points[k].normalImpulse;
-        contacts[c].manifold.points[k].tangentImpulse = constraints_[c].points[k].tangentImpulse;
+  void StoreImpulses(std::span<Contact> contacts, int begin, int end) const {
+    for (int c = begin; c < end; ++c) {
+      const ContactConstraint& cc = constraints_[c];
+      Manifold& m = contacts[cc.contact].manifold;
+      for (int k = 0; k < cc.pointCount; ++k) {
+        m.points[k].normalImpulse = cc.points[k].normalImpulse;
+        m.points[k].tangentImpulse = cc.points[k].tangentImpulse;
       }
     }
-  }
-
-  void Snapshot(const Bodies& bodies) {
-    center0_ = bodies.center;
-    rot0_.resize(bodies.xf.size());
-    for (size_t i = 0; i < bodies.xf.size(); ++i) rot0_[i] = bodies.xf[i].q;
   }
 
   // One non-linear Gauss-Seidel pass: the separation is re-evaluated from how far the bodies
   // have moved and turned since the manifold was computed, and the position error beyond the
   // slop is reduced by the Baumgarte fraction, at most maxLinearCorrection at a time.
   template <bool kRotation>
-  void SolvePositions(Bodies& bodies, const WorldDef& def) {
-    for (const ContactConstraint& cc : constraints_) {
+  void SolvePositions(Bodies& bodies, const WorldDef& def, int begin, int end) {
+    for (int c = begin; c < end; ++c) {
+      const ContactConstraint& cc = constraints_[c];
       const Vec2 n = cc.normal;
       for (int k = 0; k < cc.pointCount; ++k) {
         const PointConstraint& pc = cc.points[k];
@@ -323,7 +404,8 @@ class PgsSolver final : public Solver {
   }
 
   std::vector<ContactConstraint> constraints_;
-  bool hasBounceShift_ = false;
+  std::vector<uint64_t> bodyColors_;
+  std::vector<int> colorOf_, colorStart_, order_, fill_;
   std::vector<Vec2> center0_;
   std::vector<Rot> rot0_;
 };

@@ -22,40 +22,77 @@ class UniformGrid final : public BroadPhase {
   const char* Name() const override { return "uniform_grid"; }
 
   void FindPairs(std::span<const AABB> aabbs, std::span<const uint8_t> movable,
-                 std::vector<CandidatePair>& out) override {
+                 std::vector<CandidatePair>& out, StageRunner& run) override {
     out.clear();
-    if (aabbs.size() < 2 || !Layout(aabbs, movable)) return;
-    Bucket(aabbs);
-    ScanCells(movable, out);
-    ScanLarge(aabbs, movable, out);
+    if (aabbs.size() < 2) return;
+    if (!Layout(aabbs, movable, run)) return;
+    Bucket(aabbs, run);
+    perWorker_.resize(run.Workers());
+    for (auto& part : perWorker_) part.clear();
+    run.For(Stage::kBroadPhase, static_cast<int>(sortedIndex_.size()), run.MinItems(),
+            [&](int begin, int end, int worker) { ScanCells(begin, end, movable, perWorker_[worker]); });
+    MergePairs(perWorker_, out);
+    run.Serial(Stage::kBroadPhase, [&] { ScanLarge(aabbs, movable, out); });
   }
 
  private:
   static double Extent(const AABB& b) { return std::max(b.upper.x - b.lower.x, b.upper.y - b.lower.y); }
 
+  // Per-chunk partial results of the layout pass. Chunks have a fixed size, so combining them
+  // in chunk order gives the same bits for any thread count.
+  struct Partial {
+    AABB box{};
+    double extentSum = 0;
+    int moving = 0;
+  };
+  static constexpr int kChunk = 1024;
+
   // Chooses the grid: the region of the movable bodies (grown by one cell), the threshold
   // between ordinary and oversized bodies, and the cell size.
-  bool Layout(std::span<const AABB> aabbs, std::span<const uint8_t> movable) {
-    const size_t n = aabbs.size();
+  bool Layout(std::span<const AABB> aabbs, std::span<const uint8_t> movable, StageRunner& run) {
+    const int n = static_cast<int>(aabbs.size());
+    extent_.resize(n);
+    const int chunks = (n + kChunk - 1) / kChunk;
+    partial_.assign(chunks, Partial{});
+    run.For(Stage::kBroadPhase, chunks, std::max(1, run.MinItems() / kChunk), [&](int c0, int c1, int) {
+      for (int c = c0; c < c1; ++c) {
+        Partial& p = partial_[c];
+        for (int i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i) {
+          extent_[i] = Real(Extent(aabbs[i]));
+          if (!movable[i]) continue;
+          p.box = p.moving == 0 ? aabbs[i] : Union(p.box, aabbs[i]);
+          p.extentSum += extent_[i];
+          ++p.moving;
+        }
+      }
+    });
     double meanExtent = 0;
     int moving = 0;
     AABB box{};
-    extent_.resize(n);
-    for (size_t i = 0; i < n; ++i) {
-      extent_[i] = Real(Extent(aabbs[i]));
-      if (!movable[i]) continue;
-      box = moving == 0 ? aabbs[i] : Union(box, aabbs[i]);
-      meanExtent += extent_[i];
-      ++moving;
+    for (const Partial& p : partial_) {
+      if (p.moving == 0) continue;
+      box = moving == 0 ? p.box : Union(box, p.box);
+      meanExtent += p.extentSum;
+      moving += p.moving;
     }
     if (moving == 0) return false;
     meanExtent /= moving;
     largeThreshold_ = 4.0 * meanExtent;
+    // The cell must hold the largest ordinary body that can meet a movable one (max is exact
+    // in any order, so per-chunk maxima combine deterministically).
+    cellMax_.assign(chunks, 1e-3);
+    run.For(Stage::kBroadPhase, chunks, std::max(1, run.MinItems() / kChunk), [&](int c0, int c1, int) {
+      for (int c = c0; c < c1; ++c) {
+        double cell = 1e-3;
+        for (int i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i) {
+          const double e = extent_[i];
+          if (e <= largeThreshold_ && (movable[i] || Overlaps(aabbs[i], box))) cell = std::max(cell, e);
+        }
+        cellMax_[c] = cell;
+      }
+    });
     double cell = 1e-3;
-    for (size_t i = 0; i < n; ++i) {
-      const double e = extent_[i];
-      if (e <= largeThreshold_ && (movable[i] || Overlaps(aabbs[i], box))) cell = std::max(cell, e);
-    }
+    for (double c : cellMax_) cell = std::max(cell, c);
     const double w = std::max<double>(box.upper.x - box.lower.x, 1e-6);
     const double h = std::max<double>(box.upper.y - box.lower.y, 1e-6);
     // A few cells per body at most, so a sparse scene does not allocate a huge grid.
@@ -75,41 +112,83 @@ class UniformGrid final : public BroadPhase {
   int CellX(double v) const { return std::clamp(int((v - originX_) * inv_), 0, cols_ - 1); }
   int CellY(double v) const { return std::clamp(int((v - originY_) * inv_), 0, rows_ - 1); }
 
-  // Counting sort of ordinary bodies by cell; their AABBs are copied in cell order so the pair
-  // scan reads memory sequentially.
-  void Bucket(std::span<const AABB> aabbs) {
+  // Counting sort of ordinary bodies by cell, in parallel: each worker counts its block of
+  // bodies per cell, a prefix over (cell, worker) gives every worker its slots, and each worker
+  // fills its own. Within a cell, worker 0's bodies come first, then worker 1's: the serial
+  // order. AABBs are copied in cell order so the pair scan reads memory sequentially.
+  void Bucket(std::span<const AABB> aabbs, StageRunner& run) {
     const int n = static_cast<int>(aabbs.size());
+    const int cells = cols_ * rows_;
+    const int workers = run.Workers();
     cellOf_.resize(n);
+    counts_.resize(workers);
+    counted_.assign(workers, 0);
     large_.clear();
-    cellStart_.assign(size_t(cols_) * rows_ + 1, 0);
-    for (int i = 0; i < n; ++i) {
-      const AABB& b = aabbs[i];
-      if (extent_[i] > largeThreshold_) {
-        cellOf_[i] = -1;
-        large_.push_back(i);
-        continue;
+    run.For(Stage::kBroadPhase, n, run.MinItems(), [&](int begin, int end, int worker) {
+      std::vector<int>& count = counts_[worker];
+      count.assign(cells, 0);
+      counted_[worker] = 1;
+      for (int i = begin; i < end; ++i) {
+        const AABB& b = aabbs[i];
+        if (extent_[i] > largeThreshold_) {
+          cellOf_[i] = -1;  // oversized: queried separately
+        } else if (!Overlaps(b, region_)) {
+          cellOf_[i] = -2;  // cannot touch any movable body
+        } else {
+          const int cell = CellY(b.lower.y) * cols_ + CellX(b.lower.x);
+          cellOf_[i] = cell;
+          ++count[cell];
+        }
       }
-      if (!Overlaps(b, region_)) {  // cannot touch any movable body
-        cellOf_[i] = -2;
-        continue;
+    });
+    // Prefix over (cell, worker) in three passes so it too runs in parallel: each worker sums
+    // its block of cells, a short serial prefix over those sums, then each worker assigns the
+    // slots of its block.
+    rangeStart_.assign(workers + 1, 0);
+    auto sumCells = [&](int c0, int c1) {
+      int sum = 0;
+      for (int c = c0; c < c1; ++c) {
+        for (int w = 0; w < workers; ++w) sum += counted_[w] ? counts_[w][c] : 0;
       }
-      const int cell = CellY(b.lower.y) * cols_ + CellX(b.lower.x);
-      cellOf_[i] = cell;
-      ++cellStart_[cell + 1];
-    }
-    for (size_t c = 0; c + 1 < cellStart_.size(); ++c) cellStart_[c + 1] += cellStart_[c];
-    const int placed = cellStart_.back();
-    sortedIndex_.resize(placed);
-    sortedBox_.resize(placed);
-    sortedCell_.resize(placed);
-    fill_.assign(cellStart_.begin(), cellStart_.end() - 1);
-    for (int i = 0; i < n; ++i) {
-      if (cellOf_[i] < 0) continue;
-      const int slot = fill_[cellOf_[i]]++;
-      sortedIndex_[slot] = i;
-      sortedBox_[slot] = aabbs[i];
-      sortedCell_[slot] = cellOf_[i];
-    }
+      return sum;
+    };
+    run.For(Stage::kBroadPhase, cells, run.MinItems(),
+            [&](int c0, int c1, int worker) { rangeStart_[worker + 1] = sumCells(c0, c1); });
+    run.Serial(Stage::kBroadPhase, [&] {
+      for (int w = 0; w < workers; ++w) rangeStart_[w + 1] += rangeStart_[w];
+      for (int i = 0; i < n; ++i) {
+        if (cellOf_[i] == -1) large_.push_back(i);
+      }
+      const int total = rangeStart_[workers];
+      cellStart_.resize(size_t(cells) + 1);
+      cellStart_[cells] = total;
+      sortedIndex_.resize(total);
+      sortedBox_.resize(total);
+      sortedCell_.resize(total);
+    });
+    run.For(Stage::kBroadPhase, cells, run.MinItems(), [&](int c0, int c1, int worker) {
+      int running = rangeStart_[worker];
+      for (int c = c0; c < c1; ++c) {
+        cellStart_[c] = running;
+        for (int w = 0; w < workers; ++w) {
+          if (!counted_[w]) continue;  // got no block (small inputs run inline as worker 0)
+          const int k = counts_[w][c];
+          counts_[w][c] = running;  // becomes worker w's first slot in cell c
+          running += k;
+        }
+      }
+    });
+    run.For(Stage::kBroadPhase, n, run.MinItems(), [&](int begin, int end, int worker) {
+      std::vector<int>& slot = counts_[worker];
+      for (int i = begin; i < end; ++i) {
+        const int cell = cellOf_[i];
+        if (cell < 0) continue;
+        const int k = slot[cell]++;
+        sortedIndex_[k] = i;
+        sortedBox_[k] = aabbs[i];
+        sortedCell_[k] = cell;
+      }
+    });
   }
 
   void Emit(int i, int j, std::span<const uint8_t> movable, std::vector<CandidatePair>& out) const {
@@ -117,11 +196,11 @@ class UniformGrid final : public BroadPhase {
     out.push_back(i < j ? CandidatePair{i, j} : CandidatePair{j, i});
   }
 
-  void ScanCells(std::span<const uint8_t> movable, std::vector<CandidatePair>& out) const {
+  void ScanCells(int begin, int end, std::span<const uint8_t> movable, std::vector<CandidatePair>& out) const {
     // Own cell (later bodies only), then right, upper-left, up, upper-right. Walking the bodies
     // in cell order (not the cells) skips the many empty cells of a sparse scene.
     const int placed = static_cast<int>(sortedIndex_.size());
-    for (int k = 0; k < placed; ++k) {
+    for (int k = begin; k < end; ++k) {
       const AABB& a = sortedBox_[k];
       const int i = sortedIndex_[k];
       const int cell = sortedCell_[k];
@@ -179,9 +258,15 @@ class UniformGrid final : public BroadPhase {
   double originX_ = 0, originY_ = 0, inv_ = 1, largeThreshold_ = 0;
   int cols_ = 0, rows_ = 0;
   AABB region_{};
-  std::vector<int> cellOf_, cellStart_, fill_, sortedIndex_, sortedCell_, large_;
+  std::vector<int> cellOf_, cellStart_, sortedIndex_, sortedCell_, large_;
   std::vector<AABB> sortedBox_;
   std::vector<Real> extent_;
+  std::vector<Partial> partial_;
+  std::vector<double> cellMax_;
+  std::vector<std::vector<int>> counts_;
+  std::vector<uint8_t> counted_;
+  std::vector<int> rangeStart_;
+  std::vector<std::vector<CandidatePair>> perWorker_;
 };
 
 }  // namespace

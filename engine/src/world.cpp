@@ -9,6 +9,8 @@
 #include "contact_cache.h"
 #include "integrate.h"
 #include "narrow_phase.h"
+#include "quadrant/task_system.h"
+#include "quadrants_scheme.h"
 #include "quadrant/world.h"
 #include "solver.h"
 #include "world_internal.h"
@@ -46,6 +48,9 @@ void ValidateWorldDef(const WorldDef& d) {
   Require(IsFinite(d.maxLinearSpeed) && d.maxLinearSpeed > 0, "WorldDef.maxLinearSpeed must be > 0");
   Require(d.threadCount >= 1 && d.threadCount <= kMaxThreads, "WorldDef.threadCount must be in [1, 64]");
   Require(d.quadTreeMaxDepth >= 1 && d.quadTreeMaxDepth <= 12, "WorldDef.quadTreeMaxDepth must be in [1, 12]");
+  Require(d.minParallelItems >= 1, "WorldDef.minParallelItems must be >= 1");
+  Require(d.scheme == ParallelScheme::kDeterministic || d.scheme == ParallelScheme::kQuadrants,
+          "WorldDef.scheme is unknown");
 }
 
 // Validates a body definition and returns its shape in canonical form (polygons re-hulled).
@@ -108,8 +113,12 @@ struct World::Impl {
   std::vector<int32_t> denseOf;
   std::vector<uint32_t> freeSlots;
 
+  std::unique_ptr<TaskSystem> tasks;
+  std::unique_ptr<StageRunner> run;
   std::unique_ptr<BroadPhase> broadPhase;
   std::unique_ptr<Solver> solver;
+  std::unique_ptr<QuadrantsScheme> quadrants;  // only for ParallelScheme::kQuadrants
+  std::vector<std::vector<Contact>> workerContacts;
   ContactCache cache;
   std::vector<CandidatePair> pairs;
   std::vector<Contact> contacts;
@@ -148,6 +157,7 @@ struct World::Impl {
   }
 
   void SubStep(Real dt);
+  void CountContacts(int candidatePairs);
   void NarrowPhase(Real dt);
   void SortContacts();
 };
@@ -155,8 +165,11 @@ struct World::Impl {
 World::World(const WorldDef& def) : impl_(std::make_unique<Impl>()) {
   ValidateWorldDef(def);
   impl_->def = def;
+  impl_->tasks = MakeThreadPool(def.threadCount);
+  impl_->run = std::make_unique<StageRunner>(*impl_->tasks, def.minParallelItems);
   impl_->broadPhase = MakeBroadPhase(def.broadPhase, def.quadTreeMaxDepth);
   impl_->solver = MakeSolver(def.solver);
+  if (def.scheme == ParallelScheme::kQuadrants) impl_->quadrants = std::make_unique<QuadrantsScheme>(def, def.threadCount);
 }
 
 World::~World() = default;
@@ -250,25 +263,39 @@ void World::Step(Real dt, int subSteps) {
   Require(subSteps >= 1, "Step: subSteps must be >= 1");
   Impl& w = *impl_;
   w.profile = Profile{};
+  w.run->Reset();
   const auto start = Clock::now();
   const Real h = dt / Real(subSteps);
   for (int s = 0; s < subSteps; ++s) w.SubStep(h);
   w.profile.total = Ms(start, Clock::now());
+  w.profile.balance = w.run->Balance();
 }
 
 void World::Impl::SubStep(Real dt) {
   const int n = bodies.Count();
   auto t0 = Clock::now();
-  for (int i = 0; i < n; ++i) {
-    if (bodies.type[i] != BodyType::kStatic) UpdateAABB(i, dt);
+  run->For(Stage::kBroadPhase, n, run->MinItems(), [&](int begin, int end, int) {
+    for (int i = begin; i < end; ++i) {
+      if (bodies.type[i] != BodyType::kStatic) UpdateAABB(i, dt);
+    }
+  });
+  if (quadrants) {
+    int pairCount = 0;
+    profile.broadPhase += Ms(t0, Clock::now());  // the AABB update; the scheme times the rest
+    quadrants->Step(dt, def, bodies, *run, cache, contacts, pairCount, profile);
+    CountContacts(pairCount);
+    return;
   }
-  broadPhase->FindPairs(bodies.aabb, bodies.dynamic, pairs);
+  broadPhase->FindPairs(bodies.aabb, bodies.dynamic, pairs, *run);
   auto t1 = Clock::now();
   NarrowPhase(dt);
   auto t2 = Clock::now();
-  SortContacts();
+  run->Serial(Stage::kPersistence, [&] { SortContacts(); });
   const bool persist = def.solver == SolverType::kPgs && def.effects.warmStarting;
-  if (persist) cache.Restore(contacts);
+  if (persist) {
+    run->For(Stage::kPersistence, static_cast<int>(contacts.size()), run->MinItems(),
+             [&](int begin, int end, int) { cache.Restore(std::span<Contact>(contacts).subspan(begin, end - begin)); });
+  }
   auto t3 = Clock::now();
 
   StepContext ctx;
@@ -277,19 +304,24 @@ void World::Impl::SubStep(Real dt) {
   ctx.bodies = &bodies;
   ctx.contacts = contacts;
   ctx.profile = &profile;
+  ctx.run = run.get();
   solver->Step(ctx);
 
   auto t4 = Clock::now();
-  if (persist) cache.Store(contacts);
+  if (persist) run->Serial(Stage::kPersistence, [&] { cache.Store(contacts); });
   auto t5 = Clock::now();
 
   profile.broadPhase += Ms(t0, t1);
   profile.narrowPhase += Ms(t1, t2);
   profile.persistence += Ms(t2, t3) + Ms(t4, t5);
 
+  CountContacts(static_cast<int>(pairs.size()));
+}
+
+void World::Impl::CountContacts(int candidatePairs) {
   counters = Counters{};
-  counters.bodies = n;
-  counters.candidatePairs = static_cast<int>(pairs.size());
+  counters.bodies = bodies.Count();
+  counters.candidatePairs = candidatePairs;
   counters.contacts = static_cast<int>(contacts.size());
   for (const Contact& c : contacts) {
     counters.contactPoints += c.manifold.pointCount;
@@ -300,7 +332,20 @@ void World::Impl::SubStep(Real dt) {
 }
 
 void World::Impl::NarrowPhase(Real dt) {
+  workerContacts.resize(run->Workers());
+  for (std::vector<Contact>& part : workerContacts) part.clear();
+  run->For(Stage::kNarrowPhase, static_cast<int>(pairs.size()), run->MinItems(),
+           [&](int begin, int end, int worker) {
+             CollidePairs(bodies, def, dt, std::span<const CandidatePair>(pairs).subspan(begin, end - begin),
+                          workerContacts[worker]);
+           });
+  // Concatenated in worker order: the same sequence as one thread would produce.
   contacts.clear();
+  for (const std::vector<Contact>& part : workerContacts) contacts.insert(contacts.end(), part.begin(), part.end());
+}
+
+void CollidePairs(const Bodies& bodies, const WorldDef& def, Real dt, std::span<const CandidatePair> pairs,
+                  std::vector<Contact>& out) {
   for (const CandidatePair& p : pairs) {
     const int a = p.a, b = p.b;
     // Two bodies that cannot be moved by contacts (kinematic vs kinematic) need no manifold.
@@ -341,7 +386,7 @@ void World::Impl::NarrowPhase(Real dt) {
     c.friction = std::sqrt(bodies.shape[a].friction * bodies.shape[b].friction);
     c.restitution = std::max(bodies.shape[a].restitution, bodies.shape[b].restitution);
     c.manifold = m;
-    contacts.push_back(c);
+    out.push_back(c);
   }
 }
 
@@ -463,5 +508,14 @@ std::vector<ContactInfo> World::GetContacts() const {
 }
 
 uint64_t World::StateHash() const { return HashBodies(impl_->bodies); }
+
+std::vector<int> World::GetOwners() const {
+  if (!impl_->quadrants) return {};
+  std::vector<int> owners = impl_->quadrants->Owners();
+  owners.resize(impl_->bodies.Count(), 0);  // bodies created since the last step: not yet assigned
+  return owners;
+}
+
+AABB World::GetPartitionRegion() const { return impl_->quadrants ? impl_->quadrants->Region() : AABB{}; }
 
 }  // namespace quadrant

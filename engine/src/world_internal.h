@@ -9,6 +9,7 @@
 
 #include "narrow_phase.h"
 #include "quadrant/world.h"
+#include "stage_runner.h"
 
 namespace quadrant {
 
@@ -54,6 +55,13 @@ struct Contact {
   uint64_t Key() const { return (uint64_t(uint32_t(a)) << 32) | uint32_t(b); }
 };
 
+struct CandidatePair;
+
+/// Narrow phase for a list of pairs: manifolds with material mixing, speculative points kept
+/// only where the gap can close within the step. Appends to `out` in pair order.
+void CollidePairs(const Bodies& bodies, const WorldDef& def, Real dt, std::span<const CandidatePair> pairs,
+                  std::vector<Contact>& out);
+
 /// What a solver needs for one (sub-)step.
 struct StepContext {
   Real dt = 0;
@@ -61,6 +69,7 @@ struct StepContext {
   Bodies* bodies = nullptr;
   std::span<Contact> contacts;
   Profile* profile = nullptr;
+  StageRunner* run = nullptr;
 };
 
 }  // namespace quadrant

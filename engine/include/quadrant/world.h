@@ -17,6 +17,7 @@
 //   quadrant::Vec2 p = world.GetPosition(id);   // resting on the ground at y ~ 1.0
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <span>
@@ -93,6 +94,18 @@ struct Effects {
   bool damping = false;       ///< apply per-body linear/angular damping
 };
 
+/// How a world with threadCount > 1 splits its work.
+enum class ParallelScheme : uint8_t {
+  /// Every stage parallel over static blocks, per-thread buffers merged in block order, and the
+  /// solver parallel over constraint-graph colours: the state is bit-identical for any thread
+  /// count (the state hash is a test).
+  kDeterministic,
+  /// The thesis's data partition: the quad-tree's top nodes are the threads' regions; each
+  /// thread detects, resolves and integrates the bodies it owns; bodies straddling a region
+  /// boundary belong to the master. Results depend on the thread count.
+  kQuadrants,
+};
+
 struct WorldDef {
   Vec2 gravity{0, Real(-10)};           ///< m/s^2
   SolverType solver = SolverType::kPgs;
@@ -109,9 +122,28 @@ struct WorldDef {
   Real speculativeDistance = Real(0.02);///< contacts are created this far before touching (m)
   Real restitutionThreshold = Real(1);  ///< approach speed (m/s) below which no bounce is added
   Real maxLinearSpeed = Real(400);      ///< m/s; a numerical guard, as Box2D 3's default
-  int threadCount = 1;                  ///< worker threads (1 = no threading at all)
+  int threadCount = 1;                  ///< worker threads, 1..64 (1 = no threading at all)
+  ParallelScheme scheme = ParallelScheme::kDeterministic;
+  /// Sections with fewer items (bodies, pairs; half as many constraints) run on the calling
+  /// thread: below this a parallel-for costs more than it saves (benchmarks/task_overhead.cpp).
+  /// Lower it only to exercise threading on small scenes (the tests do). >= 1.
+  int minParallelItems = 512;
   int quadTreeMaxDepth = 8;             ///< quad-tree levels below the root, 1..12
   Effects effects;
+};
+
+/// The stages of a step, as timed in Profile and StageBalance.
+enum class Stage : uint8_t { kBroadPhase, kNarrowPhase, kPersistence, kSolve, kIntegrate };
+inline constexpr size_t kStageCount = 5;
+inline constexpr const char* kStageNames[kStageCount] = {"broad_phase", "narrow_phase", "persistence", "solve",
+                                                         "integrate"};
+
+/// Load balance of one stage: thread CPU milliseconds of all workers (work) and of the largest
+/// worker share of each parallel section plus every serial section (critical). work/critical
+/// bounds the stage's speed-up at the world's thread count.
+struct StageBalance {
+  double workMs = 0;
+  double criticalMs = 0;
 };
 
 /// Wall-clock milliseconds per stage of the last Step (summed over its sub-steps).
@@ -122,6 +154,7 @@ struct Profile {
   double solve = 0;        ///< contact solver (velocity and position passes)
   double integrate = 0;    ///< velocities and positions
   double total = 0;        ///< the whole Step
+  std::array<StageBalance, kStageCount> balance{};  ///< per stage, indexed by Stage
 };
 
 /// Counts from the last Step.
@@ -191,6 +224,13 @@ class World {
   const Profile& GetProfile() const;
   const Counters& GetCounters() const;
   std::vector<ContactInfo> GetContacts() const;
+
+  /// Under ParallelScheme::kQuadrants: the thread that owned each body (in GetBodyIds order) in
+  /// the last step, -1 for the master (a body straddling two threads' regions). Empty under the
+  /// deterministic scheme.
+  std::vector<int> GetOwners() const;
+  /// Under ParallelScheme::kQuadrants: the square split among the threads in the last step.
+  AABB GetPartitionRegion() const;
 
   /// 64-bit FNV-1a over the exact bits of every body's position, rotation and velocities,
   /// in body order. Equal hashes mean bit-identical states.

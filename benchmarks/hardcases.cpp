@@ -1,0 +1,217 @@
+// quadrant_hardcases: runs every hard case on Quadrant (which must pass) and on the peers, and
+// writes DIR/hardcases.json and DIR/hardcases.md.
+//
+//   quadrant_hardcases --out DIR [--peers box2d,bullet,chipmunk|none] [--cases a,b]
+//                      [--soak-steps N]
+//
+// The cases, their scenes and their criteria live in benchmarks/scenes (hard_cases.cpp,
+// hard_case_checks.cpp), shared with tests/adapters/hard_cases_test.cpp. Exit status: 0 when
+// every Quadrant case passes, 1 when one fails (peers never change it), 2 on bad arguments.
+#include <cerrno>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "hard_case_checks.h"
+#include "quadrant/error.h"
+#include "report_common.h"
+
+namespace qs = quadrant::scene;
+namespace rp = quadrant::report;
+
+namespace {
+
+struct Args {
+  std::string out = ".";
+  std::vector<std::string> peers = {"box2d", "bullet", "chipmunk"};
+  std::vector<std::string> cases = qs::HardCaseNames();
+  int soakSteps = 100000;
+};
+
+std::vector<std::string> SplitList(const std::string& text) {
+  std::vector<std::string> out;
+  std::stringstream in(text);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    if (!item.empty()) out.push_back(item);
+  }
+  return out;
+}
+
+[[noreturn]] void Usage(const std::string& problem) {
+  std::cerr << "quadrant_hardcases: " << problem << "\n"
+            << "usage: quadrant_hardcases --out DIR [--peers box2d,bullet,chipmunk|none] [--cases a,b] "
+               "[--soak-steps N]\n";
+  std::exit(2);
+}
+
+Args Parse(int argc, char** argv) {
+  Args a;
+  for (int i = 1; i < argc; ++i) {
+    const std::string flag = argv[i];
+    if (flag == "-h" || flag == "--help") Usage("help");
+    if (i + 1 >= argc) Usage(flag + " needs a value");
+    const std::string value = argv[++i];
+    if (flag == "--out") {
+      a.out = value;
+    } else if (flag == "--peers") {
+      a.peers = value == "none" ? std::vector<std::string>{} : SplitList(value);
+    } else if (flag == "--cases") {
+      a.cases = SplitList(value);
+    } else if (flag == "--soak-steps") {
+      char* end = nullptr;
+      errno = 0;
+      const long v = std::strtol(value.c_str(), &end, 10);
+      if (value.empty() || *end != '\0' || errno != 0 || v < 1 || v > 100000000) {
+        Usage("--soak-steps must be an integer in [1, 1e8]");
+      }
+      a.soakSteps = int(v);
+    } else {
+      Usage("unknown option " + flag);
+    }
+  }
+  return a;
+}
+
+std::string MeasuredJson(const qs::HardCaseResult& r) {
+  std::string out = "{";
+  for (size_t i = 0; i < r.measured.size(); ++i) {
+    out += (i ? ", " : "") + rp::JsonString(r.measured[i].name) + ": " + rp::JsonNumber(r.measured[i].value);
+  }
+  return out + "}";
+}
+
+std::string MeasuredText(const qs::HardCaseResult& r) {
+  if (!r.supported) return "unsupported: " + r.unsupported;
+  std::string out;
+  for (const qs::Measured& m : r.measured) out += (out.empty() ? "" : ", ") + m.name + " " + rp::Cell(m.value);
+  return out;
+}
+
+std::string Verdict(const qs::HardCaseResult& r) {
+  if (!r.supported) return "unsupported";
+  return r.pass ? "pass" : "FAIL";
+}
+
+struct Row {
+  qs::HardCaseResult quadrant;
+  std::vector<qs::HardCaseResult> peers;
+};
+
+std::string Json(const std::vector<Row>& rows, const Args& args) {
+  std::ostringstream o;
+  o << "{\n  \"context\": {\"machine\": " << rp::JsonString(rp::Env("QUADRANT_MACHINE", "unknown"))
+    << ", \"commit\": " << rp::JsonString(rp::Env("QUADRANT_COMMIT", "unknown"))
+    << ", \"date\": " << rp::JsonString(rp::UtcNow()) << ", \"compiler\": " << rp::JsonString(__VERSION__)
+    << ", \"threads\": 1, \"soak_steps\": " << args.soakSteps << "},\n  \"cases\": [\n";
+  for (size_t i = 0; i < rows.size(); ++i) {
+    const qs::HardCaseResult& q = rows[i].quadrant;
+    o << "    {\"name\": " << rp::JsonString(q.name) << ", \"criterion\": " << rp::JsonString(q.criterion)
+      << ", \"pass\": " << (q.pass ? "true" : "false") << ", \"seconds\": " << rp::JsonNumber(q.seconds);
+    if (!q.supported) o << ", \"unsupported\": " << rp::JsonString(q.unsupported);
+    if (!q.note.empty()) o << ", \"note\": " << rp::JsonString(q.note);
+    o << ",\n     \"measured\": " << MeasuredJson(q) << ",\n     \"peers\": {";
+    for (size_t k = 0; k < rows[i].peers.size(); ++k) {
+      const qs::HardCaseResult& p = rows[i].peers[k];
+      o << (k ? ",\n               " : "") << rp::JsonString(p.engine) << ": {";
+      if (p.supported) {
+        o << "\"pass\": " << (p.pass ? "true" : "false") << ", \"seconds\": " << rp::JsonNumber(p.seconds)
+          << ", \"measured\": " << MeasuredJson(p);
+      } else {
+        o << "\"pass\": null, \"unsupported\": " << rp::JsonString(p.unsupported);
+      }
+      o << "}";
+    }
+    o << "}}" << (i + 1 < rows.size() ? "," : "") << "\n";
+  }
+  o << "  ]\n}\n";
+  return o.str();
+}
+
+std::string Markdown(const std::vector<Row>& rows, const Args& args) {
+  std::ostringstream o;
+  o << "# Hard cases\n\n"
+    << "Machine `" << rp::Env("QUADRANT_MACHINE", "unknown") << "`, commit `" << rp::Env("QUADRANT_COMMIT", "unknown")
+    << "`, " << rp::UtcNow() << ", compiler " << __VERSION__ << ". One thread per engine; dt = 1/60, 8 velocity "
+    << "and 3 position iterations; soak " << args.soakSteps << " steps. Written by `tools/quadrant hardcases` "
+    << "(benchmarks/hardcases.cpp); scenes in benchmarks/scenes/hard_cases.cpp, criteria in "
+    << "benchmarks/scenes/hard_case_checks.cpp.\n\n"
+    << "Materials are built per engine so that every engine simulates the same mixed coefficient: Box2D and "
+    << "Quadrant mix friction as sqrt(f1 f2) and restitution as max(e1, e2), Bullet and Chipmunk multiply both; "
+    << "one-material scenes give product-mixing engines sqrt of the coefficient on each body, the ramp and the "
+    << "drop choose the ramp's or ground's value so that each box or ball mixes to its own.\n\n"
+    << "| case | criterion | quadrant |";
+  std::vector<std::string> peerNames;
+  if (!rows.empty()) {
+    for (const qs::HardCaseResult& p : rows[0].peers) peerNames.push_back(p.engine);
+  }
+  for (const std::string& p : peerNames) o << " " << p << " |";
+  o << "\n|---|---|---|";
+  for (size_t k = 0; k < peerNames.size(); ++k) o << "---|";
+  o << "\n";
+  for (const Row& row : rows) {
+    o << "| " << row.quadrant.name << " | " << rp::CellText(row.quadrant.criterion) << " | **"
+      << Verdict(row.quadrant) << "** |";
+    for (const qs::HardCaseResult& p : row.peers) o << " " << Verdict(p) << " |";
+    o << "\n";
+  }
+  o << "\n## Measured\n\n| case | engine | verdict | figures | seconds |\n|---|---|---|---|---|\n";
+  for (const Row& row : rows) {
+    auto line = [&](const qs::HardCaseResult& r) {
+      o << "| " << r.name << " | " << r.engine << " | " << Verdict(r) << " | " << rp::CellText(MeasuredText(r))
+        << " | " << rp::Cell(r.seconds) << " |\n";
+    };
+    line(row.quadrant);
+    for (const qs::HardCaseResult& p : row.peers) line(p);
+  }
+  bool notes = false;
+  for (const Row& row : rows) {
+    if (row.quadrant.note.empty()) continue;
+    if (!notes) o << "\n## Notes\n\n";
+    notes = true;
+    o << "- **" << row.quadrant.name << "**: " << row.quadrant.note << "\n";
+  }
+  return o.str();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const Args args = Parse(argc, argv);
+  std::vector<Row> rows;
+  bool allPass = true;
+  try {
+    qs::HardCaseOptions options;
+    options.soakSteps = args.soakSteps;
+    for (const std::string& name : args.cases) {
+      Row row;
+      row.quadrant = qs::RunHardCase(name, "quadrant", options);
+      allPass = allPass && row.quadrant.pass;
+      std::fprintf(stderr, "%-18s quadrant %-11s (%.1f s) %s\n", name.c_str(), Verdict(row.quadrant).c_str(),
+                   row.quadrant.seconds, MeasuredText(row.quadrant).c_str());
+      for (const std::string& peer : args.peers) {
+        row.peers.push_back(qs::RunHardCase(name, peer, options));
+        const qs::HardCaseResult& p = row.peers.back();
+        std::fprintf(stderr, "%-18s %-8s %-11s (%.1f s) %s\n", name.c_str(), peer.c_str(), Verdict(p).c_str(),
+                     p.seconds, MeasuredText(p).c_str());
+      }
+      rows.push_back(std::move(row));
+    }
+  } catch (const quadrant::Error& e) {
+    Usage(e.what());
+  }
+
+  std::filesystem::create_directories(args.out);
+  const std::filesystem::path dir(args.out);
+  std::ofstream(dir / "hardcases.json") << Json(rows, args);
+  std::ofstream(dir / "hardcases.md") << Markdown(rows, args);
+  std::cout << Markdown(rows, args);
+  std::fprintf(stderr, "quadrant_hardcases: wrote %s and %s; Quadrant %s\n", (dir / "hardcases.json").c_str(),
+               (dir / "hardcases.md").c_str(), allPass ? "passes every case" : "FAILS a case");
+  return allPass ? 0 : 1;
+}

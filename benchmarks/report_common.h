@@ -1,0 +1,78 @@
+// Small helpers shared by the report programs (quadrant_hardcases, quadrant_validate): JSON
+// scalars, Markdown cells and the run's context. Header-only: two programs, no library needed.
+#pragma once
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <ctime>
+#include <string>
+#include <string_view>
+
+namespace quadrant::report {
+
+/// A JSON string literal (quoted, escaped).
+inline std::string JsonString(std::string_view s) {
+  std::string out = "\"";
+  for (char c : s) {
+    switch (c) {
+      case '"': out += "\\\""; break;
+      case '\\': out += "\\\\"; break;
+      case '\n': out += "\\n"; break;
+      case '\t': out += "\\t"; break;
+      default:
+        if (static_cast<unsigned char>(c) < 0x20) {
+          char buffer[8];
+          std::snprintf(buffer, sizeof buffer, "\\u%04x", c);
+          out += buffer;
+        } else {
+          out += c;
+        }
+    }
+  }
+  return out + "\"";
+}
+
+/// A JSON number with 9 significant digits (enough for float read-back); null if not finite,
+/// which JSON cannot write.
+inline std::string JsonNumber(double v) {
+  if (!std::isfinite(v)) return "null";
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.9g", v);
+  return buffer;
+}
+
+/// A number for a Markdown table: 4 significant digits, "NaN"/"inf" spelled out.
+inline std::string Cell(double v) {
+  if (std::isnan(v)) return "NaN";
+  if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.4g", v);
+  return buffer;
+}
+
+/// A table cell's text with the characters Markdown tables cannot hold made harmless.
+inline std::string CellText(std::string_view s) {
+  std::string out;
+  for (char c : s) out += c == '|' ? '/' : (c == '\n' ? ' ' : c);
+  return out;
+}
+
+/// An environment variable, or `fallback` when unset or empty. tools/quadrant sets
+/// QUADRANT_MACHINE and QUADRANT_COMMIT for the reports.
+inline std::string Env(const char* name, const char* fallback) {
+  const char* v = std::getenv(name);
+  return v && *v ? v : fallback;
+}
+
+/// UTC time now, ISO 8601.
+inline std::string UtcNow() {
+  std::time_t t = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  char buffer[32];
+  std::strftime(buffer, sizeof buffer, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return buffer;
+}
+
+}  // namespace quadrant::report

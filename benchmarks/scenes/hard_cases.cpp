@@ -1,0 +1,354 @@
+// The hard cases that 2D solvers are judged on (anchors.md), built once for every engine.
+//
+// Each builder writes out every world setting instead of relying on the Scene defaults, so a
+// change of a default elsewhere cannot silently change a hard case. Materials go through Coef():
+// where every contact of a scene is between two bodies of one material, an engine that multiplies
+// coefficients gets the square root of the coefficient on each body, so every engine simulates
+// the same mixed value.
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <string>
+#include <vector>
+
+#include "quadrant/error.h"
+#include "scenes.h"
+
+namespace quadrant::scene {
+namespace {
+
+// The value each body of a one-material scene gets so that two of them mix to `mixed`.
+Real Coef(Mixing mixing, Real mixed) {
+  return mixing == Mixing::kBox2d ? mixed : Real(std::sqrt(double(mixed)));
+}
+
+Scene BaseScene(const char* name) {
+  Scene s;
+  s.name = name;
+  s.gravity = {0, Real(-10)};
+  s.timeStep = Real(1.0 / 60.0);
+  s.subSteps = 1;
+  s.velocityIterations = 8;
+  s.positionIterations = 3;
+  s.restitutionThreshold = 1;  // Box2D 2.4's default; cases about bouncing set their own
+  s.effects.gravity = true;
+  s.effects.friction = true;
+  s.effects.restitution = false;  // stacking cases have restitution 0 everywhere: nothing to do
+  s.effects.rotation = true;
+  s.effects.warmStarting = true;
+  s.effects.sleep = false;        // a sleeping pile cannot drift: the cases must see every step
+  s.effects.continuous = false;
+  s.effects.damping = false;
+  s.seed = 0;
+  return s;
+}
+
+std::vector<Vec2> BoxVertices(Real hx, Real hy) { return {{-hx, -hy}, {hx, -hy}, {hx, hy}, {-hx, hy}}; }
+
+BodyDesc Box(Vec2 position, Real hx, Real hy, bool dynamic, Real friction, Real density = 1,
+             Real angle = 0) {
+  BodyDesc b;
+  b.dynamic = dynamic;
+  b.shape = ShapeKind::kPolygon;
+  b.vertices = BoxVertices(hx, hy);
+  b.position = position;
+  b.angle = angle;
+  b.density = density;
+  b.friction = friction;
+  b.restitution = 0;
+  return b;
+}
+
+BodyDesc Ball(Vec2 position, Real radius, Real friction, Real restitution) {
+  BodyDesc b;
+  b.dynamic = true;
+  b.shape = ShapeKind::kCircle;
+  b.radius = radius;
+  b.position = position;
+  b.density = 1;
+  b.friction = friction;
+  b.restitution = restitution;
+  return b;
+}
+
+// A static slab 1 m thick whose top face is at offset.y, centred on offset.x.
+BodyDesc Ground(Vec2 offset, Real halfWidth, Real friction) {
+  return Box({offset.x, offset.y - Real(0.5)}, halfWidth, Real(0.5), /*dynamic=*/false, friction, 0);
+}
+
+AABB Bounds(Vec2 lower, Vec2 upper) { return {lower, upper}; }
+
+void RequireRange(int value, int lo, int hi, const char* what) {
+  if (value < lo || value > hi) {
+    throw Error(std::string(what) + " must be in [" + std::to_string(lo) + ", " + std::to_string(hi) +
+                "], got " + std::to_string(value));
+  }
+}
+
+// Pyramid rows: row r (from 0 at the bottom) holds base - r boxes, centred, so each row sits
+// half a pitch in from the one below and every upper box rests on two lower ones.
+void AddPyramidBoxes(Scene& s, int base, Vec2 offset, Real pitchX, Real pitchY, Real friction,
+                     Real density = 1) {
+  for (int r = 0; r < base; ++r) {
+    const int n = base - r;
+    for (int j = 0; j < n; ++j) {
+      const double x = offset.x + (j - 0.5 * (n - 1)) * pitchX;
+      const double y = offset.y + 0.5 + r * double(pitchY);
+      s.bodies.push_back(Box({Real(x), Real(y)}, Real(0.5), Real(0.5), true, friction, density));
+    }
+  }
+}
+
+}  // namespace
+
+Mixing MixingOf(std::string_view engine) {
+  if (engine == "quadrant" || engine.starts_with("quadrant:") || engine == "box2d") return Mixing::kBox2d;
+  if (engine == "bullet" || engine == "chipmunk") return Mixing::kProduct;
+  throw Error("MixingOf: unknown engine '" + std::string(engine) + "'");
+}
+
+Real MixFriction(Mixing mixing, Real a, Real b) {
+  return mixing == Mixing::kBox2d ? Real(std::sqrt(double(a) * double(b))) : a * b;
+}
+
+Real MixRestitution(Mixing mixing, Real a, Real b) {
+  return mixing == Mixing::kBox2d ? (a > b ? a : b) : a * b;
+}
+
+Scene MakeVerticalStack(int count, Mixing mixing) {
+  RequireRange(count, 1, 1000, "vertical stack box count");
+  Scene s = BaseScene("vertical_stack");
+  const Real f = Coef(mixing, Real(0.3));
+  s.bodies.push_back(Ground({0, 0}, 20, f));
+  for (int i = 0; i < count; ++i) {
+    // Alternating offsets: a perfectly aligned stack would hide a solver's lateral drift.
+    const Real x = i % 2 == 0 ? Real(0.01) : Real(-0.01);
+    s.bodies.push_back(Box({x, Real(0.5) + Real(i)}, Real(0.5), Real(0.5), true, f));
+  }
+  s.bounds = Bounds({-20, -1}, {20, Real(count) + 1});
+  return s;
+}
+
+Scene MakePyramid(int base, Vec2 offset, Mixing mixing) {
+  RequireRange(base, 1, 1000, "pyramid base");
+  if (!IsFinite(offset)) throw Error("pyramid offset is not finite");
+  Scene s = BaseScene("pyramid");
+  const Real f = Coef(mixing, Real(0.6));
+  // Pitch 1.1 m: a 0.1 m gap between neighbours in a row, so only vertical contacts carry load.
+  const Real pitch = Real(1.1);
+  const Real halfWidth = std::max(Real(20), Real(0.5) * pitch * Real(base) + 5);
+  s.bodies.push_back(Ground(offset, halfWidth, f));
+  AddPyramidBoxes(s, base, offset, pitch, 1, f);
+  s.bounds = Bounds({offset.x - halfWidth, offset.y - 1}, {offset.x + halfWidth, offset.y + Real(base) + 1});
+  return s;
+}
+
+Scene MakeMassRatio(int ratio, Mixing mixing) {
+  const Real f = Coef(mixing, Real(0.6));
+  if (ratio == 100) {
+    Scene s = BaseScene("mass_ratio_100");
+    s.bodies.push_back(Ground({0, 0}, 20, f));
+    AddPyramidBoxes(s, 10, {0, 0}, Real(1.1), 1, f);
+    // On the apex (row 9, centre y = 9.5): a 1 m box of density 100, i.e. 100 kg on 1 kg boxes.
+    s.bodies.push_back(Box({0, Real(10.5)}, Real(0.5), Real(0.5), true, f, 100));
+    s.bounds = Bounds({-20, -1}, {20, 12});
+    return s;
+  }
+  if (ratio == 400) {
+    Scene s = BaseScene("mass_ratio_400");
+    s.bodies.push_back(Ground({0, 0}, 20, f));
+    s.bodies.push_back(Box({-9, Real(0.5)}, Real(0.5), Real(0.5), true, f));
+    s.bodies.push_back(Box({9, Real(0.5)}, Real(0.5), Real(0.5), true, f));
+    // 20 m x 1 m at density 20: 400 kg resting on two 1 kg boxes.
+    s.bodies.push_back(Box({0, Real(1.5)}, 10, Real(0.5), true, f, 20));
+    s.bounds = Bounds({-20, -1}, {20, 3});
+    return s;
+  }
+  throw Error("mass ratio must be 100 or 400, got " + std::to_string(ratio));
+}
+
+Scene MakeArch(Mixing mixing) {
+  Scene s = BaseScene("arch");
+  const Real f = Coef(mixing, Real(0.6));
+  s.bodies.push_back(Ground({0, 0}, 20, f));
+  // A semicircular arch of radial joints. Thickness 1 m on a 4.5 m centre-line radius (t/R =
+  // 0.22) is twice the least thickness a semicircular arch of rigid blocks needs to stand
+  // (Heyman: t/R = 0.107), so a correct solver keeps it up; the joints near the springing, where
+  // the thrust is most inclined, need a friction coefficient of about 0.3 (0.6 is given).
+  constexpr int kBlocks = 17;
+  const double inner = 4, outer = 5;
+  for (int k = 0; k < kBlocks; ++k) {
+    const double t0 = std::numbers::pi * k / kBlocks, t1 = std::numbers::pi * (k + 1) / kBlocks;
+    // Counter-clockwise: inner and outer points of the joint at t0, then outer and inner at t1.
+    const double px[4] = {inner * std::cos(t0), outer * std::cos(t0), outer * std::cos(t1), inner * std::cos(t1)};
+    const double py[4] = {inner * std::sin(t0), outer * std::sin(t0), outer * std::sin(t1), inner * std::sin(t1)};
+    // The body origin is the block's centroid, so every engine rotates it about the same point.
+    double area = 0, cx = 0, cy = 0;
+    for (int i = 0; i < 4; ++i) {
+      const int j = (i + 1) % 4;
+      const double cross = px[i] * py[j] - px[j] * py[i];
+      area += 0.5 * cross;
+      cx += (px[i] + px[j]) * cross / 6;
+      cy += (py[i] + py[j]) * cross / 6;
+    }
+    cx /= area;
+    cy /= area;
+    BodyDesc b = Box({Real(cx), Real(cy)}, Real(0.5), Real(0.5), true, f);
+    for (int i = 0; i < 4; ++i) b.vertices[i] = {Real(px[i] - cx), Real(py[i] - cy)};
+    s.bodies.push_back(b);
+  }
+  s.bounds = Bounds({-20, -1}, {20, 6});
+  return s;
+}
+
+Scene MakeCardHouse(int levels, Mixing mixing) {
+  RequireRange(levels, 1, 20, "card house levels");
+  Scene s = BaseScene("card_house");
+  const Real f = Coef(mixing, Real(0.7));
+  // Cards 1 m x 0.02 m leaning 0.35 rad (20 deg) from the vertical in pairs whose top corners
+  // meet. A pair stands if the floor's friction carries tan(lean)/2 = 0.18 of the weight, well
+  // under 0.7. Pair apexes are 1.004 m apart: a flat card (1 m) bridging two apexes rests on the
+  // outer top corner of each (0.0188 m beyond the apex) and leaves a 4 mm gap to its neighbour.
+  const double length = 1, thickness = 0.02, lean = 0.35, gap = 0.004;
+  const double a = 0.5 * length, b = 0.5 * thickness;
+  const double sinL = std::sin(lean), cosL = std::cos(lean);
+  const double pitch = length + gap;
+  const double peak = length * cosL + thickness * sinL;  // floor to the top corners of a pair
+  s.bodies.push_back(Ground({0, 0}, 20, f));
+  double floor = 0;
+  for (int level = 0; level < levels; ++level) {
+    const int pairs = levels - level;
+    const double x0 = -0.5 * (pairs - 1) * pitch;
+    // Centre of a leaning card whose lowest corner is on the floor and whose inner top corner is
+    // at the apex x: offsets from the apex of b cos + a sin across and b sin + a cos up.
+    const double dx = b * cosL + a * sinL, cy = floor + b * sinL + a * cosL;
+    for (int i = 0; i < pairs; ++i) {
+      const double apex = x0 + i * pitch;
+      s.bodies.push_back(Box({Real(apex - dx), Real(cy)}, Real(b), Real(a), true, f, 1, Real(-lean)));
+      s.bodies.push_back(Box({Real(apex + dx), Real(cy)}, Real(b), Real(a), true, f, 1, Real(lean)));
+    }
+    if (level + 1 == levels) break;
+    // Flat cards bridging neighbouring apexes; the next storey's pairs stand on them.
+    for (int i = 0; i + 1 < pairs; ++i) {
+      const double cx = x0 + (i + 0.5) * pitch;
+      s.bodies.push_back(Box({Real(cx), Real(floor + peak + b)}, Real(a), Real(b), true, f));
+    }
+    floor += peak + thickness;
+  }
+  s.bounds = Bounds({-20, -1}, {20, Real(floor + peak + 1)});
+  return s;
+}
+
+Scene MakeFrictionRamp(Mixing mixing) {
+  Scene s = BaseScene("friction_ramp");
+  const double angle = 0.25;  // tan(0.25) = 0.2553: friction at or above it holds a box
+  const Real targets[5] = {Real(0.75), Real(0.5), Real(0.35), Real(0.1), Real(0)};
+  const double c = std::cos(angle), sn = std::sin(angle);
+  // Ramps of friction 1: under sqrt mixing a box of friction mu^2 then mixes to mu, under product
+  // mixing a box of friction mu does.
+  const Real rampFriction = 1;
+  for (int k = 0; k < 5; ++k) {
+    // Ramp k: 10 m x 0.5 m centred at (12 k, 0), its top face 0.25 m above the centre line.
+    const double rx = 12.0 * k, ry = 0;
+    BodyDesc ramp = Box({Real(rx), Real(ry)}, 5, Real(0.25), false, rampFriction, 0, Real(angle));
+    s.bodies.push_back(ramp);
+    const Real mu = targets[k];
+    const Real boxFriction = mixing == Mixing::kBox2d ? mu * mu : mu;
+    // 3 m up the slope from the ramp's centre, touching its top face: room to slide 8 m down.
+    const double along = 3, up = 0.25 + 0.5;
+    const double bx = rx + along * c - up * sn, by = ry + along * sn + up * c;
+    s.bodies.push_back(Box({Real(bx), Real(by)}, Real(0.5), Real(0.5), true, boxFriction, 1, Real(angle)));
+  }
+  s.bounds = Bounds({-6, -3}, {54, 3});
+  return s;
+}
+
+Scene MakeRestitutionDrop(Mixing mixing) {
+  Scene s = BaseScene("restitution_drop");
+  s.effects.friction = false;     // a bounce straight down needs none, and spin would need it
+  s.effects.restitution = true;
+  s.restitutionThreshold = 0;     // every approach speed bounces, as e^2 assumes
+  // The ground's restitution makes each ball's own value the mixed one: max(0, e) = e and
+  // 1 * e = e. (There is no single ground value for both rules: max(1, e) = 1.)
+  const Real groundE = mixing == Mixing::kBox2d ? Real(0) : Real(1);
+  BodyDesc ground = Ground({0, 0}, 10, 0);
+  ground.restitution = groundE;
+  s.bodies.push_back(ground);
+  const Real es[5] = {0, Real(0.25), Real(0.5), Real(0.75), 1};
+  for (int k = 0; k < 5; ++k) {
+    // Bottom 2 m above the ground: impact at 6.32 m/s after 0.632 s.
+    s.bodies.push_back(Ball({Real(-4 + 2 * k), Real(2.5)}, Real(0.5), 0, es[k]));
+  }
+  s.bounds = Bounds({-10, -1}, {10, 4});
+  return s;
+}
+
+Scene MakeOverlapRecovery(int base, Mixing mixing) {
+  RequireRange(base, 1, 100, "overlap recovery base");
+  Scene s = BaseScene("overlap_recovery");
+  const Real f = Coef(mixing, Real(0.6));
+  s.bodies.push_back(Ground({0, 0}, 20, f));
+  // Pitch 0.75 m for 1 m boxes in both directions: every box overlaps each neighbour by 0.25 m.
+  AddPyramidBoxes(s, base, {0, 0}, Real(0.75), Real(0.75), f);
+  s.bounds = Bounds({-20, -1}, {20, Real(base) + 2});
+  return s;
+}
+
+Scene MakeConfined(int side, uint64_t seed, Mixing mixing) {
+  RequireRange(side, 1, 100, "confined grid side");
+  Scene s = BaseScene("confined");
+  s.seed = seed;
+  s.gravity = {0, 0};
+  s.effects.gravity = false;
+  const Real f = Coef(mixing, Real(0.6));
+  // Inner side 25 m for 25 x 25 circles: area fraction 0.785, so they can all separate (random
+  // close packing of discs is about 0.82) but end up crowded.
+  const double half = 0.5 * side;
+  auto wall = [&](double cx, double cy, double hx, double hy) {
+    s.bodies.push_back(Box({Real(cx), Real(cy)}, Real(hx), Real(hy), false, f, 0));
+  };
+  wall(0, -half - 0.5, half + 1, 0.5);
+  wall(0, half + 0.5, half + 1, 0.5);
+  wall(-half - 0.5, 0, 0.5, half);
+  wall(half + 0.5, 0, 0.5, half);
+  Random rng(seed);
+  const double pitch = 0.8;
+  const double start = -0.5 * (side - 1) * pitch;
+  for (int i = 0; i < side; ++i) {
+    for (int j = 0; j < side; ++j) {
+      // A small jitter so the push-out is not a perfectly symmetric lattice problem.
+      const double x = start + j * pitch + rng.Uniform(-0.02, 0.02);
+      const double y = start + i * pitch + rng.Uniform(-0.02, 0.02);
+      s.bodies.push_back(Ball({Real(x), Real(y)}, Real(0.5), f, 0));
+    }
+  }
+  s.bounds = Bounds({Real(-half), Real(-half)}, {Real(half), Real(half)});
+  return s;
+}
+
+Scene MakeFarFromOrigin(Mixing mixing) {
+  Scene s = MakePyramid(20, {Real(1e5), Real(-8e4)}, mixing);
+  s.name = "far_from_origin";
+  return s;
+}
+
+Scene MakeNewtonsCradle(Mixing mixing) {
+  Scene s = BaseScene("newtons_cradle");
+  // Hanging needs joints, which the scene API does not have: a free row in zero gravity shows
+  // the same transfer of momentum and energy along a chain of touching balls.
+  s.gravity = {0, 0};
+  s.effects.gravity = false;
+  s.effects.friction = false;
+  s.effects.restitution = true;
+  s.restitutionThreshold = 0;
+  const Real e = Coef(mixing, 1);
+  for (int k = 0; k < 5; ++k) {
+    BodyDesc b = Ball({Real(k), 0}, Real(0.5), 0, e);
+    if (k == 0) b.velocity = {1, 0};
+    s.bodies.push_back(b);
+  }
+  s.bounds = Bounds({-10, -1}, {20, 1});
+  return s;
+}
+
+}  // namespace quadrant::scene

@@ -1,0 +1,147 @@
+// quadrant_validate: runs the canonical validation cases on Quadrant and Box2D 2.4.1 and writes
+// DIR/validation.json and DIR/validation.md.
+//
+//   quadrant_validate --out DIR [--cases a,b]
+//
+// The cases, their tolerances and the reasons for them live in
+// benchmarks/scenes/validation_cases.cpp, shared with tests/adapters/validation_test.cpp. Exit
+// status: 0 when every case passes, 1 when one fails, 2 on bad arguments.
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "quadrant/error.h"
+#include "report_common.h"
+#include "validation_cases.h"
+
+namespace qs = quadrant::scene;
+namespace rp = quadrant::report;
+
+namespace {
+
+struct Args {
+  std::string out = ".";
+  std::vector<std::string> cases = qs::ValidationCaseNames();
+};
+
+[[noreturn]] void Usage(const std::string& problem) {
+  std::cerr << "quadrant_validate: " << problem << "\nusage: quadrant_validate --out DIR [--cases a,b]\n";
+  std::exit(2);
+}
+
+Args Parse(int argc, char** argv) {
+  Args a;
+  for (int i = 1; i < argc; ++i) {
+    const std::string flag = argv[i];
+    if (flag == "-h" || flag == "--help") Usage("help");
+    if (i + 1 >= argc) Usage(flag + " needs a value");
+    const std::string value = argv[++i];
+    if (flag == "--out") {
+      a.out = value;
+    } else if (flag == "--cases") {
+      a.cases.clear();
+      std::stringstream in(value);
+      std::string item;
+      while (std::getline(in, item, ',')) {
+        if (!item.empty()) a.cases.push_back(item);
+      }
+    } else {
+      Usage("unknown option " + flag);
+    }
+  }
+  return a;
+}
+
+std::string Json(const std::vector<qs::ValidationResult>& results) {
+  std::ostringstream o;
+  o << "{\"cases\": [\n";
+  for (size_t i = 0; i < results.size(); ++i) {
+    const qs::ValidationResult& r = results[i];
+    o << "  {\"name\": " << rp::JsonString(r.name) << ", \"pass\": " << (r.pass ? "true" : "false")
+      << ", \"quantities\": {\n";
+    for (size_t k = 0; k < r.quantities.size(); ++k) {
+      const qs::ValidationQuantity& q = r.quantities[k];
+      o << "    " << rp::JsonString(q.name) << ": {\"quadrant\": " << rp::JsonNumber(q.quadrant)
+        << ", \"box2d\": " << rp::JsonNumber(q.box2d)
+        << ", \"analytic\": " << (q.analytic ? rp::JsonNumber(*q.analytic) : "null")
+        << ", \"tolerance\": " << rp::JsonNumber(q.tolerance) << ", \"pass\": " << (q.pass ? "true" : "false")
+        << ", \"reason\": " << rp::JsonString(q.reason) << "}" << (k + 1 < r.quantities.size() ? "," : "") << "\n";
+    }
+    o << "  }}" << (i + 1 < results.size() ? "," : "") << "\n";
+  }
+  o << "]}\n";
+  return o.str();
+}
+
+std::string Markdown(const std::vector<qs::ValidationResult>& results) {
+  int passed = 0;
+  for (const qs::ValidationResult& r : results) passed += r.pass ? 1 : 0;
+  std::ostringstream o;
+  o << "# Validation against Box2D 2.4.1\n\n"
+    << "Machine `" << rp::Env("QUADRANT_MACHINE", "unknown") << "`, commit `" << rp::Env("QUADRANT_COMMIT", "unknown")
+    << "`, " << rp::UtcNow() << ", compiler " << __VERSION__ << ". Written by `tools/quadrant validate` "
+    << "(benchmarks/validate.cpp); cases in benchmarks/scenes/validation_cases.cpp.\n\n"
+    << "**" << passed << " of " << results.size() << " cases pass.**\n\n"
+    << "Both engines run each case through the scene API with the same settings: dt = 1/60, 8 velocity and 3 "
+    << "position iterations, no sleep, no continuous collision, equal materials on both bodies of a contact (so "
+    << "the two mixing rules agree), and bodies that start touching or meet exactly at a step boundary. A "
+    << "quantity passes when |quadrant - box2d| <= tolerance and, where physics gives an answer, |quadrant - "
+    << "analytic| <= tolerance. Box2D's 0.01 m polygon skin is subtracted where it matters (quantities named "
+    << "`..._minus_skin`), never absorbed by a tolerance.\n\n"
+    << "| case | quantity | quadrant | box2d | analytic | tolerance | verdict |\n|---|---|---|---|---|---|---|\n";
+  for (const qs::ValidationResult& r : results) {
+    for (const qs::ValidationQuantity& q : r.quantities) {
+      o << "| " << r.name << " | " << q.name << " | " << rp::Cell(q.quadrant) << " | " << rp::Cell(q.box2d) << " | "
+        << (q.analytic ? rp::Cell(*q.analytic) : "-") << " | " << rp::Cell(q.tolerance) << " | "
+        << (q.pass ? "pass" : "**FAIL**") << " |\n";
+    }
+  }
+  o << "\n## Cases and the reasons for each tolerance\n";
+  for (const qs::ValidationResult& r : results) {
+    o << "\n### " << r.name << (r.pass ? "" : " (FAILS)") << "\n\n" << r.description << "\n\n";
+    for (const qs::ValidationQuantity& q : r.quantities) o << "- `" << q.name << "`: " << q.reason << "\n";
+  }
+  return o.str();
+}
+
+void Write(const std::filesystem::path& path, const std::string& text) {
+  std::ofstream out(path);
+  out << text;
+  if (!out) Usage("cannot write " + path.string());
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const Args args = Parse(argc, argv);
+  std::vector<qs::ValidationResult> results;
+  bool allPass = true;
+  try {
+    for (const std::string& name : args.cases) {
+      results.push_back(qs::RunValidationCase(name));
+      const qs::ValidationResult& r = results.back();
+      allPass = allPass && r.pass;
+      std::fprintf(stderr, "%-24s %s\n", r.name.c_str(), r.pass ? "pass" : "FAIL");
+      for (const qs::ValidationQuantity& q : r.quantities) {
+        if (!q.pass) {
+          std::fprintf(stderr, "    %-32s quadrant %.9g box2d %.9g analytic %s tolerance %g\n", q.name.c_str(),
+                       q.quadrant, q.box2d, q.analytic ? rp::JsonNumber(*q.analytic).c_str() : "-", q.tolerance);
+        }
+      }
+    }
+  } catch (const quadrant::Error& e) {
+    Usage(e.what());
+  }
+  std::filesystem::create_directories(args.out);
+  const std::filesystem::path dir(args.out);
+  Write(dir / "validation.json", Json(results));
+  Write(dir / "validation.md", Markdown(results));
+  std::fprintf(stderr, "quadrant_validate: wrote %s and %s; %s\n", (dir / "validation.json").c_str(),
+               (dir / "validation.md").c_str(), allPass ? "every case passes" : "a case FAILS");
+  return allPass ? 0 : 1;
+}

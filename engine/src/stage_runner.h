@@ -1,0 +1,82 @@
+// Runs the step's stages on the task system and measures their load balance.
+//
+// Every block of every parallel stage is timed with the thread's own CPU clock, so a worker
+// that the OS preempts (more threads than cores) is not charged for the wait. Per stage the
+// runner adds up the total work and the critical path (the largest worker share of each
+// parallel section, all of each serial one); work / critical path is the speed-up that the
+// partition allows at this thread count, whatever the machine's core count.
+#pragma once
+
+#include <time.h>
+
+#include <algorithm>
+#include <vector>
+
+#include "quadrant/task_system.h"
+#include "quadrant/world.h"
+
+namespace quadrant {
+
+class StageRunner {
+ public:
+  StageRunner(TaskSystem& tasks, int minParallelItems)
+      : tasks_(tasks), minItems_(minParallelItems), workerMs_(tasks.WorkerCount(), 0.0) {}
+
+  int Workers() const { return tasks_.WorkerCount(); }
+  /// Sections with fewer items run inline (WorldDef::minParallelItems).
+  int MinItems() const { return minItems_; }
+
+  /// Runs fn(begin, end, worker) over [0, count) in parallel when count >= minParallel,
+  /// otherwise inline on the caller as one block (worker 0). Both give the same results for
+  /// work whose blocks are independent.
+  template <class Fn>
+  void For(Stage stage, int count, int minParallel, Fn&& fn) {
+    if (count <= 0) return;
+    if (tasks_.WorkerCount() == 1 || count < minParallel) {
+      Serial(stage, [&] { fn(0, count, 0); });
+      return;
+    }
+    std::fill(workerMs_.begin(), workerMs_.end(), 0.0);
+    tasks_.ParallelFor(count, [&](int begin, int end, int worker) {
+      const double t0 = ThreadCpuMs();
+      fn(begin, end, worker);
+      workerMs_[worker] += ThreadCpuMs() - t0;
+    });
+    double sum = 0, largest = 0;
+    for (double ms : workerMs_) {
+      sum += ms;
+      largest = std::max(largest, ms);
+    }
+    Add(stage, sum, largest);
+  }
+
+  /// Runs fn on the calling thread; all of it is on the critical path.
+  template <class Fn>
+  void Serial(Stage stage, Fn&& fn) {
+    const double t0 = ThreadCpuMs();
+    fn();
+    const double ms = ThreadCpuMs() - t0;
+    Add(stage, ms, ms);
+  }
+
+  void Reset() { balance_ = {}; }
+  const std::array<StageBalance, kStageCount>& Balance() const { return balance_; }
+
+ private:
+  static double ThreadCpuMs() {
+    timespec ts;
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+    return double(ts.tv_sec) * 1e3 + double(ts.tv_nsec) * 1e-6;
+  }
+  void Add(Stage stage, double work, double critical) {
+    balance_[size_t(stage)].workMs += work;
+    balance_[size_t(stage)].criticalMs += critical;
+  }
+
+  TaskSystem& tasks_;
+  int minItems_;
+  std::vector<double> workerMs_;
+  std::array<StageBalance, kStageCount> balance_{};
+};
+
+}  // namespace quadrant

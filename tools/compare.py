@@ -1,0 +1,402 @@
+#!/usr/bin/python3
+"""Compare two Google Benchmark runs benchmark by benchmark: is NEW faster, slower or unchanged?
+
+Usage (Debian's interpreter; only the standard library is needed):
+
+    /usr/bin/python3 tools/compare.py BASE NEW [--alpha 0.05] [--threshold 5]
+                                               [--min-repetitions 9]
+
+BASE and NEW are Google Benchmark JSON files (--benchmark_out_format=json) or directories, in
+which case every *.json directly inside is read and the repetitions of a benchmark found in
+several files are pooled.
+
+Per benchmark (paired by name, with Google Benchmark's suffixes such as /iterations:1 and
+/real_time removed; aggregate rows _mean/_median/_stddev/_cv are ignored in favour of the
+per-repetition rows):
+  - the median time per step on each side: the ms_per_step counter when every row of both
+    sides has it, else real_time (converted to ms);
+  - the ratio NEW/BASE of the medians;
+  - a two-sided Mann-Whitney U test over the repetitions (p value);
+  - a verdict: "slower" or "faster" when p < alpha AND the medians differ by more than the
+    threshold (a significant 2 % change under a 5 % threshold is "unchanged": it is real but
+    too small to act on); "unchanged" otherwise; "unchanged (too few repetitions)" when either
+    side has fewer than --min-repetitions repetitions (with fewer, the test cannot reach
+    significance reliably, and one noisy run would decide).
+
+Prints a Markdown table, then names every slower benchmark and lists the benchmarks found on
+one side only. Exit status: 1 if any benchmark is slower, 0 otherwise, 2 on bad input (a
+missing or unreadable file, a file that is not Google Benchmark JSON, no benchmark in common).
+
+Why Mann-Whitney U: benchmark times are not normal (a long right tail from preemption and
+cache misses), so a t-test's assumptions do not hold; the rank test needs none (Google
+Benchmark's own tools/compare.py uses it too).
+
+Why it is implemented here rather than taken from scipy: it is 60 lines, it keeps this tool
+free of a 60 MB dependency, and it lets us use the EXACT null distribution for the usual sample
+sizes (9..50 repetitions without ties), where scipy 1.10 (Debian bookworm) switches to the
+normal approximation as soon as a sample exceeds 8 values. The normal approximation (with tie
+and continuity correction, as scipy's) is used when there are ties or the samples are large.
+tests/tools/compare_test.py checks both against values computed once with scipy.
+"""
+
+import argparse
+import glob
+import json
+import math
+import os
+import re
+import statistics
+import sys
+
+# Google Benchmark appends these to a benchmark's name; they are not part of its identity
+# (a run with a different iteration count or time mode is still the same benchmark).
+SUFFIX_RE = re.compile(
+    r"/(?:iterations:\d+|repeats:\d+|min_time:[0-9.]+s?|min_warmup_time:[0-9.]+s?"
+    r"|real_time|manual_time|process_time)$"
+)
+AGGREGATE_RE = re.compile(r"_(?:mean|median|stddev|cv)$")
+TIME_UNITS_MS = {"ns": 1e-6, "us": 1e-3, "ms": 1.0, "s": 1e3}
+
+# Context keys whose difference makes a comparison questionable: warned about on stderr.
+CONTEXT_KEYS = ("machine", "cpu_model", "compiler", "cxx_flags", "build_type", "quadrant_real",
+                "steps", "warmup", "seed")
+
+# Exact p values are computed when there are no ties and m * n is at most this (m = n = 50:
+# the polynomial has 2501 coefficients, m passes over it: well under a second).
+EXACT_MAX_PRODUCT = 2500
+
+
+class InputError(Exception):
+    """Bad input: reported on stderr, exit status 2."""
+
+
+# ---- Mann-Whitney U ---------------------------------------------------------------------------
+
+
+def rank(values):
+    """Ranks 1..n, ties getting the average of the ranks they span. Returns (ranks, tie sizes)."""
+    order = sorted(range(len(values)), key=lambda i: values[i])
+    ranks = [0.0] * len(values)
+    ties = []
+    i = 0
+    while i < len(order):
+        j = i
+        while j + 1 < len(order) and values[order[j + 1]] == values[order[i]]:
+            j += 1
+        avg = (i + j) / 2 + 1
+        for k in range(i, j + 1):
+            ranks[order[k]] = avg
+        if j > i:
+            ties.append(j - i + 1)
+        i = j + 1
+    return ranks, ties
+
+
+def u_distribution(m, n):
+    """Number of arrangements of m x's and n y's giving U = 0..m*n (no ties).
+
+    The counts are the coefficients of the Gaussian binomial [m+n choose m](q) =
+    prod_{i=1..m} (1 - q^(n+i)) / (1 - q^i); each factor is one multiplication by (1 - q^(n+i))
+    and one division by (1 - q^i) (a running sum with stride i), in exact integers.
+    """
+    size = m * n + 1
+    c = [0] * size
+    c[0] = 1
+    for i in range(1, m + 1):
+        shift = n + i
+        for k in range(size - 1, shift - 1, -1):  # multiply by (1 - q^shift)
+            c[k] -= c[k - shift]
+        for k in range(i, size):  # divide by (1 - q^i)
+            c[k] += c[k - i]
+    return c
+
+
+def normal_sf(z):
+    return 0.5 * math.erfc(z / math.sqrt(2))
+
+
+def mann_whitney_u(x, y, method="auto"):
+    """Two-sided Mann-Whitney U test. Returns (U of x, p value, method used).
+
+    method: "exact" (no ties allowed), "asymptotic" (normal approximation with tie and continuity
+    correction) or "auto" (exact when there are no ties and len(x) * len(y) <= EXACT_MAX_PRODUCT).
+    The statistic and the p values follow scipy.stats.mannwhitneyu's definitions: U1 = R1 -
+    m(m+1)/2, two-sided p = 2 P(U >= max(U1, U2)), clipped to 1.
+    """
+    m, n = len(x), len(y)
+    if m == 0 or n == 0:
+        raise ValueError("mann_whitney_u: both samples need at least one value")
+    ranks, ties = rank(list(x) + list(y))
+    u1 = sum(ranks[:m]) - m * (m + 1) / 2
+    u2 = m * n - u1
+    u = max(u1, u2)
+    if method == "auto":
+        method = "exact" if not ties and m * n <= EXACT_MAX_PRODUCT else "asymptotic"
+    if method == "exact":
+        if ties:
+            raise ValueError("mann_whitney_u: the exact test needs samples without ties")
+        counts = u_distribution(m, n)
+        total = math.comb(m + n, m)
+        p = 2 * sum(counts[int(round(u)):]) / total
+    elif method == "asymptotic":
+        big_n = m + n
+        tie_term = sum(t ** 3 - t for t in ties)
+        variance = m * n / 12 * ((big_n + 1) - tie_term / (big_n * (big_n - 1)))
+        if variance <= 0:  # every value equal: no evidence of any difference
+            return u1, 1.0, method
+        z = (u - m * n / 2 - 0.5) / math.sqrt(variance)
+        p = 2 * normal_sf(z)
+    else:
+        raise ValueError(f"mann_whitney_u: unknown method {method!r}")
+    return u1, min(1.0, max(0.0, p)), method
+
+
+# ---- Reading Google Benchmark JSON ------------------------------------------------------------
+
+
+def base_name(name):
+    """The benchmark's identity: its name without Google Benchmark's run suffixes."""
+    prev = None
+    while prev != name:
+        prev, name = name, SUFFIX_RE.sub("", name)
+    return name
+
+
+def is_aggregate(row):
+    return (row.get("run_type") == "aggregate" or bool(row.get("aggregate_name"))
+            or bool(AGGREGATE_RE.search(row.get("name", ""))))
+
+
+class Side:
+    """One side of the comparison: the repetitions of every benchmark, from one or more files."""
+
+    def __init__(self, label, path):
+        self.label = label
+        self.path = path
+        self.files = self._files(path)
+        self.reps = {}        # name -> list of rows (per-repetition)
+        self.medians = {}     # name -> aggregate _median row (used only if no repetitions)
+        self.failed = {}      # name -> error message
+        self.contexts = []
+        for f in self.files:
+            self._read(f)
+        if not (self.reps or self.medians or self.failed):
+            raise InputError(f"{label} {path}: no benchmark rows found")
+
+    @staticmethod
+    def _files(path):
+        if os.path.isdir(path):
+            files = sorted(glob.glob(os.path.join(path, "*.json")))
+            if not files:
+                raise InputError(f"{path}: directory holds no *.json file")
+            return files
+        if not os.path.exists(path):
+            raise InputError(f"{path}: no such file or directory")
+        return [path]
+
+    def _read(self, path):
+        try:
+            with open(path, encoding="utf-8") as f:
+                data = json.load(f)
+        except OSError as e:
+            raise InputError(f"{path}: cannot read: {e.strerror or e}")
+        except (json.JSONDecodeError, UnicodeDecodeError) as e:
+            raise InputError(f"{path}: not valid JSON ({e})")
+        if not isinstance(data, dict) or not isinstance(data.get("benchmarks"), list):
+            raise InputError(f'{path}: not Google Benchmark JSON (no "benchmarks" array; '
+                             "write it with --benchmark_out=FILE --benchmark_out_format=json)")
+        if isinstance(data.get("context"), dict):
+            self.contexts.append(data["context"])
+        for i, row in enumerate(data["benchmarks"]):
+            if not isinstance(row, dict) or not isinstance(row.get("name"), str):
+                raise InputError(f"{path}: benchmarks[{i}] is not a benchmark row (no name)")
+            if row.get("error_occurred"):
+                name = base_name(row.get("run_name") or row["name"])
+                self.failed[name] = row.get("error_message", "no message")
+                continue
+            if is_aggregate(row):
+                if (row.get("aggregate_name") or "") == "median" or row["name"].endswith("_median"):
+                    name = base_name(row.get("run_name") or AGGREGATE_RE.sub("", row["name"]))
+                    self.medians[name] = row
+                continue
+            self.reps.setdefault(base_name(row["name"]), []).append(row)
+
+    def names(self):
+        return set(self.reps) | set(self.medians)
+
+    def context_value(self, key):
+        values = {str(c[key]) for c in self.contexts if key in c}
+        return ", ".join(sorted(values)) if values else None
+
+
+def row_ms(row, metric, where):
+    """The row's time per step (ms): the ms_per_step counter or real_time in ms."""
+    if metric == "ms_per_step":
+        value = row.get("ms_per_step")
+    else:
+        unit = TIME_UNITS_MS.get(row.get("time_unit", "ns"))
+        real = row.get("real_time")
+        if unit is None:
+            raise InputError(f"{where}: {row['name']}: unknown time_unit {row.get('time_unit')!r}")
+        value = real * unit if isinstance(real, (int, float)) else None
+    if not isinstance(value, (int, float)) or not math.isfinite(value) or value < 0:
+        raise InputError(f"{where}: {row['name']}: no usable {metric} (got {value!r})")
+    return float(value)
+
+
+# ---- Comparing --------------------------------------------------------------------------------
+
+
+class Comparison:
+    def __init__(self, name, base_values, new_values, base_median, new_median, metric,
+                 p, verdict):
+        self.name = name
+        self.base_values, self.new_values = base_values, new_values
+        self.base_median, self.new_median = base_median, new_median
+        self.metric = metric
+        self.p = p
+        self.verdict = verdict
+
+    @property
+    def ratio(self):
+        return self.new_median / self.base_median if self.base_median > 0 else math.inf
+
+
+def compare_one(name, base, new, alpha, threshold, min_reps):
+    base_rows, new_rows = base.reps.get(name, []), new.reps.get(name, [])
+    rows = base_rows + new_rows + [r for r in (base.medians.get(name), new.medians.get(name)) if r]
+    metric = "ms_per_step" if all("ms_per_step" in r for r in rows) else "real_time"
+    base_values = [row_ms(r, metric, base.path) for r in base_rows]
+    new_values = [row_ms(r, metric, new.path) for r in new_rows]
+    # A side with only aggregate rows still gives a median to show, but no test.
+    base_median = (statistics.median(base_values) if base_values
+                   else row_ms(base.medians[name], metric, base.path))
+    new_median = (statistics.median(new_values) if new_values
+                  else row_ms(new.medians[name], metric, new.path))
+    p = None
+    if len(base_values) < min_reps or len(new_values) < min_reps:
+        verdict = "unchanged (too few repetitions)"
+    else:
+        _, p, _ = mann_whitney_u(new_values, base_values)
+        ratio = new_median / base_median if base_median > 0 else math.inf
+        if p < alpha and ratio > 1 + threshold:
+            verdict = "slower"
+        elif p < alpha and ratio < 1 - threshold:
+            verdict = "faster"
+        else:
+            verdict = "unchanged"
+    return Comparison(name, base_values, new_values, base_median, new_median, metric, p, verdict)
+
+
+def fmt_ms(v):
+    return f"{v:.4g}"
+
+
+def render(base, new, results, only_base, only_new, alpha, threshold, min_reps):
+    lines = []
+    commits = (base.context_value("commit") or "?", new.context_value("commit") or "?")
+    lines.append(f"Comparison: BASE {base.path} (commit {commits[0]}) -> NEW {new.path} "
+                 f"(commit {commits[1]})")
+    lines.append(f"Two-sided Mann-Whitney U over repetitions; a change is reported when "
+                 f"p < {alpha:g} and the medians differ by more than {threshold * 100:g} %; "
+                 f"at least {min_reps} repetitions per side.")
+    lines.append("")
+    lines.append("| benchmark | base ms/step | new ms/step | new/base | change | p | reps base/new | verdict |")
+    lines.append("|---|---:|---:|---:|---:|---:|---:|---|")
+    for c in results:
+        change = (c.ratio - 1) * 100
+        p = "n/a" if c.p is None else f"{c.p:.3g}"
+        unit = "" if c.metric == "ms_per_step" else " (real_time)"
+        verdict = f"**{c.verdict}**" if c.verdict in ("slower", "faster") else c.verdict
+        lines.append(f"| {c.name}{unit} | {fmt_ms(c.base_median)} | {fmt_ms(c.new_median)} | "
+                     f"{c.ratio:.3f} | {change:+.1f} % | {p} | {len(c.base_values)}/"
+                     f"{len(c.new_values)} | {verdict} |")
+    lines.append("")
+    slower = [c for c in results if c.verdict == "slower"]
+    faster = [c for c in results if c.verdict == "faster"]
+    if slower:
+        lines.append(f"SLOWER ({len(slower)}):")
+        for c in slower:
+            lines.append(f"  - {c.name} ({(c.ratio - 1) * 100:+.1f} %, p = {c.p:.3g})")
+    else:
+        lines.append("No benchmark is slower.")
+    if faster:
+        lines.append(f"Faster ({len(faster)}): " + ", ".join(c.name for c in faster))
+    few = [c for c in results if c.p is None]
+    if few:
+        lines.append(f"Not tested, fewer than {min_reps} repetitions on a side ({len(few)}): "
+                     + ", ".join(c.name for c in few))
+    for label, names in (("Only in BASE (not compared)", only_base),
+                         ("Only in NEW (not compared)", only_new)):
+        if names:
+            lines.append(f"{label}: " + ", ".join(sorted(names)))
+    for side in (base, new):
+        for name, msg in sorted(side.failed.items()):
+            lines.append(f"Failed in {side.label} (not compared): {name}: {msg}")
+    return "\n".join(lines)
+
+
+def warn_context(base, new):
+    for key in CONTEXT_KEYS:
+        b, n = base.context_value(key), new.context_value(key)
+        if b is not None and n is not None and b != n:
+            print(f"compare: warning: {key} differs: BASE {b!r}, NEW {n!r}", file=sys.stderr)
+
+
+def percent(text):
+    try:
+        value = float(text.rstrip("%").strip())
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a percentage")
+    if not 0 <= value < 100:
+        raise argparse.ArgumentTypeError(f"{text!r} is not in [0, 100)")
+    return value / 100
+
+
+def probability(text):
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number")
+    if not 0 < value < 1:
+        raise argparse.ArgumentTypeError(f"{text!r} is not in (0, 1)")
+    return value
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(
+        prog="compare.py",
+        description="Compare two Google Benchmark JSON runs (files or directories of *.json).")
+    parser.add_argument("base", metavar="BASE")
+    parser.add_argument("new", metavar="NEW")
+    parser.add_argument("--alpha", type=probability, default=0.05,
+                        help="significance level of the Mann-Whitney U test (default 0.05)")
+    parser.add_argument("--threshold", type=percent, default=0.05,
+                        help="smallest change in %% of the median reported as slower/faster "
+                             "(default 5)")
+    parser.add_argument("--min-repetitions", type=int, default=9,
+                        help="repetitions needed on each side for a verdict (default 9)")
+    args = parser.parse_args(argv)
+    if args.min_repetitions < 1:
+        parser.error("--min-repetitions must be >= 1")
+    try:
+        base = Side("BASE", args.base)
+        new = Side("NEW", args.new)
+        common = sorted(base.names() & new.names())
+        if not common:
+            raise InputError(f"no benchmark in common between {args.base} "
+                             f"({len(base.names())} benchmarks) and {args.new} "
+                             f"({len(new.names())} benchmarks)")
+        results = [compare_one(name, base, new, args.alpha, args.threshold, args.min_repetitions)
+                   for name in common]
+    except InputError as e:
+        print(f"compare: error: {e}", file=sys.stderr)
+        return 2
+    warn_context(base, new)
+    print(render(base, new, results, base.names() - new.names(), new.names() - base.names(),
+                 args.alpha, args.threshold, args.min_repetitions))
+    return 1 if any(c.verdict == "slower" for c in results) else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
