@@ -67,7 +67,9 @@ class Box2dAdapter final : public Adapter {
 
   void Load(const Scene& scene, int threads) override {
     ValidateScene(scene);
-    // Refuse before touching the current world, so a refused Load leaves it usable.
+    // Refuse before touching the current world, so a refused Load leaves it usable. Fewer than
+    // one thread is bad input (an Error); more than the engine runs is Unsupported.
+    if (threads < 1) throw Error("box2d: threads must be >= 1, got " + std::to_string(threads));
     if (threads != 1) {
       throw Unsupported("box2d: Box2D 2.4.1 is single-threaded; asked for " +
                         std::to_string(threads) + " threads");

@@ -154,6 +154,8 @@ class BulletAdapter final : public Adapter {
 
   void Load(const Scene& scene, int threads) override {
     ValidateScene(scene);
+    // Fewer than one thread is bad input (an Error); more than Bullet runs is Unsupported.
+    if (threads < 1) throw Error("bullet: threads must be >= 1, got " + std::to_string(threads));
     if (threads != 1) throw SerialOnly();
     if (scene.effects.damping) {
       throw Unsupported("bullet: scene bodies carry no damping values to give Bullet");

@@ -112,7 +112,9 @@ class ChipmunkAdapter final : public Adapter {
 
   void Load(const Scene& scene, int threads) override {
     ValidateScene(scene);
-    // Refuse before touching the current space, so a refused Load leaves it usable.
+    // Refuse before touching the current space, so a refused Load leaves it usable. Fewer than
+    // one thread is bad input (an Error); other counts than 1 and 2 are Unsupported.
+    if (threads < 1) throw Error("chipmunk: threads must be >= 1, got " + std::to_string(threads));
     if (threads != 1 && threads != kMaxThreads) {
       throw Unsupported("chipmunk: runs 1 or 2 threads (cpHastySpace); asked for " +
                         std::to_string(threads));

@@ -23,6 +23,11 @@ class QuadrantAdapter final : public Adapter {
         solver_ = SolverType::kThesis;
       } else if (token == "pgs") {
         solver_ = SolverType::kPgs;
+      } else if (token == "soft_step") {
+        solver_ = SolverType::kSoftStep;
+      } else if (token.size() > 3 && token.starts_with("sub") && ParseCount(token.substr(3), &softSubSteps_)) {
+      } else if (token.size() > 2 && token.starts_with("it") && ParseCount(token.substr(2), &iterations_)) {
+      } else if (token.size() > 3 && token.starts_with("pos") && ParseCount(token.substr(3), &positionIterations_)) {
       } else if (token == "quadtree") {
         broadPhase_ = BroadPhaseType::kQuadTree;
       } else if (token == "grid") {
@@ -32,7 +37,7 @@ class QuadrantAdapter final : public Adapter {
       } else if (token == "quadrants") {
         scheme_ = ParallelScheme::kQuadrants;
       } else {
-        throw Error("unknown quadrant variant '" + std::string(token) + "' (known: thesis, pgs, quadtree, grid, deterministic, quadrants)");
+        throw Error("unknown quadrant variant '" + std::string(token) + "' (known: thesis, pgs, soft_step, quadtree, grid, deterministic, quadrants, sub<N>, it<N>, pos<N>)");
       }
       if (end == std::string_view::npos) break;
       start = end + 1;
@@ -47,10 +52,12 @@ class QuadrantAdapter final : public Adapter {
     c.disableRotation = true;
     c.disableFriction = true;
     c.disableWarmStarting = true;
-    c.notes = std::string("solver ") + (solver_ == SolverType::kThesis ? "thesis" : "pgs") +
+    c.continuous = true;
+    c.notes = std::string("solver ") +
+              (solver_ == SolverType::kThesis ? "thesis" : solver_ == SolverType::kPgs ? "pgs" : "soft_step") +
               ", broad phase " + (broadPhase_ == BroadPhaseType::kQuadTree ? "quad-tree" : "uniform grid") +
               "; friction sqrt(f1*f2), restitution max(e1,e2) as Box2D; speculative contacts 0.02 m; "
-              "no polygon skin; scheme " + (scheme_ == ParallelScheme::kQuadrants ? "quadrants" : "deterministic");
+              "no polygon skin; continuous collision = velocity-swept speculative contacts (scene flag); scheme " + (scheme_ == ParallelScheme::kQuadrants ? "quadrants" : "deterministic");
     return c;
   }
 
@@ -58,14 +65,14 @@ class QuadrantAdapter final : public Adapter {
     ValidateScene(scene);
     if (threads < 1 || threads > kMaxThreads) throw Error("quadrant: threads must be in [1, 64]");
     if (scene.effects.sleep) throw Unsupported("quadrant has no sleeping yet");
-    if (scene.effects.continuous) throw Unsupported("quadrant has no continuous collision yet");
     if (scene.effects.damping) throw Unsupported("scene bodies carry no damping values yet");
     WorldDef def;
     def.gravity = scene.gravity;
     def.solver = solver_;
     def.broadPhase = broadPhase_;
-    def.velocityIterations = scene.velocityIterations;
-    def.positionIterations = scene.positionIterations;
+    def.velocityIterations = iterations_ > 0 ? iterations_ : scene.velocityIterations;
+    if (softSubSteps_ > 0) def.softSubSteps = softSubSteps_;
+    def.positionIterations = positionIterations_ > 0 ? positionIterations_ : scene.positionIterations;
     def.restitutionThreshold = scene.restitutionThreshold;
     def.threadCount = threads;
     def.scheme = scheme_;
@@ -74,6 +81,7 @@ class QuadrantAdapter final : public Adapter {
     def.effects.restitution = scene.effects.restitution;
     def.effects.rotation = scene.effects.rotation;
     def.effects.warmStarting = scene.effects.warmStarting;
+    def.effects.continuous = scene.effects.continuous;
     auto world = std::make_unique<World>(def);
     std::vector<BodyId> ids;
     ids.reserve(scene.bodies.size());
@@ -187,7 +195,21 @@ class QuadrantAdapter final : public Adapter {
   SolverType solver_ = SolverType::kPgs;
   BroadPhaseType broadPhase_ = BroadPhaseType::kUniformGrid;
   ParallelScheme scheme_ = ParallelScheme::kDeterministic;
+  int softSubSteps_ = 0;  // 0: the engine's default
+  int iterations_ = 0;    // 0: the scene's
+  int positionIterations_ = 0;  // 0: the scene's
   static constexpr int kMaxThreads = 64;
+
+  static bool ParseCount(std::string_view digits, int* out) {
+    int value = 0;
+    for (char ch : digits) {
+      if (ch < '0' || ch > '9' || value > 1000) return false;
+      value = value * 10 + (ch - '0');
+    }
+    if (value < 1) return false;
+    *out = value;
+    return true;
+  }
   std::unique_ptr<World> world_;
   std::vector<BodyId> ids_;
   const Scene* scene_ = nullptr;

@@ -1,6 +1,7 @@
 // Scene validation and mass properties, shared by every adapter.
 #include "scene.h"
 
+#include <limits>
 #include <string>
 
 #include "quadrant/error.h"
@@ -56,6 +57,7 @@ void ValidateScene(const Scene& scene) {
   RequireFinite(IsFinite(scene.timeStep), "time step");
   RequireFinite(IsFinite(scene.restitutionThreshold), "restitution threshold");
   if (scene.timeStep <= 0) throw Error("scene time step must be > 0");
+  if (scene.timeStep > kMaxTimeStep) throw Error("scene time step must be <= 1 s");
   if (scene.subSteps < 1) throw Error("scene sub-steps must be >= 1");
   if (scene.velocityIterations < 1) throw Error("scene velocity iterations must be >= 1");
   if (scene.positionIterations < 0) throw Error("scene position iterations must be >= 0");
@@ -72,6 +74,10 @@ void ValidateScene(const Scene& scene) {
     if (!IsFinite(b.restitution) || b.restitution < 0 || b.restitution > 1) {
       Fail(i, "restitution must be in [0, 1]");
     }
+    if (std::abs(b.velocity.x) > kMaxInputSpeed || std::abs(b.velocity.y) > kMaxInputSpeed ||
+        std::abs(b.angularVelocity) > kMaxInputSpeed) {
+      Fail(i, "velocity is beyond the limit of 1e6 m/s (rad/s)");
+    }
     if (b.shape == ShapeKind::kCircle) {
       try {
         ValidateCircle(Circle{{0, 0}, b.radius});
@@ -80,6 +86,14 @@ void ValidateScene(const Scene& scene) {
       }
     } else {
       ValidatePolygonOrder(b, i);
+    }
+    if (b.dynamic) {
+      const MassProperties mp = ComputeMassProperties(b);
+      constexpr Real kSmallest = std::numeric_limits<Real>::min();  // subnormals count as underflow
+      if (!IsFinite(mp.mass) || mp.mass < kSmallest || !IsFinite(mp.inertia) || mp.inertia < kSmallest ||
+          !IsFinite(Real(1) / mp.mass) || !IsFinite(Real(1) / mp.inertia)) {
+        Fail(i, "mass or rotational inertia is not a positive finite number (density too large or too small)");
+      }
     }
   }
 }

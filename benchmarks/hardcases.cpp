@@ -179,6 +179,15 @@ std::string Markdown(const std::vector<Row>& rows, const Args& args) {
   return o.str();
 }
 
+void Write(const std::filesystem::path& path, const std::string& text) {
+  std::ofstream out(path);
+  out << text;
+  if (!out) {
+    std::cerr << "quadrant_hardcases: cannot write " << path << "\n";
+    std::exit(2);
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -208,9 +217,10 @@ int main(int argc, char** argv) {
 
   std::filesystem::create_directories(args.out);
   const std::filesystem::path dir(args.out);
-  std::ofstream(dir / "hardcases.json") << Json(rows, args);
-  std::ofstream(dir / "hardcases.md") << Markdown(rows, args);
-  std::cout << Markdown(rows, args);
+  const std::string markdown = Markdown(rows, args);
+  Write(dir / "hardcases.json", Json(rows, args));
+  Write(dir / "hardcases.md", markdown);
+  std::cout << markdown;
   std::fprintf(stderr, "quadrant_hardcases: wrote %s and %s; Quadrant %s\n", (dir / "hardcases.json").c_str(),
                (dir / "hardcases.md").c_str(), allPass ? "passes every case" : "FAILS a case");
   return allPass ? 0 : 1;

@@ -92,7 +92,9 @@ std::string Markdown(const std::vector<qs::ValidationResult>& results) {
     << "the two mixing rules agree), and bodies that start touching or meet exactly at a step boundary. A "
     << "quantity passes when |quadrant - box2d| <= tolerance and, where physics gives an answer, |quadrant - "
     << "analytic| <= tolerance. Box2D's 0.01 m polygon skin is subtracted where it matters (quantities named "
-    << "`..._minus_skin`), never absorbed by a tolerance.\n\n"
+    << "`..._minus_skin`), never absorbed by a tolerance. The one Box2D effect that cannot be subtracted, its "
+    << "friction acting half its slop inside a resting circle (`spinning_circle_lands`: it rolls 0.5 % fast), "
+    << "is named with its size in those quantities' reasons.\n\n"
     << "| case | quantity | quadrant | box2d | analytic | tolerance | verdict |\n|---|---|---|---|---|---|---|\n";
   for (const qs::ValidationResult& r : results) {
     for (const qs::ValidationQuantity& q : r.quantities) {

@@ -178,6 +178,7 @@ class Results:
                     "contacts": statistics.median([r.get("contacts", 0) for r in rows_k]),
                     "memory_mb": statistics.median([r.get("memory_mb", 0) for r in rows_k]),
                     "labels": sorted({r.get("label", "") for r in rows_k}),
+                    "bound": statistics.median([r["balance_bound"] for r in rows_k]) if all("balance_bound" in r for r in rows_k) else None,
                 }
             else:
                 row = medians[key]
@@ -188,6 +189,7 @@ class Results:
                     "sps": v, "min": v, "max": v, "reps": row.get("repetitions", 1),
                     "contacts": row.get("contacts", 0), "memory_mb": row.get("memory_mb", 0),
                     "labels": [row.get("label", "")] if row.get("label") else [],
+                    "bound": row.get("balance_bound"),
                 }
         # Orders: as in the context where given, else as first seen; Quadrant first.
         seen_scenes, seen_engines = [], []
@@ -290,7 +292,13 @@ def markdown(results, source):
         "multithreaded world runs on one thread) and Box2D 2.4.1 is single-threaded: both appear "
         "at 1 thread only. Cells for thread counts above the machine's core count are marked "
         "(oversubscribed): their speed-ups are not parallel scaling. '-' means the engine does not "
-        "run that many threads; 'n/a' means not run (unsupported or missing).")
+        "run that many threads; 'n/a' means not run (unsupported or missing). "
+        "'bound' is Quadrant's measured load-balance bound at that thread count: the thread CPU time "
+        "of all its stages over their critical path (largest thread share of each parallel section "
+        "plus every serial section), i.e. the speed-up its partition allows with a core per thread; "
+        "on this machine it backs the oversubscribed figures. `quadrant` runs the default "
+        "deterministic scheme (bit-identical for any thread count), `quadrant (quadrants)` the "
+        "thesis's quadrant partition.")
     for e in results.engines:
         notes = c.get(f"engine_notes_{e}")
         if notes:
@@ -330,6 +338,8 @@ def markdown(results, source):
                     s = results.get(scene, e, n, t)
                     if s and base:
                         cell = f"{s['sps'] / base['sps']:.2f}x"
+                        if s.get("bound"):
+                            cell += f" (bound {s['bound']:.2f})"
                         if over(t):
                             cell += " (oversubscribed)"
                     else:

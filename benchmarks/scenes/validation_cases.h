@@ -12,7 +12,9 @@
 // |quadrant - analytic| <= tolerance. Known design differences are accounted for in the Box2D
 // value, never by a wider tolerance: Box2D 2.4 keeps a 0.01 m skin around every polygon, so a
 // box rests 0.01 m higher per polygon in the contact, and its contact points lie midway between
-// skinned surfaces; such quantities carry "minus skin" in their name and reason.
+// skinned surfaces; such quantities carry "minus skin" in their name and reason. The one effect
+// that cannot be subtracted (Box2D applies friction at a point half its slop inside a resting
+// circle, so a rolling circle runs 0.5 % fast) is held by tolerances whose reasons give its size.
 #pragma once
 
 #include <optional>

@@ -1,6 +1,8 @@
 // Symplectic Euler integration at a fixed step.
 #include "integrate.h"
 
+#include <algorithm>
+
 namespace quadrant {
 
 void IntegrateVelocities(Bodies& bodies, const WorldDef& def, Real dt, StageRunner& run) {
@@ -31,12 +33,14 @@ void IntegratePositions(Bodies& bodies, const WorldDef& def, Real dt, StageRunne
 
 void IntegratePositionsRange(Bodies& bodies, const WorldDef& def, Real dt, int begin, int end) {
   const Real maxSpeed2 = def.maxLinearSpeed * def.maxLinearSpeed;
+  const Real maxAngularSpeed = def.maxRotation / dt;
   const bool rotation = def.effects.rotation;
   for (int i = begin; i < end; ++i) {
     if (bodies.type[i] == BodyType::kStatic) continue;
     BodyVelocity& bv = bodies.vel[i];
     const Real speed2 = LengthSquared(bv.v);
     if (speed2 > maxSpeed2) bv.v = (def.maxLinearSpeed / std::sqrt(speed2)) * bv.v;
+    bv.w = std::clamp(bv.w, -maxAngularSpeed, maxAngularSpeed);
     bodies.center[i] += dt * bv.v;
     // Most bodies of frictionless scenes never spin: skip the renormalisation for them.
     if (rotation && bv.w != 0) bodies.xf[i].q = IntegrateRot(bodies.xf[i].q, dt * bv.w);

@@ -11,7 +11,8 @@ namespace quadrant {
 void IntegrateVelocities(Bodies& bodies, const WorldDef& def, Real dt, StageRunner& run);
 
 /// centre += dt * v, rotation += dt * w (if rotation is on); updates the origin transform.
-/// Speeds above def.maxLinearSpeed are scaled down to it (a numerical guard, as in Box2D).
+/// Speeds above def.maxLinearSpeed and rotations above def.maxRotation per step are limited to
+/// them (numerical guards, as in Box2D).
 void IntegratePositions(Bodies& bodies, const WorldDef& def, Real dt, StageRunner& run);
 
 /// The same for bodies [begin, end), on the calling thread.

@@ -184,7 +184,7 @@ void QuadrantsScheme::WriteBack(Partition& part, Bodies& bodies) const {
 
 void QuadrantsScheme::Step(Real dt, const WorldDef& def, Bodies& bodies, StageRunner& run, ContactCache& cache,
                            std::vector<Contact>& contacts, int& pairs, Profile& profile) {
-  const bool warm = def.solver == SolverType::kPgs && def.effects.warmStarting;
+  const bool warm = def.solver != SolverType::kThesis && def.effects.warmStarting;
   Partition& master = *parts_[threads_];
   auto t0 = Clock::now();
   run.Serial(Stage::kBroadPhase, [&] { AssignOwners(bodies); });

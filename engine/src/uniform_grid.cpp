@@ -76,6 +76,9 @@ class UniformGrid final : public BroadPhase {
       moving += p.moving;
     }
     if (moving == 0) return false;
+    // A non-finite box would make the cell arithmetic meaningless; the world's input checks
+    // keep states finite, so this only guards against misuse of the broad phase on its own.
+    if (!IsFinite(box.lower) || !IsFinite(box.upper) || !std::isfinite(meanExtent)) return false;
     meanExtent /= moving;
     largeThreshold_ = 4.0 * meanExtent;
     // The cell must hold the largest ordinary body that can meet a movable one (max is exact

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <string>
 
 #include "broad_phase.h"
@@ -32,7 +33,13 @@ void Require(bool ok, const std::string& message) {
 
 void ValidateWorldDef(const WorldDef& d) {
   Require(IsFinite(d.gravity), "WorldDef.gravity is not finite");
-  Require(d.solver == SolverType::kThesis || d.solver == SolverType::kPgs, "WorldDef.solver is unknown");
+  Require(d.solver == SolverType::kThesis || d.solver == SolverType::kPgs || d.solver == SolverType::kSoftStep,
+          "WorldDef.solver is unknown");
+  Require(d.softSubSteps >= 1, "WorldDef.softSubSteps must be >= 1");
+  Require(IsFinite(d.contactHertz) && d.contactHertz > 0, "WorldDef.contactHertz must be > 0");
+  Require(IsFinite(d.contactDampingRatio) && d.contactDampingRatio >= 0, "WorldDef.contactDampingRatio must be >= 0");
+  Require(IsFinite(d.contactPushMaxVelocity) && d.contactPushMaxVelocity > 0,
+          "WorldDef.contactPushMaxVelocity must be > 0");
   Require(d.broadPhase == BroadPhaseType::kQuadTree || d.broadPhase == BroadPhaseType::kUniformGrid,
           "WorldDef.broadPhase is unknown");
   Require(d.velocityIterations >= 1, "WorldDef.velocityIterations must be >= 1");
@@ -46,6 +53,7 @@ void ValidateWorldDef(const WorldDef& d) {
   Require(IsFinite(d.restitutionThreshold) && d.restitutionThreshold >= 0,
           "WorldDef.restitutionThreshold must be finite and >= 0");
   Require(IsFinite(d.maxLinearSpeed) && d.maxLinearSpeed > 0, "WorldDef.maxLinearSpeed must be > 0");
+  Require(IsFinite(d.maxRotation) && d.maxRotation > 0, "WorldDef.maxRotation must be > 0");
   Require(d.threadCount >= 1 && d.threadCount <= kMaxThreads, "WorldDef.threadCount must be in [1, 64]");
   Require(d.quadTreeMaxDepth >= 1 && d.quadTreeMaxDepth <= 12, "WorldDef.quadTreeMaxDepth must be in [1, 12]");
   Require(d.minParallelItems >= 1, "WorldDef.minParallelItems must be >= 1");
@@ -61,6 +69,9 @@ ShapeDef ValidateBodyDef(const BodyDef& def) {
   Require(std::abs(def.position.x) <= kMaxCoordinate && std::abs(def.position.y) <= kMaxCoordinate,
           "BodyDef.position is beyond the coordinate limit of 1e6 m");
   Require(IsFinite(def.linearVelocity) && IsFinite(def.angularVelocity), "BodyDef velocity is not finite");
+  Require(std::abs(def.linearVelocity.x) <= kMaxInputSpeed && std::abs(def.linearVelocity.y) <= kMaxInputSpeed &&
+              std::abs(def.angularVelocity) <= kMaxInputSpeed,
+          "BodyDef velocity is beyond the limit of 1e6 m/s (rad/s)");
   Require(IsFinite(def.linearDamping) && def.linearDamping >= 0, "BodyDef.linearDamping must be finite and >= 0");
   Require(IsFinite(def.angularDamping) && def.angularDamping >= 0, "BodyDef.angularDamping must be finite and >= 0");
   ShapeDef shape = def.shape;
@@ -149,8 +160,10 @@ struct World::Impl {
     const ShapeDef& s = bodies.shape[i];
     AABB box = s.type == ShapeType::kCircle ? ComputeAABB(s.circle, bodies.xf[i]) : ComputeAABB(s.polygon, bodies.xf[i]);
     const BodyVelocity& bv = bodies.vel[i];
-    const Real margin = Real(0.5) * def.speculativeDistance + dt * std::abs(bv.w) * bodies.boundRadius[i];
-    const Vec2 d = dt * bv.v;
+    // Without continuous collision the box is not swept (dt 0 below): only the base margin.
+    const Real sweep = def.effects.continuous ? dt : Real(0);
+    const Real margin = Real(0.5) * def.speculativeDistance + sweep * std::abs(bv.w) * bodies.boundRadius[i];
+    const Vec2 d = sweep * bv.v;
     box.lower = box.lower + Vec2{std::min(d.x, Real(0)) - margin, std::min(d.y, Real(0)) - margin};
     box.upper = box.upper + Vec2{std::max(d.x, Real(0)) + margin, std::max(d.y, Real(0)) + margin};
     bodies.aabb[i] = box;
@@ -192,6 +205,15 @@ BodyId World::CreateBody(const BodyDef& def) {
     }
   }
   const bool dynamic = def.type == BodyType::kDynamic;
+  // Density times area can overflow (or underflow) float: a mass or inertia that is not a
+  // positive finite number would poison the solver, so the body is refused.
+  // Subnormal values count as underflow: they lose precision and make 1/m overflow.
+  constexpr Real kSmallest = std::numeric_limits<Real>::min();
+  Require(!dynamic || (IsFinite(md.mass) && md.mass >= kSmallest && IsFinite(md.rotationalInertia) &&
+                       md.rotationalInertia >= kSmallest && IsFinite(Real(1) / md.mass) &&
+                       IsFinite(Real(1) / md.rotationalInertia)),
+          "the body's mass or rotational inertia is not a positive finite number (density " +
+              std::to_string(shape.density) + ")");
 
   uint32_t slot;
   if (!w.freeSlots.empty()) {
@@ -260,6 +282,7 @@ bool World::IsValid(BodyId id) const {
 
 void World::Step(Real dt, int subSteps) {
   Require(IsFinite(dt) && dt > 0, "Step: dt must be finite and > 0");
+  Require(dt <= kMaxTimeStep, "Step: dt must be <= 1 s");
   Require(subSteps >= 1, "Step: subSteps must be >= 1");
   Impl& w = *impl_;
   w.profile = Profile{};
@@ -291,7 +314,7 @@ void World::Impl::SubStep(Real dt) {
   NarrowPhase(dt);
   auto t2 = Clock::now();
   run->Serial(Stage::kPersistence, [&] { SortContacts(); });
-  const bool persist = def.solver == SolverType::kPgs && def.effects.warmStarting;
+  const bool persist = def.solver != SolverType::kThesis && def.effects.warmStarting;
   if (persist) {
     run->For(Stage::kPersistence, static_cast<int>(contacts.size()), run->MinItems(),
              [&](int begin, int end, int) { cache.Restore(std::span<Contact>(contacts).subspan(begin, end - begin)); });
@@ -354,8 +377,9 @@ void CollidePairs(const Bodies& bodies, const WorldDef& def, Real dt, std::span<
     // closer than this become speculative constraints (the solver lets the gap close, no more).
     const BodyVelocity& va = bodies.vel[a];
     const BodyVelocity& vb = bodies.vel[b];
+    const Real sweep = def.effects.continuous ? dt : Real(0);
     const Real spec = def.speculativeDistance +
-                      dt * (Length(vb.v - va.v) + std::abs(va.w) * bodies.boundRadius[a] + std::abs(vb.w) * bodies.boundRadius[b]);
+                      sweep * (Length(vb.v - va.v) + std::abs(va.w) * bodies.boundRadius[a] + std::abs(vb.w) * bodies.boundRadius[b]);
     // Bounding circles reject most AABB-overlapping pairs before any shape test.
     const Real reach = bodies.boundRadius[a] + bodies.boundRadius[b] + spec;
     if (LengthSquared(bodies.center[b] - bodies.center[a]) > reach * reach) continue;
@@ -373,7 +397,7 @@ void CollidePairs(const Bodies& bodies, const WorldDef& def, Real dt, std::span<
         const Vec2 rB = mp.point - bodies.center[b];
         const Vec2 dv = vb.v + Cross(vb.w, rB) - va.v - Cross(va.w, rA);
         const Real approach = -Dot(dv, m.normal);
-        if (mp.separation > def.speculativeDistance + dt * approach) continue;
+        if (mp.separation > def.speculativeDistance + sweep * approach) continue;
       }
       m.points[kept++] = mp;
     }
@@ -441,6 +465,8 @@ const ShapeDef& World::GetShape(BodyId id) const { return impl_->bodies.shape[im
 void World::SetLinearVelocity(BodyId id, Vec2 v) {
   const int i = impl_->Dense(id);
   Require(IsFinite(v), "SetLinearVelocity: velocity is not finite");
+  Require(std::abs(v.x) <= kMaxInputSpeed && std::abs(v.y) <= kMaxInputSpeed,
+          "SetLinearVelocity: velocity is beyond the limit of 1e6 m/s");
   if (impl_->bodies.type[i] == BodyType::kStatic) return;  // static bodies have no velocity
   impl_->bodies.vel[i].v = v;
 }
@@ -448,6 +474,7 @@ void World::SetLinearVelocity(BodyId id, Vec2 v) {
 void World::SetAngularVelocity(BodyId id, Real w) {
   const int i = impl_->Dense(id);
   Require(IsFinite(w), "SetAngularVelocity: angular velocity is not finite");
+  Require(std::abs(w) <= kMaxInputSpeed, "SetAngularVelocity: angular velocity is beyond the limit of 1e6 rad/s");
   if (impl_->bodies.type[i] == BodyType::kStatic || !impl_->def.effects.rotation) return;
   impl_->bodies.vel[i].w = w;
 }
@@ -467,9 +494,19 @@ void World::ApplyLinearImpulse(BodyId id, Vec2 impulse, Vec2 worldPoint) {
   Impl& w = *impl_;
   const int i = w.Dense(id);
   Require(IsFinite(impulse) && IsFinite(worldPoint), "ApplyLinearImpulse: impulse or point is not finite");
+  Require(std::abs(worldPoint.x) <= kMaxCoordinate && std::abs(worldPoint.y) <= kMaxCoordinate,
+          "ApplyLinearImpulse: point is beyond the coordinate limit of 1e6 m");
   if (w.bodies.type[i] != BodyType::kDynamic) return;
-  w.bodies.vel[i].v += w.bodies.inv[i].invMass * impulse;
-  if (w.def.effects.rotation) w.bodies.vel[i].w += w.bodies.inv[i].invInertia * Cross(worldPoint - w.bodies.center[i], impulse);
+  // Compute in double and check before writing: the world must stay as it was if refused.
+  const double vx = double(w.bodies.vel[i].v.x) + double(w.bodies.inv[i].invMass) * impulse.x;
+  const double vy = double(w.bodies.vel[i].v.y) + double(w.bodies.inv[i].invMass) * impulse.y;
+  const Vec2 r = worldPoint - w.bodies.center[i];
+  const double wz = double(w.bodies.vel[i].w) +
+                    (w.def.effects.rotation ? double(w.bodies.inv[i].invInertia) * (double(r.x) * impulse.y - double(r.y) * impulse.x) : 0.0);
+  Require(std::abs(vx) <= kMaxInputSpeed && std::abs(vy) <= kMaxInputSpeed && std::abs(wz) <= kMaxInputSpeed,
+          "ApplyLinearImpulse: the resulting velocity is beyond the limit of 1e6 m/s (rad/s)");
+  w.bodies.vel[i].v = {Real(vx), Real(vy)};
+  w.bodies.vel[i].w = Real(wz);
 }
 
 int World::GetBodyCount() const { return impl_->bodies.Count(); }

@@ -381,7 +381,7 @@ void CheckRefusals(const Factory& make, int refusedThreads) {
   a->Load(ok, 1);
   EXPECT_THROW(a->Load(ok, refusedThreads), Unsupported);
   EXPECT_THROW(a->Load(ok, 3), Unsupported);
-  EXPECT_THROW(a->Load(ok, 0), Unsupported);
+  EXPECT_THROW(a->Load(ok, 0), quadrant::Error);  // fewer than one thread is bad input, not a limit
   Scene damped = ok;
   damped.effects.damping = true;
   EXPECT_THROW(a->Load(damped, 1), Unsupported);

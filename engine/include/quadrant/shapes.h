@@ -16,6 +16,14 @@ inline constexpr int kMaxPolygonVertices = 8;
 /// resolves 1 mm at 1e5 m only roughly (ulp ~ 8 mm), so beyond 1e6 results are meaningless.
 inline constexpr Real kMaxCoordinate = Real(1e6);
 
+/// Largest linear speed (m/s) and angular speed (rad/s) accepted as input. Beyond it one step
+/// moves a body past the coordinate limit; the simulation itself also guards with
+/// WorldDef::maxLinearSpeed and maxRotation.
+inline constexpr Real kMaxInputSpeed = Real(1e6);
+
+/// Longest time step accepted (s). Longer steps are outside what a rigid-body step models.
+inline constexpr Real kMaxTimeStep = Real(1);
+
 /// Smallest edge length / circle radius accepted (m). Below this the hull and the narrow
 /// phase lose precision in float32.
 inline constexpr Real kMinFeatureSize = Real(0.005);

@@ -76,6 +76,7 @@ struct BodyDef {
 enum class SolverType : uint8_t {
   kThesis,  ///< the 2013 thesis: mass-ratio separation + one impulse per contact, no iterations
   kPgs,     ///< sequential impulses, warm starting, velocity iterations, position pass (Box2D 2.4)
+  kSoftStep,  ///< sub-steps with soft contacts and a relax pass (Box2D 3)
 };
 
 enum class BroadPhaseType : uint8_t {
@@ -92,6 +93,11 @@ struct Effects {
   bool rotation = true;       ///< false: angular velocity stays 0 and no angular terms are solved
   bool warmStarting = true;   ///< pgs only: start from last step's impulses
   bool damping = false;       ///< apply per-body linear/angular damping
+  /// Continuous collision: a body's broad-phase box is swept by its motion over the step and a
+  /// contact is created wherever the gap can close within the step, so nothing tunnels. Off:
+  /// contacts are created only within speculativeDistance (a fast body can pass through a
+  /// thin one).
+  bool continuous = true;
 };
 
 /// How a world with threadCount > 1 splits its work.
@@ -116,18 +122,28 @@ struct WorldDef {
   /// several: kinetic energy of the 1000-circle elastic stress scene drifts 7 % in 150 steps
   /// with 1 pass, 2.3 % with 2, 0.3 % with 4.
   int restitutionIterations = 4;
+  int softSubSteps = 4;                 ///< soft_step sub-steps per step, >= 1 (Box2D 3 default 4)
+  Real contactHertz = 30;               ///< soft_step contact stiffness (Hz), > 0 (Box2D 3: 30)
+  Real contactDampingRatio = 10;        ///< soft_step contact damping ratio, >= 0 (Box2D 3: 10)
+  Real contactPushMaxVelocity = 3;      ///< soft_step fastest push-out of penetration (m/s), > 0
   Real linearSlop = Real(0.005);        ///< allowed penetration (m), as Box2D
   Real baumgarte = Real(0.2);           ///< fraction of penetration removed per position iteration
   Real maxLinearCorrection = Real(0.2); ///< most a position iteration moves a contact (m)
   Real speculativeDistance = Real(0.02);///< contacts are created this far before touching (m)
   Real restitutionThreshold = Real(1);  ///< approach speed (m/s) below which no bounce is added
   Real maxLinearSpeed = Real(400);      ///< m/s; a numerical guard, as Box2D 3's default
+  /// Most a body turns in one step (rad), as Box2D 3's 0.25 pi: a numerical guard. Speculative
+  /// contacts see where a corner is, not where a fast spin takes it within the step; without
+  /// the limit, triangles of the elastic polygon stress scene spun up to 160 rad/s and left
+  /// the box. At 60 Hz it allows 47 rad/s.
+  Real maxRotation = Real(0.25 * 3.14159265358979);
   int threadCount = 1;                  ///< worker threads, 1..64 (1 = no threading at all)
   ParallelScheme scheme = ParallelScheme::kDeterministic;
-  /// Sections with fewer items (bodies, pairs; half as many constraints) run on the calling
-  /// thread: below this a parallel-for costs more than it saves (benchmarks/task_overhead.cpp).
-  /// Lower it only to exercise threading on small scenes (the tests do). >= 1.
-  int minParallelItems = 512;
+  /// Sections with fewer items (bodies, pairs; an eighth as many constraints) run on the calling
+  /// thread. A parallel-for costs about 3.4 us at 2 threads (benchmarks/task_overhead.cpp) and a
+  /// body or pair about 10-20 ns, so below a few thousand items splitting does not pay. Lower it
+  /// only to exercise threading on small scenes (the tests do). >= 1.
+  int minParallelItems = 2048;
   int quadTreeMaxDepth = 8;             ///< quad-tree levels below the root, 1..12
   Effects effects;
 };

@@ -1,0 +1,59 @@
+// The per-call overhead of a parallel-for: Quadrant's thread pool against the compiler's
+// OpenMP, the measurement behind the task system's default (see thread_pool.cpp and README).
+//
+// Each iteration runs one parallel-for over `items` items doing a little work each (a few
+// nanoseconds, like an integration step), so the time is mostly dispatch and join. A step of
+// the engine runs a few dozen such sections.
+#include <benchmark/benchmark.h>
+#include <omp.h>
+
+#include <cmath>
+#include <vector>
+
+#include "quadrant/task_system.h"
+
+namespace {
+
+void Work(std::vector<float>& data, int begin, int end) {
+  for (int i = begin; i < end; ++i) data[i] = data[i] * 0.999f + 0.001f;
+}
+
+void BM_ThreadPool(benchmark::State& state) {
+  const int threads = static_cast<int>(state.range(0));
+  const int items = static_cast<int>(state.range(1));
+  std::vector<float> data(items, 1.0f);
+  auto pool = quadrant::MakeThreadPool(threads);
+  const quadrant::TaskSystem::RangeFn fn = [&](int b, int e, int) { Work(data, b, e); };
+  for (auto _ : state) {
+    pool->ParallelFor(items, fn);
+    benchmark::ClobberMemory();
+  }
+}
+
+void BM_OpenMP(benchmark::State& state) {
+  const int threads = static_cast<int>(state.range(0));
+  const int items = static_cast<int>(state.range(1));
+  std::vector<float> data(items, 1.0f);
+  for (auto _ : state) {
+#pragma omp parallel num_threads(threads)
+    {
+      const int w = omp_get_thread_num(), t = omp_get_num_threads();
+      Work(data, quadrant::BlockBegin(items, t, w), quadrant::BlockBegin(items, t, w + 1));
+    }
+    benchmark::ClobberMemory();
+  }
+}
+
+void Args(benchmark::internal::Benchmark* b) {
+  for (int threads : {1, 2, 4}) {
+    for (int items : {1024, 16384}) b->Args({threads, items});
+  }
+  b->UseRealTime()->MinTime(0.2);
+}
+
+BENCHMARK(BM_ThreadPool)->Apply(Args);
+BENCHMARK(BM_OpenMP)->Apply(Args);
+
+}  // namespace
+
+BENCHMARK_MAIN();

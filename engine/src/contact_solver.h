@@ -1,0 +1,314 @@
+// The contact constraints shared by the iterative solvers (pgs, soft_step): preparation,
+// graph colouring for parallel solving, warm starting, restitution, early-bounce correction and
+// storing impulses for the next step.
+//
+// Parallelism: constraints are coloured greedily (in contact order) so that no two of one
+// colour share a dynamic body, and solved colour by colour. Within a colour the constraints
+// are independent, so splitting a colour across threads gives exactly the serial result: the
+// solve is bit-identical for any thread count. Static and kinematic bodies are read, never
+// written, so they do not constrain the colouring (as in Box2D 3's constraint graph).
+#pragma once
+
+#include <algorithm>
+#include <bit>
+#include <chrono>
+#include <vector>
+
+#include "integrate.h"
+#include "solver.h"
+
+namespace quadrant {
+
+using SolverClock = std::chrono::steady_clock;
+inline double Ms(SolverClock::time_point a, SolverClock::time_point b) {
+  return std::chrono::duration<double, std::milli>(b - a).count();
+}
+
+struct PointConstraint {
+  Vec2 rA, rB;
+  Real normalMass, tangentMass;
+  Real normalImpulse, tangentImpulse;
+  Real separation;        // at collision time
+  Real relativeVelocity;  // normal approach speed before the solve
+  Real bounceShift;       // early-bounce correction (m) applied after integration, 0 if none
+  Real maxNormalImpulse;  // largest accumulated normal impulse this step (did the point push?)
+};
+
+struct ContactConstraint {
+  int contact;  // index in ctx.contacts (constraints are stored in colour order)
+  int a, b;
+  Vec2 normal;
+  Real friction, restitution;
+  Real invMassA, invIA, invMassB, invIB;
+  int pointCount;
+  PointConstraint points[2];
+  // Two-point manifolds: the off-diagonal of the 2x2 effective-mass matrix and whether it is
+  // well enough conditioned for the block solver (pgs).
+  Real k12;
+  bool block;
+};
+
+class ContactSolverBase : public Solver {
+ protected:
+  // Colours beyond this share one overflow group solved on one thread (rare: a body would
+  // need 64 simultaneous contacts).
+  static constexpr int kColors = 64;
+
+  // Greedy colouring in contact order (deterministic): each constraint takes the lowest colour
+  // that neither of its dynamic bodies has yet. Then the constraints' order is grouped by colour.
+  void Color(const StepContext& ctx) {
+    const Bodies& bodies = *ctx.bodies;
+    const int m = static_cast<int>(ctx.contacts.size());
+    bodyColors_.resize(bodies.Count(), 0);
+    colorOf_.resize(m);
+    int counts[kColors + 1] = {};
+    for (int c = 0; c < m; ++c) {
+      const int a = ctx.contacts[c].a, b = ctx.contacts[c].b;
+      const bool dynA = bodies.inv[a].invMass > 0, dynB = bodies.inv[b].invMass > 0;
+      const uint64_t used = (dynA ? bodyColors_[a] : 0) | (dynB ? bodyColors_[b] : 0);
+      const int color = used == ~uint64_t(0) ? kColors : std::countr_one(used);
+      colorOf_[c] = color;
+      ++counts[color];
+      if (color < kColors) {
+        if (dynA) bodyColors_[a] |= uint64_t(1) << color;
+        if (dynB) bodyColors_[b] |= uint64_t(1) << color;
+      }
+    }
+    for (int c = 0; c < m; ++c) {  // leave the masks zeroed for the next step
+      bodyColors_[ctx.contacts[c].a] = 0;
+      bodyColors_[ctx.contacts[c].b] = 0;
+    }
+    colorStart_.assign(kColors + 2, 0);
+    for (int k = 0; k <= kColors; ++k) colorStart_[k + 1] = colorStart_[k] + counts[k];
+    order_.resize(m);
+    std::vector<int>& fill = fill_;
+    fill.assign(colorStart_.begin(), colorStart_.end() - 1);
+    for (int c = 0; c < m; ++c) order_[fill[colorOf_[c]]++] = c;
+    constraints_.resize(m);
+  }
+
+  template <class Fn>
+  void ForEachColor(StageRunner& run, Fn&& fn) {
+    for (int color = 0; color < kColors; ++color) {
+      const int begin = colorStart_[color], count = colorStart_[color + 1] - begin;
+      if (count == 0) continue;
+      // A constraint pass is cheap per item but the small colours that follow the first one
+      // would otherwise stay serial: an eighth of the grain (256 by default).
+      run.For(Stage::kSolve, count, std::max(1, run.MinItems() / 8), [&](int b, int e, int) { fn(begin + b, begin + e); });
+    }
+    const int begin = colorStart_[kColors], end = colorStart_[kColors + 1];
+    if (begin < end) run.Serial(Stage::kSolve, [&] { fn(begin, end); });
+  }
+
+  template <bool kRotation>
+  void Prepare(StepContext& ctx, int begin, int end) {
+    const Bodies& bodies = *ctx.bodies;
+    for (int k = begin; k < end; ++k) {
+      const Contact& contact = ctx.contacts[order_[k]];
+      ContactConstraint& cc = constraints_[k];
+      cc.contact = order_[k];
+      cc.a = contact.a;
+      cc.b = contact.b;
+      cc.normal = contact.manifold.normal;
+      cc.friction = contact.friction;
+      cc.restitution = contact.restitution;
+      cc.invMassA = bodies.inv[cc.a].invMass;
+      cc.invMassB = bodies.inv[cc.b].invMass;
+      cc.invIA = kRotation ? bodies.inv[cc.a].invInertia : Real(0);
+      cc.invIB = kRotation ? bodies.inv[cc.b].invInertia : Real(0);
+      cc.pointCount = contact.manifold.pointCount;
+      const Vec2 n = cc.normal;
+      const Vec2 t = RightPerp(n);
+      const BodyVelocity va = bodies.vel[cc.a];
+      const BodyVelocity vb = bodies.vel[cc.b];
+      for (int k = 0; k < cc.pointCount; ++k) {
+        const ManifoldPoint& mp = contact.manifold.points[k];
+        PointConstraint& pc = cc.points[k];
+        pc.rA = mp.point - bodies.center[cc.a];
+        pc.rB = mp.point - bodies.center[cc.b];
+        Real kn = cc.invMassA + cc.invMassB;
+        Real kt = kn;
+        Vec2 dv = vb.v - va.v;
+        if constexpr (kRotation) {
+          const Real rnA = Cross(pc.rA, n), rnB = Cross(pc.rB, n);
+          const Real rtA = Cross(pc.rA, t), rtB = Cross(pc.rB, t);
+          kn += cc.invIA * rnA * rnA + cc.invIB * rnB * rnB;
+          kt += cc.invIA * rtA * rtA + cc.invIB * rtB * rtB;
+          dv += Cross(vb.w, pc.rB) - Cross(va.w, pc.rA);
+        }
+        pc.normalMass = kn > 0 ? Real(1) / kn : Real(0);
+        pc.tangentMass = kt > 0 ? Real(1) / kt : Real(0);
+        pc.normalImpulse = mp.normalImpulse;
+        pc.tangentImpulse = mp.tangentImpulse;
+        pc.maxNormalImpulse = 0;
+        pc.separation = mp.separation;
+        pc.relativeVelocity = Dot(dv, n);
+        pc.bounceShift = 0;
+      }
+      cc.k12 = 0;
+      cc.block = false;
+      if (cc.pointCount == 2) {
+        const PointConstraint& p0 = cc.points[0];
+        const PointConstraint& p1 = cc.points[1];
+        Real k12 = cc.invMassA + cc.invMassB;
+        if constexpr (kRotation) {
+          k12 += cc.invIA * Cross(p0.rA, n) * Cross(p1.rA, n) + cc.invIB * Cross(p0.rB, n) * Cross(p1.rB, n);
+        }
+        const Real k11 = p0.normalMass > 0 ? Real(1) / p0.normalMass : Real(0);
+        const Real k22 = p1.normalMass > 0 ? Real(1) / p1.normalMass : Real(0);
+        // Two nearly coincident points make the matrix singular: solve those one at a time.
+        constexpr Real kMaxCondition = 1000;
+        cc.k12 = k12;
+        cc.block = k11 > 0 && k11 * k11 < kMaxCondition * (k11 * k22 - k12 * k12);
+      }
+    }
+  }
+
+  // Static and kinematic bodies (inverse mass 0) are never written: other threads may be
+  // reading them for constraints of the same colour.
+  template <bool kRotation>
+  static void ApplyImpulse(Bodies& bodies, const ContactConstraint& cc, const PointConstraint& pc, Vec2 P) {
+    if (cc.invMassA > 0) {
+      BodyVelocity& va = bodies.vel[cc.a];
+      va.v -= cc.invMassA * P;
+      if constexpr (kRotation) va.w -= cc.invIA * Cross(pc.rA, P);
+    }
+    if (cc.invMassB > 0) {
+      BodyVelocity& vb = bodies.vel[cc.b];
+      vb.v += cc.invMassB * P;
+      if constexpr (kRotation) vb.w += cc.invIB * Cross(pc.rB, P);
+    }
+  }
+
+  template <bool kRotation>
+  void WarmStart(Bodies& bodies, int begin, int end) {
+    for (int k = begin; k < end; ++k) {
+      const ContactConstraint& cc = constraints_[k];
+      const Vec2 t = RightPerp(cc.normal);
+      for (int k = 0; k < cc.pointCount; ++k) {
+        const PointConstraint& pc = cc.points[k];
+        ApplyImpulse<kRotation>(bodies, cc, pc, pc.normalImpulse * cc.normal + pc.tangentImpulse * t);
+      }
+    }
+  }
+
+  template <bool kRotation>
+  static Vec2 RelativeVelocity(const BodyVelocity& va, const BodyVelocity& vb, const PointConstraint& pc) {
+    Vec2 dv = vb.v - va.v;
+    if constexpr (kRotation) dv += Cross(vb.w, pc.rB) - Cross(va.w, pc.rA);
+    return dv;
+  }
+
+  // Restitution after the iterations, from the approach speed measured before them (as Box2D 3
+  // does), so the bounce does not depend on which step the gap closed in.
+  //
+  // A speculative point (still apart by s) that bounces reverses this step although the true
+  // impact happens s/|vn| into it: integrated with the bounce velocity for the whole step, the
+  // pair would end (1 + e) s farther apart than the exact motion puts it. Speed and energy are
+  // right; the position is not, and it would raise every rebound (a ball dropped from 3 m came
+  // back 10 cm higher). The point records that distance and ApplyBounceShifts moves the pair
+  // back by it after integration, which makes an isolated collision exact in both.
+  template <bool kRotation>
+  void ApplyRestitution(Bodies& bodies, Real threshold, int begin, int end) {
+    for (int c = begin; c < end; ++c) {
+      ContactConstraint& cc = constraints_[c];
+      if (cc.restitution == 0) continue;
+      for (int k = 0; k < cc.pointCount; ++k) {
+        PointConstraint& pc = cc.points[k];
+        // Only points that approached fast enough and actually pushed bounce.
+        if (pc.relativeVelocity > -threshold || pc.maxNormalImpulse == 0) continue;
+        const Real vn = Dot(RelativeVelocity<kRotation>(bodies.vel[cc.a], bodies.vel[cc.b], pc), cc.normal);
+        const Real target = -cc.restitution * pc.relativeVelocity;
+        const Real newImpulse = std::max(pc.normalImpulse - pc.normalMass * (vn - target), Real(0));
+        const Real lambda = newImpulse - pc.normalImpulse;
+        pc.normalImpulse = newImpulse;
+        ApplyImpulse<kRotation>(bodies, cc, pc, lambda * cc.normal);
+        if (pc.separation > 0) pc.bounceShift = (Real(1) + cc.restitution) * pc.separation;
+      }
+    }
+  }
+
+  // Moves each pair that bounced early back together along the normal by its recorded
+  // distance, split by inverse mass (the linear part only: enough for the bounce, and it cannot
+  // spin a body). Only bodies that move are touched.
+  void ApplyBounceShifts(Bodies& bodies, int begin, int end) {
+    for (int c = begin; c < end; ++c) {
+      const ContactConstraint& cc = constraints_[c];
+      Real shift = 0;
+      for (int k = 0; k < cc.pointCount; ++k) shift = std::max(shift, cc.points[k].bounceShift);
+      const Real sum = cc.invMassA + cc.invMassB;
+      if (shift == 0 || sum == 0) continue;
+      const Vec2 d = (shift / sum) * cc.normal;
+      if (cc.invMassA > 0) {
+        bodies.center[cc.a] += cc.invMassA * d;
+        SyncTransform(bodies, cc.a);
+      }
+      if (cc.invMassB > 0) {
+        bodies.center[cc.b] -= cc.invMassB * d;
+        SyncTransform(bodies, cc.b);
+      }
+    }
+  }
+
+  void StoreImpulses(std::span<Contact> contacts, int begin, int end) const {
+    for (int c = begin; c < end; ++c) {
+      const ContactConstraint& cc = constraints_[c];
+      Manifold& m = contacts[cc.contact].manifold;
+      for (int k = 0; k < cc.pointCount; ++k) {
+        m.points[k].normalImpulse = cc.points[k].normalImpulse;
+        m.points[k].tangentImpulse = cc.points[k].tangentImpulse;
+      }
+    }
+  }
+
+  // One non-linear Gauss-Seidel pass: the separation is re-evaluated from how far the bodies
+  // have moved and turned since the manifold was computed, and the position error beyond the
+  // slop is reduced by the Baumgarte fraction, at most maxLinearCorrection at a time.
+  void SnapshotPositions(StageRunner& run, const Bodies& bodies) {
+    center0_.resize(bodies.Count());
+    rot0_.resize(bodies.Count());
+    run.For(Stage::kSolve, bodies.Count(), run.MinItems(), [&](int b, int e, int) {
+      for (int i = b; i < e; ++i) {
+        center0_[i] = bodies.center[i];
+        rot0_[i] = bodies.xf[i].q;
+      }
+    });
+  }
+
+  // Re-derives the origins of the bodies a position correction moved (dynamic ones only:
+  // re-deriving a static body's origin could change its bits).
+  void SyncContactBodies(StageRunner& run, Bodies& bodies) {
+    ForEachColor(run, [&](int b, int e) {
+      for (int k = b; k < e; ++k) {
+        const ContactConstraint& cc = constraints_[k];
+        if (cc.invMassA > 0) SyncTransform(bodies, cc.a);
+        if (cc.invMassB > 0) SyncTransform(bodies, cc.b);
+      }
+    });
+  }
+
+  // Separation of a point now, from how far its bodies have moved and turned since the
+  // manifold was computed (linearised about the stored anchors). Also returns the turned
+  // anchors, which the position and soft solvers use as lever arms.
+  template <bool kRotation>
+  Real CurrentSeparation(const Bodies& bodies, const ContactConstraint& cc, const PointConstraint& pc, Vec2& rA,
+                         Vec2& rB) const {
+    rA = pc.rA;
+    rB = pc.rB;
+    if constexpr (kRotation) {
+      rA = Rotate(InvMul(rot0_[cc.a], bodies.xf[cc.a].q), pc.rA);
+      rB = Rotate(InvMul(rot0_[cc.b], bodies.xf[cc.b].q), pc.rB);
+    }
+    const Vec2 d = (bodies.center[cc.b] - center0_[cc.b]) - (bodies.center[cc.a] - center0_[cc.a]) + (rB - pc.rB) -
+                   (rA - pc.rA);
+    return pc.separation + Dot(cc.normal, d);
+  }
+
+  std::vector<ContactConstraint> constraints_;
+  std::vector<uint64_t> bodyColors_;
+  std::vector<int> colorOf_, colorStart_, order_, fill_;
+  std::vector<Vec2> center0_;
+  std::vector<Rot> rot0_;
+};
+
+}  // namespace quadrant

@@ -1,0 +1,196 @@
+// The hard cases on Quadrant: every case's criterion (benchmarks/scenes/hard_case_checks.cpp, the
+// same code tools/quadrant hardcases runs) must pass. The soak runs 3000 steps here instead of the
+// tool's 100000 (2.5 minutes instead of 28 of simulated time) to keep the suite, which CI also
+// runs under ASan, fast. Also: the scene builders' contracts (body counts, order, materials) and
+// the penetration measure the criteria rely on.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "hard_case_checks.h"
+#include "quadrant/error.h"
+#include "scenes.h"
+
+namespace quadrant::scene {
+namespace {
+
+constexpr int kTestSoakSteps = 3000;
+
+std::string Describe(const HardCaseResult& r) {
+  std::string out = r.name + " on " + r.engine + ": " + r.criterion + "\n  measured:";
+  for (const Measured& m : r.measured) out += " " + m.name + "=" + std::to_string(m.value);
+  if (!r.supported) out += " unsupported: " + r.unsupported;
+  return out;
+}
+
+// Cases Quadrant does not pass yet. They stay in the tool's report (hardcases.md says FAIL
+// with the figures) and in the project's open issue; here they assert what does hold.
+//   newtons_cradle: five touching balls are solved as simultaneous contacts, so the first
+//   ball's momentum spreads along the row (last ball 0.41 m/s instead of 1) instead of passing
+//   through as a sequence of binary collisions. Box2D 2.4 does the same (0.44 m/s); Chipmunk
+//   passes.
+const std::vector<std::string> kKnownFailures = {"newtons_cradle"};
+
+std::vector<std::string> PassingCases() {
+  std::vector<std::string> out;
+  for (const std::string& c : HardCaseNames()) {
+    if (std::find(kKnownFailures.begin(), kKnownFailures.end(), c) == kKnownFailures.end()) out.push_back(c);
+  }
+  return out;
+}
+
+class QuadrantHardCase : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(QuadrantHardCase, Passes) {
+  HardCaseOptions options;
+  options.soakSteps = kTestSoakSteps;
+  const HardCaseResult r = RunHardCase(GetParam(), "quadrant", options);
+  EXPECT_TRUE(r.supported) << r.unsupported;
+  EXPECT_FALSE(r.measured.empty());
+  EXPECT_TRUE(r.pass) << Describe(r);
+}
+
+TEST(HardCases, NewtonsCradleConservesMomentumAndGainsNoEnergy) {
+  const HardCaseResult r = RunHardCase("newtons_cradle", "quadrant");
+  EXPECT_LT(r.Get("momentum_rel_error"), 1e-4) << Describe(r);
+  EXPECT_LE(r.Get("ke_ratio"), 1.0 + 1e-3) << Describe(r);
+  // The known failure is still a failure: if this starts passing, move the case back.
+  EXPECT_FALSE(r.pass) << "newtons_cradle passes now: remove it from kKnownFailures";
+}
+
+INSTANTIATE_TEST_SUITE_P(All, QuadrantHardCase, ::testing::ValuesIn(PassingCases()),
+                         [](const ::testing::TestParamInfo<std::string>& info) { return info.param; });
+
+TEST(HardCases, NamesAndRegistry) {
+  const std::vector<std::string> cases = HardCaseNames();
+  EXPECT_EQ(cases.size(), 13u);
+  // Every hard-case scene is in the registry under its case name (the soak is polygon_stress).
+  const std::vector<std::string> scenes = SceneNames();
+  for (const std::string& c : cases) {
+    if (c == "soak") continue;
+    EXPECT_NE(std::find(scenes.begin(), scenes.end(), c), scenes.end()) << c;
+    const Scene s = MakeScene(c, 210, 42);
+    EXPECT_EQ(s.name, c);
+    EXPECT_NO_THROW(ValidateScene(s)) << c;
+  }
+  EXPECT_THROW(RunHardCase("no_such_case", "quadrant"), Error);
+  EXPECT_THROW(RunHardCase("pyramid", "no_such_engine"), Error);
+}
+
+TEST(HardCases, ScenesAreValidUnderBothMixingRules) {
+  for (Mixing m : {Mixing::kBox2d, Mixing::kProduct}) {
+    for (const Scene& s : {MakeVerticalStack(15, m), MakePyramid(20, {}, m), MakeMassRatio(100, m),
+                           MakeMassRatio(400, m), MakeArch(m), MakeCardHouse(5, m), MakeFrictionRamp(m),
+                           MakeRestitutionDrop(m), MakeOverlapRecovery(10, m), MakeConfined(25, 42, m),
+                           MakeFarFromOrigin(m), MakeNewtonsCradle(m)}) {
+      EXPECT_NO_THROW(ValidateScene(s)) << s.name;
+      EXPECT_EQ(s.timeStep, Real(1.0 / 60.0)) << s.name;
+      // Box2D 2.4's defaults (8/3), except the cases that state the solver budget they need
+      // (the same for every engine; see hard_cases.cpp and accuracy.md).
+      const int velocity = s.name == "vertical_stack" || s.name == "mass_ratio_100" ? 16
+                           : s.name == "mass_ratio_400"                              ? 32
+                                                                                     : 8;
+      EXPECT_EQ(s.velocityIterations, velocity) << s.name;
+      EXPECT_EQ(s.positionIterations, s.name == "overlap_recovery" ? 20 : 3) << s.name;
+      EXPECT_FALSE(s.effects.sleep) << s.name;
+    }
+  }
+}
+
+TEST(HardCases, BuildersKeepTheirContracts) {
+  EXPECT_EQ(MakeVerticalStack().bodies.size(), 16u);
+  EXPECT_EQ(MakePyramid(20).bodies.size(), 1u + 210u);
+  EXPECT_EQ(MakePyramid(100).bodies.size(), 1u + 5050u);
+  EXPECT_EQ(MakeScene("pyramid", 5050).bodies.size(), 1u + 5050u);  // count = boxes
+  EXPECT_EQ(MakeScene("pyramid", 5100).bodies.size(), 1u + 5050u);  // rounds down to a full base
+  EXPECT_EQ(MakeArch().bodies.size(), 1u + 17u);
+  EXPECT_EQ(MakeCardHouse(5).bodies.size(), 1u + 40u);
+  EXPECT_EQ(MakeConfined().bodies.size(), 4u + 625u);
+  EXPECT_EQ(MakeNewtonsCradle().bodies.size(), 5u);
+  EXPECT_THROW(MakeMassRatio(7), Error);
+  EXPECT_THROW(MakePyramid(0), Error);
+  EXPECT_THROW(MakeScene("pyramid", 0), Error);
+  // The apex is the last body of a pyramid; far from origin is the same pyramid shifted.
+  const Scene near = MakePyramid(20), far = MakeFarFromOrigin();
+  ASSERT_EQ(near.bodies.size(), far.bodies.size());
+  EXPECT_NEAR(far.bodies.back().position.x - near.bodies.back().position.x, 1e5, 0.01);
+  EXPECT_NEAR(far.bodies.back().position.y - near.bodies.back().position.y, -8e4, 0.01);
+  EXPECT_NEAR(near.bodies.back().position.y, 19.5, 1e-4);
+  // Mass ratios: 100 kg on 1 kg boxes, 400 kg on two 1 kg boxes.
+  EXPECT_NEAR(ComputeMassProperties(MakeMassRatio(100).bodies.back()).mass, 100, 1e-3);
+  EXPECT_NEAR(ComputeMassProperties(MakeMassRatio(400).bodies.back()).mass, 400, 1e-2);
+}
+
+TEST(HardCases, MaterialsMixToTheIntendedCoefficients) {
+  const Real want[5] = {Real(0.75), Real(0.5), Real(0.35), Real(0.1), 0};
+  const Real es[5] = {0, Real(0.25), Real(0.5), Real(0.75), 1};
+  for (Mixing m : {Mixing::kBox2d, Mixing::kProduct}) {
+    const Scene ramp = MakeFrictionRamp(m);
+    for (int k = 0; k < 5; ++k) {
+      EXPECT_NEAR(MixFriction(m, ramp.bodies[2 * k + 1].friction, ramp.bodies[2 * k].friction), want[k], 1e-6);
+    }
+    const Scene drop = MakeRestitutionDrop(m);
+    for (int k = 0; k < 5; ++k) {
+      EXPECT_NEAR(MixRestitution(m, drop.bodies[k + 1].restitution, drop.bodies[0].restitution), es[k], 1e-6);
+    }
+    const Scene stack = MakeVerticalStack(15, m);
+    EXPECT_NEAR(MixFriction(m, stack.bodies[1].friction, stack.bodies[2].friction), 0.3, 1e-6);
+    EXPECT_NEAR(MixFriction(m, stack.bodies[0].friction, stack.bodies[1].friction), 0.3, 1e-6);
+  }
+  EXPECT_EQ(MixingOf("quadrant:thesis"), Mixing::kBox2d);
+  EXPECT_EQ(MixingOf("chipmunk"), Mixing::kProduct);
+  EXPECT_THROW(MixingOf("havok"), Error);
+}
+
+TEST(HardCases, SpawnGeometry) {
+  // Touching spawns touch (no overlap), overlapping spawns overlap by what they say.
+  auto pen = [](const Scene& s) {
+    std::vector<BodyState> st(s.bodies.size());
+    for (size_t i = 0; i < s.bodies.size(); ++i) st[i] = {s.bodies[i].position, s.bodies[i].angle, {}, 0};
+    return MaxPenetration(s, st);
+  };
+  EXPECT_LT(pen(MakeVerticalStack()), 1e-5);
+  EXPECT_LT(pen(MakePyramid(20)), 1e-5);
+  EXPECT_LT(pen(MakeArch()), 1e-5);
+  EXPECT_LT(pen(MakeCardHouse(5)), 1e-5);
+  EXPECT_LT(pen(MakeFrictionRamp()), 1e-5);
+  EXPECT_LT(pen(MakeNewtonsCradle()), 1e-5);
+  EXPECT_NEAR(pen(MakeOverlapRecovery(10)), 0.25, 1e-5);
+  EXPECT_NEAR(pen(MakeConfined()), 0.24, 0.01);  // 0.2 m on the grid, up to 0.04 m more from jitter
+}
+
+TEST(HardCases, PenetrationMeasure) {
+  Scene s;
+  BodyDesc box;
+  box.shape = ShapeKind::kPolygon;
+  box.vertices = {{Real(-0.5), Real(-0.5)}, {Real(0.5), Real(-0.5)}, {Real(0.5), Real(0.5)}, {Real(-0.5), Real(0.5)}};
+  BodyDesc ball;
+  ball.shape = ShapeKind::kCircle;
+  ball.radius = Real(0.5);
+  s.bodies = {box, box, ball, ball};
+  std::vector<BodyState> st(4);
+  st[0].position = {0, 0};
+  st[1].position = {Real(0.3), Real(0.9)};   // 0.1 deep from above
+  st[2].position = {Real(10), 0};
+  st[3].position = {Real(10.7), 0};          // 0.3 deep
+  EXPECT_NEAR(MaxPenetration(s, st), 0.3, 1e-5);
+  st[3].position = {Real(11.2), 0};
+  EXPECT_NEAR(MaxPenetration(s, st), 0.1, 1e-5);
+  // A circle poking 0.05 into a box's corner region from the side.
+  st[2].position = {Real(0.95), 0};
+  st[3].position = {Real(20), 0};
+  EXPECT_NEAR(MaxPenetration(s, st), 0.1, 1e-5);  // still the box pair; the circle is 0.05 in
+  st[1].position = {Real(5), Real(5)};
+  EXPECT_NEAR(MaxPenetration(s, st), 0.05, 1e-5);
+  // Rotated: a box at 45 degrees resting on a corner 0.02 into the other box.
+  st[2].position = {Real(30), 0};
+  st[1].position = {0, Real(0.5 + std::sqrt(0.5) - 0.02)};
+  st[1].angle = Real(0.785398163);
+  EXPECT_NEAR(MaxPenetration(s, st), 0.02, 1e-5);
+}
+
+}  // namespace
+}  // namespace quadrant::scene
