@@ -217,11 +217,20 @@ def hard_case_section(data, lines):
     for r in data["runs"]:
         if r.get("ms_per_step") is not None:
             cost[(r["scene"], r.get("id"), r.get("precision", "float"))] = r["ms_per_step"]
+    budget = {}
+    for h in hard:
+        if h["engine"] != "quadrant" and "iterations" in h:
+            budget.setdefault(h["scene"], h["iterations"])
+    budgets = ", ".join("{} {}".format(scene, n) for scene, n in budget.items())
     lines.append("## The cheapest setting that meets each hard-case criterion\n")
     lines.append("Each hard case (benchmarks/scenes/hard_case_checks.cpp, `RunHardCase`) was run on every swept "
-                 "Quadrant setting (and on the peers at their defaults, for reference). Cost is the setting's "
-                 "median ms per step on the same scene in the sweep above. Only float-precision Quadrant "
-                 "settings compete for \"cheapest\"; the double build's point is listed for reference.\n")
+                 "Quadrant setting, whose iteration count (it<N>) replaces the case's own budget, and once on each "
+                 "peer at the budget the case gives every engine (its scene's velocity iterations: {}), for "
+                 "reference. Cost is the "
+                 "setting's median ms per step on the same scene in the sweep above (Box2D at the case's budget "
+                 "is the sweep's box2d:it<N>; Bullet and Chipmunk were swept at 8 only). Only float-precision "
+                 "Quadrant settings compete for \"cheapest\"; the double build's point is listed for reference.\n"
+                 .format(budgets or "no peer ran"))
     lines.append("| hard case | cheapest passing Quadrant setting | its ms/step | criterion |")
     lines.append("|---|---|---|---|")
     scenes = []
