@@ -114,6 +114,7 @@ std::string Json(const std::vector<Row>& rows, const Args& args) {
     o << "    {\"name\": " << rp::JsonString(q.name) << ", \"criterion\": " << rp::JsonString(q.criterion)
       << ", \"pass\": " << (q.pass ? "true" : "false") << ", \"seconds\": " << rp::JsonNumber(q.seconds);
     if (!q.supported) o << ", \"unsupported\": " << rp::JsonString(q.unsupported);
+    o << ", \"settings\": " << rp::JsonString(q.settings);
     if (!q.note.empty()) o << ", \"note\": " << rp::JsonString(q.note);
     o << ",\n     \"measured\": " << MeasuredJson(q) << ",\n     \"peers\": {";
     for (size_t k = 0; k < rows[i].peers.size(); ++k) {
@@ -137,8 +138,10 @@ std::string Markdown(const std::vector<Row>& rows, const Args& args) {
   std::ostringstream o;
   o << "# Hard cases\n\n"
     << "Machine `" << rp::Env("QUADRANT_MACHINE", "unknown") << "`, commit `" << rp::Env("QUADRANT_COMMIT", "unknown")
-    << "`, " << rp::UtcNow() << ", compiler " << __VERSION__ << ". One thread per engine; dt = 1/60, 8 velocity "
-    << "and 3 position iterations; soak " << args.soakSteps << " steps. Written by `tools/quadrant hardcases` "
+    << "`, " << rp::UtcNow() << ", compiler " << __VERSION__ << ". One thread per engine; every engine runs a "
+    << "case with the same world settings (listed per case below: most cases at Box2D 2.4's 8 velocity and 3 "
+    << "position iterations, a few with the larger budget their scene sets); soak " << args.soakSteps
+    << " steps. Written by `tools/quadrant hardcases` "
     << "(benchmarks/hardcases.cpp); scenes in benchmarks/scenes/hard_cases.cpp, criteria in "
     << "benchmarks/scenes/hard_case_checks.cpp.\n\n"
     << "Materials are built per engine so that every engine simulates the same mixed coefficient: Box2D and "
@@ -169,6 +172,8 @@ std::string Markdown(const std::vector<Row>& rows, const Args& args) {
     line(row.quadrant);
     for (const qs::HardCaseResult& p : row.peers) line(p);
   }
+  o << "\n## Settings\n\n| case | world settings (every engine) |\n|---|---|\n";
+  for (const Row& row : rows) o << "| " << row.quadrant.name << " | " << rp::CellText(row.quadrant.settings) << " |\n";
   bool notes = false;
   for (const Row& row : rows) {
     if (row.quadrant.note.empty()) continue;

@@ -32,10 +32,25 @@ std::string Fixed(double v, int digits) {
   return buffer;
 }
 
+// The world settings a case runs with, for the report (the same for every engine).
+std::string SettingsText(const Scene& s) {
+  char buffer[320];
+  std::snprintf(buffer, sizeof buffer,
+                "dt %.5g s, %d velocity + %d position iterations, %d sub-step%s, gravity %s, restitution "
+                "threshold %g m/s, continuous %s, warm starting %s, sleep %s",
+                double(s.timeStep), s.velocityIterations, s.positionIterations, s.subSteps,
+                s.subSteps == 1 ? "" : "s", s.effects.gravity ? "(0, -10)" : "off", double(s.restitutionThreshold),
+                s.effects.continuous ? "on" : "off", s.effects.warmStarting ? "on" : "off",
+                s.effects.sleep ? "on" : "off");
+  return buffer;
+}
+
 // One engine running one scene. Holds the scene itself: adapters may keep pointers into it.
+// Records the scene's settings in the result before loading, so a refused scene has them too.
 class Sim {
  public:
-  Sim(std::string_view engine, Scene scene) : scene_(std::make_unique<Scene>(std::move(scene))) {
+  Sim(HardCaseResult& r, std::string_view engine, Scene scene) : scene_(std::make_unique<Scene>(std::move(scene))) {
+    r.settings = SettingsText(*scene_);
     adapter_ = MakeAdapter(engine);
     adapter_->Load(*scene_, 1);
     adapter_->ReadBodies(states_);
@@ -221,7 +236,7 @@ PileRun RunPile(Sim& sim, double seconds, size_t first, size_t last) {
 void VerticalStack(std::string_view engine, const HardCaseOptions&, HardCaseResult& r) {
   r.criterion = "15 boxes of 1 m (friction 0.3, x offsets +-0.01 m): the top box's |dx| and |dy| between "
                 "t = 1 s and t = 10 s below 0.01 m each";
-  Sim sim(engine, MakeVerticalStack(15, MixingOf(engine)));
+  Sim sim(r, engine, MakeVerticalStack(15, MixingOf(engine)));
   const size_t top = sim.scene().bodies.size() - 1;
   PileRun run = RunPile(sim, 10, 1, top + 1);
   const double dx = std::abs(double(run.atEnd[top].position.x) - run.atOne[top].position.x);
@@ -242,7 +257,7 @@ void Pyramid(std::string_view engine, HardCaseResult& r, Scene scene, bool far) 
                       "t = 10 s below 0.02 m (penetration reported only: float read-back resolves 7.8 mm there)"
                     : "base-20 pyramid of 1 m boxes (friction 0.6): apex drift between t = 1 s and t = 10 s below "
                       "0.02 m and largest penetration (sampled every 0.5 s) below 0.01 m";
-  Sim sim(engine, std::move(scene));
+  Sim sim(r, engine, std::move(scene));
   const size_t apex = sim.scene().bodies.size() - 1;
   PileRun run = RunPile(sim, 10, 1, apex + 1);
   const double apexDrift = Displacement(run.atOne[apex], run.atEnd[apex]);
@@ -267,7 +282,7 @@ void MassRatio(std::string_view engine, HardCaseResult& r, int ratio) {
                       "more than 0.05 m between t = 1 s and t = 10 s, largest penetration below 0.02 m"
                     : "a 20 m x 1 m plank of 400 kg on two 1 kg boxes (1 m, at x = +-9): no body moves more than "
                       "0.05 m between t = 1 s and t = 10 s, largest penetration below 0.02 m";
-  Sim sim(engine, MakeMassRatio(ratio, MixingOf(engine)));
+  Sim sim(r, engine, MakeMassRatio(ratio, MixingOf(engine)));
   const size_t n = sim.scene().bodies.size();
   PileRun run = RunPile(sim, 10, 1, n);
   Add(r, "max_body_drift_m", run.maxDrift);
@@ -283,7 +298,7 @@ void MassRatio400(std::string_view engine, const HardCaseOptions&, HardCaseResul
 void Arch(std::string_view engine, const HardCaseOptions&, HardCaseResult& r) {
   r.criterion = "semicircular arch of 17 blocks (inner radius 4 m, outer 5 m, friction 0.6): no block moves more "
                 "than 0.05 m between t = 1 s and t = 11 s (10 s)";
-  Sim sim(engine, MakeArch(MixingOf(engine)));
+  Sim sim(r, engine, MakeArch(MixingOf(engine)));
   const size_t n = sim.scene().bodies.size();
   PileRun run = RunPile(sim, 11, 1, n);
   const size_t crown = 1 + 8;  // the middle of 17 blocks
@@ -300,7 +315,7 @@ void Arch(std::string_view engine, const HardCaseOptions&, HardCaseResult& r) {
 void CardHouse(std::string_view engine, const HardCaseOptions&, HardCaseResult& r) {
   r.criterion = "card house of 5 storeys, 40 cards of 1 m x 0.02 m (friction 0.7): the top pair's cards move "
                 "less than 0.05 m between t = 1 s and t = 6 s (5 s)";
-  Sim sim(engine, MakeCardHouse(5, MixingOf(engine)));
+  Sim sim(r, engine, MakeCardHouse(5, MixingOf(engine)));
   const size_t n = sim.scene().bodies.size();
   PileRun run = RunPile(sim, 6, 1, n);
   const double top = std::max(Displacement(run.atOne[n - 1], run.atEnd[n - 1]),
@@ -321,7 +336,7 @@ void FrictionRamp(std::string_view engine, const HardCaseOptions&, HardCaseResul
                 "tan 0.25 = 0.2553): after 2 s a sticking box has moved less than 0.01 m, a sliding one "
                 "0.5 g (sin - mu cos) t^2 down the slope within 5 %";
   const Mixing mixing = MixingOf(engine);
-  Sim sim(engine, MakeFrictionRamp(mixing));
+  Sim sim(r, engine, MakeFrictionRamp(mixing));
   const std::vector<BodyState> start = sim.states();
   sim.RunTo(int(t * kStepsPerSecond));
   const std::vector<BodyState>& end = sim.states();
@@ -356,7 +371,7 @@ void RestitutionDrop(std::string_view engine, const HardCaseOptions&, HardCaseRe
                 "1, threshold 0, no friction: first rebound height / 2 m within 5 % of e^2; for e = 0 the "
                 "rebound above the final resting height below 0.01 m";
   const Mixing mixing = MixingOf(engine);
-  Sim sim(engine, MakeRestitutionDrop(mixing));
+  Sim sim(r, engine, MakeRestitutionDrop(mixing));
   const Scene& scene = sim.scene();
   const int balls = 5;
   const double radius = 0.5, drop = double(scene.bodies[1].position.y) - radius;
@@ -400,10 +415,10 @@ void RestitutionDrop(std::string_view engine, const HardCaseOptions&, HardCaseRe
   }
   r.note = "Materials mix to e in every engine: ground restitution 0 under max mixing (Box2D, Quadrant), 1 under "
            "product mixing (Bullet, Chipmunk). Heights are of the ball's bottom above the ground's face (Box2D's "
-           "skin lifts both the drop and the rebound by 0.01 m, 0.5 % of the drop). Without continuous collision "
-           "the peers find the ground only once the ball is in it, up to v dt = 0.105 m deep at the 6.3 m/s "
-           "impact, and their push-out then changes the rebound; Quadrant's speculative contact bounces at the "
-           "surface.";
+           "skin lifts both the drop and the rebound by 0.01 m, 0.5 % of the drop). The scene turns continuous "
+           "collision on: without it a ball meets the ground up to v dt = 0.105 m deep at the 6.3 m/s impact and "
+           "its rebound depends on where in the step the impact falls. Chipmunk has no continuous collision and "
+           "reports the case unsupported.";
   r.pass = pass;
 }
 
@@ -411,7 +426,7 @@ void OverlapRecovery(std::string_view engine, const HardCaseOptions&, HardCaseRe
   r.criterion = "base-10 pyramid of 1 m boxes spawned at 0.75 m pitch (25 % overlap, friction 0.6): after 60 "
                 "steps no pair overlaps by more than 0.02 m, and no body is faster than 2 m/s in the first 120 "
                 "steps";
-  Sim sim(engine, MakeOverlapRecovery(10, MixingOf(engine)));
+  Sim sim(r, engine, MakeOverlapRecovery(10, MixingOf(engine)));
   const double initial = MaxPenetrationOf(sim.scene(), sim.states());
   double maxSpeed = 0;
   int separatedAt = -1;
@@ -433,7 +448,7 @@ void Confined(std::string_view engine, const HardCaseOptions&, HardCaseResult& r
   r.criterion = "625 circles (r = 0.5 m) spawned overlapping by 0.2 m in a closed 25 m box, zero gravity, at rest: "
                 "no NaN, every centre stays in the box, no body faster than 2 m/s, and after the push-out (t >= "
                 "1 s) the kinetic energy never rises above its value at t = 1 s by more than 1 % (+1e-6 J)";
-  Sim sim(engine, MakeConfined(25, 42, MixingOf(engine)));
+  Sim sim(r, engine, MakeConfined(25, 42, MixingOf(engine)));
   const Scene& scene = sim.scene();
   const double half = 12.5;
   double maxSpeed = 0, peakKe = 0, keAtOne = 0, worstRise = 0, outside = 0;
@@ -469,7 +484,7 @@ void NewtonsCradle(std::string_view engine, const HardCaseOptions&, HardCaseResu
   r.criterion = "five touching balls, zero gravity, friction 0, restitution 1, the first at 1 m/s: after 2 s the "
                 "last moves at 1 m/s within 5 %, momentum is conserved within 1e-3 (relative) and kinetic energy "
                 "has not grown (by more than 1e-3 relative)";
-  Sim sim(engine, MakeNewtonsCradle(MixingOf(engine)));
+  Sim sim(r, engine, MakeNewtonsCradle(MixingOf(engine)));
   const Scene& scene = sim.scene();
   const double v0 = scene.bodies[0].velocity.x;
   const Vec2 p0 = LinearMomentum(scene, sim.states());
@@ -492,7 +507,7 @@ void Soak(std::string_view engine, const HardCaseOptions& o, HardCaseResult& r) 
   r.criterion = "polygon_stress with N = 1000 for " + std::to_string(o.soakSteps) +
                 " steps: no NaN and no body outside the box at any step (outside: its centre beyond a wall's "
                 "inner face by more than its circumradius, so all of it is past the face)";
-  Sim sim(engine, MakeScene("polygon_stress", 1000, 42));
+  Sim sim(r, engine, MakeScene("polygon_stress", 1000, 42));
   const Scene& scene = sim.scene();
   const AABB box = scene.bounds;
   std::vector<double> reach(scene.bodies.size(), 0);

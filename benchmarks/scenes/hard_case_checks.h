@@ -30,6 +30,7 @@ struct HardCaseResult {
   bool pass = false;
   std::vector<Measured> measured;
   std::string note;         ///< what a reader needs to interpret the figures
+  std::string settings;     ///< the scene's world settings (time step, iterations, effects)
   double seconds = 0;       ///< wall time of the run
 
   /// The value of a measured figure; throws quadrant::Error if there is none of that name.

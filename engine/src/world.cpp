@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <string>
 
@@ -36,6 +37,7 @@ void ValidateWorldDef(const WorldDef& d) {
   Require(d.solver == SolverType::kThesis || d.solver == SolverType::kPgs || d.solver == SolverType::kSoftStep,
           "WorldDef.solver is unknown");
   Require(d.softSubSteps >= 1, "WorldDef.softSubSteps must be >= 1");
+  Require(d.softSubSteps <= kMaxIterations, "WorldDef.softSubSteps must be <= 1000");
   Require(IsFinite(d.contactHertz) && d.contactHertz > 0, "WorldDef.contactHertz must be > 0");
   Require(IsFinite(d.contactDampingRatio) && d.contactDampingRatio >= 0, "WorldDef.contactDampingRatio must be >= 0");
   Require(IsFinite(d.contactPushMaxVelocity) && d.contactPushMaxVelocity > 0,
@@ -43,8 +45,11 @@ void ValidateWorldDef(const WorldDef& d) {
   Require(d.broadPhase == BroadPhaseType::kQuadTree || d.broadPhase == BroadPhaseType::kUniformGrid,
           "WorldDef.broadPhase is unknown");
   Require(d.velocityIterations >= 1, "WorldDef.velocityIterations must be >= 1");
+  Require(d.velocityIterations <= kMaxIterations, "WorldDef.velocityIterations must be <= 1000");
   Require(d.positionIterations >= 0, "WorldDef.positionIterations must be >= 0");
+  Require(d.positionIterations <= kMaxIterations, "WorldDef.positionIterations must be <= 1000");
   Require(d.restitutionIterations >= 1, "WorldDef.restitutionIterations must be >= 1");
+  Require(d.restitutionIterations <= kMaxIterations, "WorldDef.restitutionIterations must be <= 1000");
   Require(IsFinite(d.linearSlop) && d.linearSlop >= 0, "WorldDef.linearSlop must be finite and >= 0");
   Require(IsFinite(d.baumgarte) && d.baumgarte >= 0 && d.baumgarte <= 1, "WorldDef.baumgarte must be in [0, 1]");
   Require(IsFinite(d.maxLinearCorrection) && d.maxLinearCorrection > 0, "WorldDef.maxLinearCorrection must be > 0");
@@ -59,6 +64,13 @@ void ValidateWorldDef(const WorldDef& d) {
   Require(d.minParallelItems >= 1, "WorldDef.minParallelItems must be >= 1");
   Require(d.scheme == ParallelScheme::kDeterministic || d.scheme == ParallelScheme::kQuadrants,
           "WorldDef.scheme is unknown");
+}
+
+// std::to_string prints 1e-40 as 0.000000; %g keeps the exponent.
+std::string DensityText(Real density) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%g", double(density));
+  return buffer;
 }
 
 // Validates a body definition and returns its shape in canonical form (polygons re-hulled).
@@ -213,7 +225,7 @@ BodyId World::CreateBody(const BodyDef& def) {
                        md.rotationalInertia >= kSmallest && IsFinite(Real(1) / md.mass) &&
                        IsFinite(Real(1) / md.rotationalInertia)),
           "the body's mass or rotational inertia is not a positive finite number (density " +
-              std::to_string(shape.density) + ")");
+              DensityText(shape.density) + ")");
 
   uint32_t slot;
   if (!w.freeSlots.empty()) {
@@ -284,6 +296,7 @@ void World::Step(Real dt, int subSteps) {
   Require(IsFinite(dt) && dt > 0, "Step: dt must be finite and > 0");
   Require(dt <= kMaxTimeStep, "Step: dt must be <= 1 s");
   Require(subSteps >= 1, "Step: subSteps must be >= 1");
+  Require(subSteps <= kMaxIterations, "Step: subSteps must be <= 1000");
   Impl& w = *impl_;
   w.profile = Profile{};
   w.run->Reset();

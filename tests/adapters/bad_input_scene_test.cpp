@@ -141,6 +141,18 @@ void ExpectMessage(const std::function<void()>& call, const std::string& message
   }
 }
 
+TEST(BadInputScene, IterationAndSubStepLimits) {
+  Scene bad = Good();
+  bad.subSteps = 1001;
+  ExpectMessage([&] { ValidateScene(bad); }, "sub-steps must be <= 1000", "scene sub-steps 1001");
+  bad = Good();
+  bad.velocityIterations = 1000000000;
+  ExpectMessage([&] { ValidateScene(bad); }, "velocity iterations must be <= 1000", "scene velocity its 1e9");
+  bad = Good();
+  bad.positionIterations = 1001;
+  ExpectMessage([&] { ValidateScene(bad); }, "position iterations must be <= 1000", "scene position its 1001");
+}
+
 TEST(BadInputScene, ValidateSceneRefusesEveryRow) {
   EXPECT_NO_THROW(ValidateScene(Good()));
   for (const Row& row : Rows()) {

@@ -257,6 +257,29 @@ TEST(BadInputMoreTest, EveryAccessorRefusesADestroyedId) {
   ExpectRefused(s.world, [&] { s.world.GetPosition(doomed); }, stale, "old id after slot reuse");
 }
 
+TEST(BadInputMoreTest, StepRefusesMoreThanAThousandSubSteps) {
+  Scene s;
+  ExpectRefused(s.world, [&] { s.world.Step(kDt, 1001); }, "subSteps must be <= 1000", "Step(1/60, 1001)");
+  ExpectRefused(s.world, [&] { s.world.Step(kDt, 1000000000); }, "subSteps must be <= 1000", "Step(1/60, 1e9)");
+  const uint64_t before = s.world.StateHash();
+  s.world.Step(kDt, 1000);  // the limit itself is accepted
+  EXPECT_NE(s.world.StateHash(), before);
+}
+
+TEST(BadInputMoreTest, UnderflowingDensityIsPrintedWithItsExponent) {
+  World world;
+  BodyDef def;
+  def.type = BodyType::kDynamic;
+  def.shape = ShapeDef::MakeCircle(Real(0.5));
+  def.shape.density = Real(1e-40);
+  try {
+    world.CreateBody(def);
+    ADD_FAILURE() << "density 1e-40 was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("e-40"), std::string::npos) << e.what();
+  }
+}
+
 TEST(BadInputMoreTest, WorldDefMoreRefusals) {
   auto refuse = [](const std::function<void(WorldDef&)>& edit, const std::string& message, const std::string& what) {
     WorldDef d;
@@ -266,6 +289,11 @@ TEST(BadInputMoreTest, WorldDefMoreRefusals) {
   refuse([](WorldDef& d) { d.threadCount = 65; }, "threadCount must be in [1, 64]", "threads 65");
   refuse([](WorldDef& d) { d.threadCount = -3; }, "threadCount must be in [1, 64]", "threads -3");
   refuse([](WorldDef& d) { d.restitutionIterations = 0; }, "restitutionIterations must be >= 1", "restitution its 0");
+  // Upper limits (kMaxIterations = 1000): without them one Step could run for hours.
+  refuse([](WorldDef& d) { d.velocityIterations = 1001; }, "velocityIterations must be <= 1000", "velocity its 1001");
+  refuse([](WorldDef& d) { d.positionIterations = 1000000000; }, "positionIterations must be <= 1000", "position its 1e9");
+  refuse([](WorldDef& d) { d.restitutionIterations = 1001; }, "restitutionIterations must be <= 1000", "restitution its 1001");
+  refuse([](WorldDef& d) { d.softSubSteps = 1001; }, "softSubSteps must be <= 1000", "soft sub-steps 1001");
   refuse([](WorldDef& d) { d.linearSlop = kNaN; }, "linearSlop", "slop NaN");
   refuse([](WorldDef& d) { d.baumgarte = Real(1.5); }, "baumgarte must be in [0, 1]", "baumgarte 1.5");
   refuse([](WorldDef& d) { d.maxLinearCorrection = 0; }, "maxLinearCorrection must be > 0", "max correction 0");

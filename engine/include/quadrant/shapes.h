@@ -24,6 +24,10 @@ inline constexpr Real kMaxInputSpeed = Real(1e6);
 /// Longest time step accepted (s). Longer steps are outside what a rigid-body step models.
 inline constexpr Real kMaxTimeStep = Real(1);
 
+/// Most sub-steps per Step and iterations of any kind accepted. Far beyond any useful accuracy
+/// (the accuracy study sweeps to 32); without a bound, one call could run for hours.
+inline constexpr int kMaxIterations = 1000;
+
 /// Smallest edge length / circle radius accepted (m). Below this the hull and the narrow
 /// phase lose precision in float32.
 inline constexpr Real kMinFeatureSize = Real(0.005);

@@ -211,7 +211,7 @@ class World {
   bool IsValid(BodyId id) const;
 
   /// Advances by dt seconds as `subSteps` equal sub-steps of the whole pipeline.
-  /// Throws quadrant::Error for dt <= 0 or non-finite, or subSteps < 1.
+  /// Throws quadrant::Error for dt <= 0, dt > 1 s or non-finite, or subSteps outside [1, 1000].
   void Step(Real dt, int subSteps = 1);
 
   // Read-back (all throw quadrant::Error on a stale id).
