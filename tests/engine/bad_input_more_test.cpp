@@ -276,7 +276,10 @@ TEST(BadInputMoreTest, UnderflowingDensityIsPrintedWithItsExponent) {
     world.CreateBody(def);
     ADD_FAILURE() << "density 1e-40 was accepted";
   } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("e-40"), std::string::npos) << e.what();
+    // 1e-40 is a float denormal (9.99995e-41): the message must show it, not "0.000000".
+    const std::string message = e.what();
+    EXPECT_NE(message.find("e-41"), std::string::npos) << message;
+    EXPECT_EQ(message.find("0.000000"), std::string::npos) << message;
   }
 }
 
