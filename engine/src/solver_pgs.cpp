@@ -1,21 +1,25 @@
 // Projected Gauss-Seidel over contact impulses (sequential impulses, Box2D 2.4's family).
 //
-// Per step: gravity, prepare constraints, warm start, N velocity iterations (friction then
-// normal, accumulated impulses clamped), a restitution pass, position integration, then a
+// Per step: gravity, prepare constraints, warm start, restitution as pairwise collisions,
+// N velocity iterations (friction then normal, accumulated impulses clamped), position
+// integration, then a
 // position pass (non-linear Gauss-Seidel on the linearised separation, with slop and a
 // Baumgarte factor) that removes penetration without adding velocity.
 //
 // Contacts are speculative: a point that is still apart by s may close at most s this step
 // (the normal row targets vn >= -s/dt), so fast bodies stop at the surface instead of passing
-// through it. Restitution is applied after the iterations from the approach speed measured
-// before them (as Box2D 3 does): a bounce then does not depend on the step at which the gap
-// closed, which keeps restitution-1 scenes from losing energy on speculative contacts.
+// through it. A speculative point that will close its gap this step collides now (and is moved
+// back by the distance it bounced early, after integration): a bounce then does not depend on
+// the step at which the gap closed, which keeps restitution-1 scenes from losing energy.
+// Collisions are applied pair by pair before the iterations (ApplyCollisions in
+// contact_solver.h says why: Newton's cradle).
 //
 // The kernels are templates on the effects (rotation, friction): a world with an effect off
 // runs a path without its rows or terms instead of multiplying them by zero.
 //
-// Colouring, preparation, warm starting and restitution are shared with soft_step
-// (contact_solver.h).
+// Colouring, preparation and warm starting are shared with soft_step (contact_solver.h).
+#include <atomic>
+
 #include "contact_solver.h"
 
 namespace quadrant {
@@ -54,13 +58,19 @@ class PgsSolver final : public ContactSolverBase {
     run.For(Stage::kSolve, m, run.MinItems(), [&](int b, int e, int) { Prepare<kRotation>(ctx, b, e); });
     if (def.effects.warmStarting) ForEachColor(run, [&](int b, int e) { WarmStart<kRotation>(bodies, b, e); });
     const Real invDt = Real(1) / dt;
-    for (int it = 0; it < def.velocityIterations; ++it) {
-      ForEachColor(run, [&](int b, int e) { SolveVelocities<kRotation, kFriction>(bodies, invDt, b, e); });
-    }
     if (def.effects.restitution) {
       for (int it = 0; it < def.restitutionIterations; ++it) {
-        ForEachColor(run, [&](int b, int e) { ApplyRestitution<kRotation>(bodies, def.restitutionThreshold, b, e); });
+        std::atomic<bool> collided{false};
+        ForEachColor(run, [&](int b, int e) {
+          if (ApplyCollisions<kRotation>(bodies, def.restitutionThreshold, invDt, b, e)) {
+            collided.store(true, std::memory_order_relaxed);
+          }
+        });
+        if (!collided.load(std::memory_order_relaxed)) break;  // read after the colour's join
       }
+    }
+    for (int it = 0; it < def.velocityIterations; ++it) {
+      ForEachColor(run, [&](int b, int e) { SolveVelocities<kRotation, kFriction>(bodies, invDt, b, e); });
     }
     run.For(Stage::kSolve, m, run.MinItems(), [&](int b, int e, int) { StoreImpulses(ctx.contacts, b, e); });
     auto t2 = Clock::now();
@@ -101,7 +111,7 @@ class PgsSolver final : public ContactSolverBase {
         for (int k = 0; k < cc.pointCount; ++k) {
           PointConstraint& pc = cc.points[k];
           const Real vt = Dot(RelativeVelocity<kRotation>(va, vb, pc), t);
-          const Real maxFriction = cc.friction * pc.normalImpulse;
+          const Real maxFriction = cc.friction * (pc.normalImpulse + pc.collisionImpulse);
           const Real newImpulse = std::clamp(pc.tangentImpulse - pc.tangentMass * vt, -maxFriction, maxFriction);
           const Real lambda = newImpulse - pc.tangentImpulse;
           pc.tangentImpulse = newImpulse;
@@ -146,22 +156,7 @@ class PgsSolver final : public ContactSolverBase {
     const Real b0 = Dot(RelativeVelocity<kRotation>(va, vb, p0), n) + gap0 - (k11 * a0 + k12 * a1);
     const Real b1 = Dot(RelativeVelocity<kRotation>(va, vb, p1), n) + gap1 - (k12 * a0 + k22 * a1);
     Real x0, x1;
-    const Real det = k11 * k22 - k12 * k12;
-    x0 = -(k22 * b0 - k12 * b1) / det;
-    x1 = -(k11 * b1 - k12 * b0) / det;
-    if (!(x0 >= 0 && x1 >= 0)) {
-      x0 = -b0 / k11;
-      x1 = 0;
-      if (!(x0 >= 0 && k12 * x0 + b1 >= 0)) {
-        x0 = 0;
-        x1 = -b1 / k22;
-        if (!(x1 >= 0 && k12 * x1 + b0 >= 0)) {
-          x0 = 0;
-          x1 = 0;
-          if (!(b0 >= 0 && b1 >= 0)) return;  // no case fits (numerical corner): keep the old impulses
-        }
-      }
-    }
+    if (!SolveLcp2(k11, k12, k22, b0, b1, x0, x1)) return;  // no case fits: keep the old impulses
     const Vec2 P0 = (x0 - a0) * n, P1 = (x1 - a1) * n;
     va.v -= cc.invMassA * (P0 + P1);
     vb.v += cc.invMassB * (P0 + P1);

@@ -26,22 +26,6 @@ std::string Describe(const HardCaseResult& r) {
   return out;
 }
 
-// Cases Quadrant does not pass yet. They stay in the tool's report (hardcases.md says FAIL
-// with the figures) and in the project's open issue; here they assert what does hold.
-//   newtons_cradle: five touching balls are solved as simultaneous contacts, so the first
-//   ball's momentum spreads along the row (last ball 0.41 m/s instead of 1) instead of passing
-//   through as a sequence of binary collisions. Box2D 2.4 does the same (0.44 m/s); Chipmunk
-//   passes.
-const std::vector<std::string> kKnownFailures = {"newtons_cradle"};
-
-std::vector<std::string> PassingCases() {
-  std::vector<std::string> out;
-  for (const std::string& c : HardCaseNames()) {
-    if (std::find(kKnownFailures.begin(), kKnownFailures.end(), c) == kKnownFailures.end()) out.push_back(c);
-  }
-  return out;
-}
-
 class QuadrantHardCase : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(QuadrantHardCase, Passes) {
@@ -53,15 +37,7 @@ TEST_P(QuadrantHardCase, Passes) {
   EXPECT_TRUE(r.pass) << Describe(r);
 }
 
-TEST(HardCases, NewtonsCradleConservesMomentumAndGainsNoEnergy) {
-  const HardCaseResult r = RunHardCase("newtons_cradle", "quadrant");
-  EXPECT_LT(r.Get("momentum_rel_error"), 1e-4) << Describe(r);
-  EXPECT_LE(r.Get("ke_ratio"), 1.0 + 1e-3) << Describe(r);
-  // The known failure is still a failure: if this starts passing, move the case back.
-  EXPECT_FALSE(r.pass) << "newtons_cradle passes now: remove it from kKnownFailures";
-}
-
-INSTANTIATE_TEST_SUITE_P(All, QuadrantHardCase, ::testing::ValuesIn(PassingCases()),
+INSTANTIATE_TEST_SUITE_P(All, QuadrantHardCase, ::testing::ValuesIn(HardCaseNames()),
                          [](const ::testing::TestParamInfo<std::string>& info) { return info.param; });
 
 TEST(HardCases, NamesAndRegistry) {
