@@ -51,7 +51,7 @@ class Box2dAdapter final : public Adapter {
     caps.disableRotation = true;
     caps.disableFriction = true;
     caps.disableWarmStarting = true;
-    caps.damping = false;
+    caps.damping = true;
     caps.notes =
         "Box2D 2.4.1 (Debian), single-threaded. Friction mixing sqrt(f1*f2), restitution "
         "mixing max(e1, e2); restitution threshold set per fixture from the scene (default "
@@ -61,7 +61,7 @@ class Box2dAdapter final : public Adapter {
         "follows the scene. Polygons carry Box2D's 0.01 m skin (b2_polygonRadius), so they "
         "collide 0.01 m larger than the scene says; mass comes from density (exact, skin "
         "excluded). Sleep uses Box2D's defaults (0.5 s below 0.01 m/s and 2 deg/s). Rotation "
-        "off = SetFixedRotation. Damping not supported yet (the scene has no damping values).";
+        "off = SetFixedRotation. Damping: the scene's per-body rates as b2BodyDef damping (the same law).";
     return caps;
   }
 
@@ -73,9 +73,6 @@ class Box2dAdapter final : public Adapter {
     if (threads != 1) {
       throw Unsupported("box2d: Box2D 2.4.1 is single-threaded; asked for " +
                         std::to_string(threads) + " threads");
-    }
-    if (scene.effects.damping) {
-      throw Unsupported("box2d: damping is not supported yet (scene bodies carry no damping)");
     }
     for (int i = 0; i < static_cast<int>(scene.bodies.size()); ++i) {
       if (scene.bodies[i].shape == ShapeKind::kPolygon) RequireWeldSafePolygon(scene.bodies[i], i);
@@ -105,6 +102,9 @@ class Box2dAdapter final : public Adapter {
       def.angle = static_cast<float>(desc.angle);
       def.allowSleep = fx.sleep;
       def.fixedRotation = !fx.rotation;
+      // Box2D 2.4's damping law is the scene's own: 1 / (1 + dt c) per step.
+      def.linearDamping = fx.damping ? static_cast<float>(desc.linearDamping) : 0.0f;
+      def.angularDamping = fx.damping ? static_cast<float>(desc.angularDamping) : 0.0f;
       b2Body* body = world_->CreateBody(&def);
 
       b2CircleShape circle;

@@ -131,7 +131,7 @@ class BulletAdapter final : public Adapter {
     caps.disableRotation = true;
     caps.disableFriction = true;
     caps.disableWarmStarting = true;
-    caps.damping = false;
+    caps.damping = true;
     caps.notes =
         "serial only (Debian's Bullet is built without BT_THREADSAFE); "
         "2D-constrained mode: linear factor (1,1,0), angular factor (0,0,1), "
@@ -148,6 +148,8 @@ class BulletAdapter final : public Adapter {
         "elastic collisions); "
         "continuous: per-body swept-sphere CCD (sphere = inner radius, threshold = inner "
         "radius); sleep: Bullet's thresholds 0.8 m/s, 1 rad/s, 2 s; "
+        "damping: per-body, Bullet's (1 - d)^dt law with d chosen so one step gives the "
+        "scene's factor 1 / (1 + dt c); "
         "contacts = manifolds with a point at distance <= 0";
     return caps;
   }
@@ -157,9 +159,6 @@ class BulletAdapter final : public Adapter {
     // Fewer than one thread is bad input (an Error); more than Bullet runs is Unsupported.
     if (threads < 1) throw Error("bullet: threads must be >= 1, got " + std::to_string(threads));
     if (threads != 1) throw SerialOnly();
-    if (scene.effects.damping) {
-      throw Unsupported("bullet: scene bodies carry no damping values to give Bullet");
-    }
     // Built aside and swapped in at the end, so a throwing Load keeps the previous world.
     auto next = std::make_unique<BulletWorld>();
     BuildWorld(scene, *next);
@@ -351,8 +350,12 @@ class BulletAdapter final : public Adapter {
     info.m_startWorldTransform = btTransform(rotation, centre);
     info.m_friction = fx.friction ? desc.friction : Real(0);
     info.m_restitution = fx.restitution ? desc.restitution : Real(0);
-    info.m_linearDamping = 0;
-    info.m_angularDamping = 0;
+    // Bullet multiplies velocities by (1 - d)^dt each step; d = 1 - (1 + dt c)^(-1/dt) makes
+    // that the scene's 1 / (1 + dt c) at the scene's fixed step.
+    const double h = scene.timeStep;
+    auto bulletDamping = [&](Real c) { return btScalar(1 - std::pow(1 + h * double(c), -1 / h)); };
+    info.m_linearDamping = fx.damping ? bulletDamping(desc.linearDamping) : btScalar(0);
+    info.m_angularDamping = fx.damping ? bulletDamping(desc.angularDamping) : btScalar(0);
 
     auto body = std::make_unique<btRigidBody>(info);
     if (desc.dynamic) {

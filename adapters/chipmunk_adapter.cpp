@@ -95,7 +95,7 @@ class ChipmunkAdapter final : public Adapter {
     caps.disableRotation = true;
     caps.disableFriction = true;
     caps.disableWarmStarting = false;
-    caps.damping = false;
+    caps.damping = true;
     caps.notes =
         "Chipmunk 7.0.3 (Debian, built with assertions on), doubles. Friction and elasticity "
         "mixing: multiplied (f1*f2, e1*e2); no restitution threshold (elasticity applies at "
@@ -106,7 +106,10 @@ class ChipmunkAdapter final : public Adapter {
         "0.01 m/s (Box2D's values); a sleeping body reads back the velocity it fell asleep with "
         "(Box2D zeroes it). Threads: 1 = cpSpace, 2 = cpHastySpace with 2 threads "
         "(only the impulse solver threaded, nondeterministic). No continuous collision, "
-        "warm starting cannot be switched off, no damping values yet.";
+        "warm starting cannot be switched off. Damping: one space-wide rate for linear and "
+        "angular motion (cpSpaceSetDamping, converted so one step gives 1 / (1 + dt c)); "
+        "scenes with per-body or unequal linear and angular rates are unsupported; Chipmunk "
+        "damps before adding gravity, Box2D and Quadrant after.";
     return caps;
   }
 
@@ -122,8 +125,21 @@ class ChipmunkAdapter final : public Adapter {
     const Effects& fx = scene.effects;
     if (fx.continuous) throw Unsupported("chipmunk: no continuous collision detection");
     if (!fx.warmStarting) throw Unsupported("chipmunk: warm starting cannot be switched off");
+    // Chipmunk damps every body by one space-wide fraction per second, linear and angular
+    // alike; a scene whose dynamic bodies differ cannot be given to it.
+    double damping = 0;
+    bool dampingSet = false;
     if (fx.damping) {
-      throw Unsupported("chipmunk: damping is not supported yet (scene bodies carry no damping)");
+      for (const BodyDesc& b : scene.bodies) {
+        if (!b.dynamic) continue;
+        const bool same = b.linearDamping == b.angularDamping && (!dampingSet || double(b.linearDamping) == damping);
+        if (!same) {
+          throw Unsupported("chipmunk: damping is one space-wide rate for linear and angular motion; this scene's "
+                            "bodies have different or unequal rates");
+        }
+        damping = double(b.linearDamping);
+        dampingSet = true;
+      }
     }
 
     WarmUpOnce();
@@ -141,6 +157,9 @@ class ChipmunkAdapter final : public Adapter {
     cpSpaceSetCollisionSlop(space_, kCollisionSlop);
     cpSpaceSetSleepTimeThreshold(space_, fx.sleep ? kSleepTime : INFINITY);
     cpSpaceSetIdleSpeedThreshold(space_, kIdleSpeed);
+    // Chipmunk keeps damping^dt of the velocity per step: damping = (1 + dt c)^(-1/dt) gives the
+    // scene's 1 / (1 + dt c).
+    if (fx.damping) cpSpaceSetDamping(space_, std::pow(1 + scene.timeStep * damping, -1 / double(scene.timeStep)));
 
     timeStep_ = cpFloat(scene.timeStep);
     driver_ = scene.driver;

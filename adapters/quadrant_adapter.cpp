@@ -65,7 +65,6 @@ class QuadrantAdapter final : public Adapter {
     ValidateScene(scene);
     if (threads < 1 || threads > kMaxThreads) throw Error("quadrant: threads must be in [1, 64]");
     if (scene.effects.sleep) throw Unsupported("quadrant has no sleeping yet");
-    if (scene.effects.damping) throw Unsupported("scene bodies carry no damping values yet");
     WorldDef def;
     def.gravity = scene.gravity;
     def.solver = solver_;
@@ -82,6 +81,7 @@ class QuadrantAdapter final : public Adapter {
     def.effects.rotation = scene.effects.rotation;
     def.effects.warmStarting = scene.effects.warmStarting;
     def.effects.continuous = scene.effects.continuous;
+    def.effects.damping = scene.effects.damping;
     auto world = std::make_unique<World>(def);
     std::vector<BodyId> ids;
     ids.reserve(scene.bodies.size());
@@ -92,6 +92,8 @@ class QuadrantAdapter final : public Adapter {
       bd.angle = b.angle;
       bd.linearVelocity = b.velocity;
       bd.angularVelocity = b.angularVelocity;
+      bd.linearDamping = b.linearDamping;  // the engine applies them only with effects.damping
+      bd.angularDamping = b.angularDamping;
       bd.shape = b.shape == ShapeKind::kCircle ? ShapeDef::MakeCircle(b.radius) : ShapeDef::FromPolygon(MakePolygon(b.vertices));
       bd.shape.density = b.density;
       bd.shape.friction = b.friction;

@@ -74,6 +74,9 @@ void ValidateScene(const Scene& scene) {
     }
     if (!IsFinite(b.density) || (b.dynamic && b.density <= 0)) Fail(i, "density must be > 0");
     if (!IsFinite(b.friction) || b.friction < 0) Fail(i, "friction must be >= 0");
+    if (!IsFinite(b.linearDamping) || b.linearDamping < 0 || !IsFinite(b.angularDamping) || b.angularDamping < 0) {
+      Fail(i, "damping must be finite and >= 0");
+    }
     if (!IsFinite(b.restitution) || b.restitution < 0 || b.restitution > 1) {
       Fail(i, "restitution must be in [0, 1]");
     }

@@ -41,6 +41,11 @@ struct BodyDesc {
   Real density = 1;                 ///< kg/m^2
   Real friction = Real(0.6);
   Real restitution = 0;
+  /// Damping rates (1/s, >= 0), acting only when the scene's damping effect is on. Box2D 2.4's
+  /// meaning: each step multiplies the velocity by 1 / (1 + dt c). Adapters of engines with
+  /// another law (Bullet, Chipmunk) convert the rate so one step gives that same factor.
+  Real linearDamping = 0;
+  Real angularDamping = 0;
 };
 
 class Adapter;

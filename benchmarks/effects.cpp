@@ -306,8 +306,10 @@ int main(int argc, char** argv) {
                         args.steps, args.warmup));
     rows.push_back(Flip("warmStarting", &qs::Effects::warmStarting, "the scene's contacts", polygons, args.steps,
                         args.warmup));
-    rows.push_back(Flip("damping", &qs::Effects::damping, "flag only (scene bodies carry no damping values)",
-                        polygons, args.steps, args.warmup));
+    qs::Scene damped = polygons;
+    for (qs::BodyDesc& b : damped.bodies) b.linearDamping = b.angularDamping = quadrant::Real(0.1);
+    rows.push_back(Flip("damping", &qs::Effects::damping, "linear and angular damping 0.1 /s on every body in both copies",
+                        damped, args.steps, args.warmup));
     // Sleep: a pile at rest, where a sleeping engine would stop simulating it; warmed up 2 s so
     // the pile has settled (Box2D sleeps a body after 0.5 s below its thresholds).
     const qs::Scene pile = qs::MakePyramid(args.quick ? 20 : 63);

@@ -268,13 +268,6 @@ TEST(BulletAdapter, TwoThreadsAreUnsupported) {
   EXPECT_EQ(adapter->BodyCount(), 1);
 }
 
-TEST(BulletAdapter, DampingIsUnsupported) {
-  Scene s = BaseScene();
-  s.effects.damping = true;
-  s.bodies = {Circle({0, 0})};
-  EXPECT_THROW(MakeBulletAdapter()->Load(s, 1), Unsupported);
-}
-
 TEST(BulletAdapter, InvalidSceneThrowsError) {
   Scene s = BaseScene();
   BodyDesc bad = Circle({0, 0});

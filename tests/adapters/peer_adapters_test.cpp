@@ -382,9 +382,6 @@ void CheckRefusals(const Factory& make, int refusedThreads) {
   EXPECT_THROW(a->Load(ok, refusedThreads), Unsupported);
   EXPECT_THROW(a->Load(ok, 3), Unsupported);
   EXPECT_THROW(a->Load(ok, 0), quadrant::Error);  // fewer than one thread is bad input, not a limit
-  Scene damped = ok;
-  damped.effects.damping = true;
-  EXPECT_THROW(a->Load(damped, 1), Unsupported);
   // An invalid scene is an Error, checked before anything engine-specific.
   Scene bad = ok;
   bad.bodies[1].radius = -1;
@@ -408,7 +405,7 @@ TEST(Box2dAdapter, NameAndCapabilities) {
   EXPECT_TRUE(c.continuous);
   EXPECT_TRUE(c.sleep);
   EXPECT_TRUE(c.disableWarmStarting);
-  EXPECT_FALSE(c.damping);
+  EXPECT_TRUE(c.damping);
   EXPECT_NE(c.notes.find("sqrt"), std::string::npos);
   EXPECT_NE(c.notes.find("0.01 m"), std::string::npos);
 }
@@ -428,7 +425,7 @@ TEST(Box2dAdapter, ContactsSurviveSleep) { CheckContactsSurviveSleep(kBox2d); }
 TEST(Box2dAdapter, DriverRunsBeforeEachStep) { CheckDriver(kBox2d); }
 TEST(Box2dAdapter, LoadTwiceReplacesWorld) { CheckLoadTwice(kBox2d); }
 TEST(Box2dAdapter, SetVelocity) { CheckSetVelocity(kBox2d); }
-TEST(Box2dAdapter, RefusesTwoThreadsDampingAndInvalidScenes) { CheckRefusals(kBox2d, 2); }
+TEST(Box2dAdapter, RefusesTwoThreadsAndInvalidScenes) { CheckRefusals(kBox2d, 2); }
 
 TEST(Box2dAdapter, ContinuousFlagDecidesTunnelling) {
   // A 0.1 m ball at Box2D's speed cap (2 m per step) against a 0.1 m plank: the discrete
@@ -498,7 +495,7 @@ TEST(ChipmunkAdapter, ContactsSurviveSleep) { CheckContactsSurviveSleep(kChipmun
 TEST(ChipmunkAdapter, DriverRunsBeforeEachStep) { CheckDriver(kChipmunk); }
 TEST(ChipmunkAdapter, LoadTwiceReplacesWorld) { CheckLoadTwice(kChipmunk); }
 TEST(ChipmunkAdapter, SetVelocity) { CheckSetVelocity(kChipmunk); }
-TEST(ChipmunkAdapter, RefusesThreeThreadsDampingAndInvalidScenes) {
+TEST(ChipmunkAdapter, RefusesThreeThreadsAndInvalidScenes) {
   CheckRefusals(kChipmunk, 4);
 }
 
