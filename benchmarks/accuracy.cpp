@@ -370,15 +370,7 @@ struct Args {
   int count = 0;  // stress N; 0: 1000, or 200 with --quick
 };
 
-std::vector<std::string> SplitList(const std::string& text) {
-  std::vector<std::string> out;
-  std::stringstream in(text);
-  std::string item;
-  while (std::getline(in, item, ',')) {
-    if (!item.empty()) out.push_back(item);
-  }
-  return out;
-}
+using quadrant::report::SplitList;
 
 [[noreturn]] void Usage(const std::string& problem) {
   std::cerr << "quadrant_accuracy: " << problem << "\n"

@@ -33,15 +33,7 @@ struct Args {
   int soakSteps = 100000;
 };
 
-std::vector<std::string> SplitList(const std::string& text) {
-  std::vector<std::string> out;
-  std::stringstream in(text);
-  std::string item;
-  while (std::getline(in, item, ',')) {
-    if (!item.empty()) out.push_back(item);
-  }
-  return out;
-}
+using quadrant::report::SplitList;
 
 [[noreturn]] void Usage(const std::string& problem) {
   std::cerr << "quadrant_hardcases: " << problem << "\n"

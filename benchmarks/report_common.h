@@ -1,5 +1,5 @@
-// Small helpers shared by the report programs (quadrant_hardcases, quadrant_validate): JSON
-// scalars, Markdown cells and the run's context. Header-only: two programs, no library needed.
+// Small helpers shared by the report programs (hardcases, validate, accuracy, effects): JSON
+// scalars, Markdown cells, list options and the run's context. Header-only: no library needed.
 #pragma once
 
 #include <cmath>
@@ -7,9 +7,22 @@
 #include <cstdlib>
 #include <ctime>
 #include <string>
+#include <sstream>
 #include <string_view>
+#include <vector>
 
 namespace quadrant::report {
+
+/// The items of a comma-separated command-line list ("a,b,c"), empty items dropped.
+inline std::vector<std::string> SplitList(const std::string& text) {
+  std::vector<std::string> out;
+  std::stringstream in(text);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    if (!item.empty()) out.push_back(item);
+  }
+  return out;
+}
 
 /// A JSON string literal (quoted, escaped).
 inline std::string JsonString(std::string_view s) {

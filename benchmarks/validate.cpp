@@ -44,12 +44,7 @@ Args Parse(int argc, char** argv) {
     if (flag == "--out") {
       a.out = value;
     } else if (flag == "--cases") {
-      a.cases.clear();
-      std::stringstream in(value);
-      std::string item;
-      while (std::getline(in, item, ',')) {
-        if (!item.empty()) a.cases.push_back(item);
-      }
+      a.cases = quadrant::report::SplitList(value);
     } else {
       Usage("unknown option " + flag);
     }

@@ -116,14 +116,25 @@ const OffCase kOffCases[] = {
      }},
 };
 
+// The two scenes of a row: A with the effect's flag off, B with nothing for it to act on.
+struct OffPair {
+  Scene base, a, b;
+};
+OffPair MakeOffPair(const OffCase& c) {
+  OffPair p;
+  p.base = Pile();
+  p.base.effects.damping = true;
+  p.a = p.base;
+  p.b = p.base;
+  c.off(p.a);
+  c.absent(p.b);
+  return p;
+}
+
 TEST_P(EngineEffects, EffectOffEqualsSceneWithoutIt) {
   const std::string engine = GetParam();
   for (const OffCase& c : kOffCases) {
-    Scene base = Pile();
-    base.effects.damping = true;
-    Scene a = base, b = base;
-    c.off(a);
-    c.absent(b);
+    const auto [base, a, b] = MakeOffPair(c);
     std::vector<BodyState> sa, sb;
     try {
       sa = RunScene(engine, a, 90);
@@ -154,14 +165,10 @@ INSTANTIATE_TEST_SUITE_P(All, EngineEffects, ::testing::Values("quadrant", "box2
 // world with nothing for the effect to act on.
 TEST(QuadrantEffects, EffectOffIsBitIdenticalToSceneWithoutIt) {
   for (const OffCase& c : kOffCases) {
-    Scene base = Pile();
-    base.effects.damping = true;
-    Scene a = base, b = base;
-    c.off(a);
-    c.absent(b);
+    const OffPair p = MakeOffPair(c);
     auto qa = MakeAdapter("quadrant"), qb = MakeAdapter("quadrant");
-    qa->Load(a, 1);
-    qb->Load(b, 1);
+    qa->Load(p.a, 1);
+    qb->Load(p.b, 1);
     for (int i = 0; i < 90; ++i) {
       qa->Step();
       qb->Step();
