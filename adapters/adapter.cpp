@@ -5,6 +5,7 @@
 #include <cstring>
 
 #include "adapter_factories.h"
+#include "quadrant/bit_hash.h"
 #include "quadrant/error.h"
 
 namespace quadrant::scene {
@@ -51,16 +52,9 @@ Vec2 LinearMomentum(const Scene& scene, const std::vector<BodyState>& states) {
 }
 
 uint64_t HashStates(const std::vector<BodyState>& states) {
-  // FNV-1a over the exact bits: equal hashes mean bit-identical read-backs.
-  uint64_t h = 0xcbf29ce484222325ull;
-  auto mix = [&h](Real x) {
-    unsigned char bytes[sizeof(Real)];
-    std::memcpy(bytes, &x, sizeof(Real));
-    for (unsigned char b : bytes) {
-      h ^= b;
-      h *= 0x100000001b3ull;
-    }
-  };
+  // Equal hashes mean bit-identical read-backs.
+  BitHash h;
+  auto mix = [&h](Real x) { h.Mix(x); };
   for (const BodyState& s : states) {
     mix(s.position.x);
     mix(s.position.y);
@@ -69,7 +63,7 @@ uint64_t HashStates(const std::vector<BodyState>& states) {
     mix(s.velocity.y);
     mix(s.angularVelocity);
   }
-  return h;
+  return h.Value();
 }
 
 }  // namespace quadrant::scene

@@ -1,20 +1,12 @@
 // The state hash: FNV-1a over the exact bits of every body's state, in body order.
-#include <cstring>
-
+#include "quadrant/bit_hash.h"
 #include "world_internal.h"
 
 namespace quadrant {
 
 uint64_t HashBodies(const Bodies& bodies) {
-  uint64_t h = 0xcbf29ce484222325ull;
-  auto mix = [&h](Real x) {
-    unsigned char bytes[sizeof(Real)];
-    std::memcpy(bytes, &x, sizeof(Real));
-    for (unsigned char b : bytes) {
-      h ^= b;
-      h *= 0x100000001b3ull;
-    }
-  };
+  BitHash h;
+  auto mix = [&h](Real x) { h.Mix(x); };
   for (int i = 0; i < bodies.Count(); ++i) {
     mix(bodies.xf[i].p.x);
     mix(bodies.xf[i].p.y);
@@ -24,7 +16,7 @@ uint64_t HashBodies(const Bodies& bodies) {
     mix(bodies.vel[i].v.y);
     mix(bodies.vel[i].w);
   }
-  return h;
+  return h.Value();
 }
 
 }  // namespace quadrant
