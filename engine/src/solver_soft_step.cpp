@@ -67,7 +67,7 @@ class SoftStepSolver final : public ContactSolverBase {
     auto t0 = Clock::now();
     run.Serial(Stage::kSolve, [&] { Color(ctx); });
     const int m = static_cast<int>(constraints_.size());
-    run.For(Stage::kSolve, m, run.MinItems(), [&](int b, int e, int) { Prepare<kRotation>(ctx, b, e); });
+    run.For(Stage::kSolve, m, run.MinHeavyItems(), [&](int b, int e, int) { Prepare<kRotation>(ctx, b, e); });
     SnapshotPositions(run, bodies);
     for (int sub = 0; sub < n; ++sub) {
       auto ti = Clock::now();
@@ -85,7 +85,7 @@ class SoftStepSolver final : public ContactSolverBase {
         ForEachColor(run, [&](int b, int e) { ApplyRestitution<kRotation>(bodies, def.restitutionThreshold, b, e); });
       }
     }
-    run.For(Stage::kSolve, m, run.MinItems(), [&](int b, int e, int) { StoreImpulses(ctx.contacts, b, e); });
+    run.For(Stage::kSolve, m, run.MinHeavyItems(), [&](int b, int e, int) { StoreImpulses(ctx.contacts, b, e); });
     const double total = Ms(t0, Clock::now());
     ctx.profile->integrate += integrateMs;
     ctx.profile->solve += total - integrateMs;
