@@ -350,7 +350,7 @@ void World::Impl::SubStep(Real dt) {
   solver->Step(ctx);
 
   auto t4 = Clock::now();
-  if (persist) run->Serial(Stage::kPersistence, [&] { cache.Store(contacts); });
+  if (persist) cache.Store(contacts, *run);
   auto t5 = Clock::now();
 
   profile.broadPhase += Ms(t0, t1);
