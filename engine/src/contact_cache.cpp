@@ -1,4 +1,9 @@
 // Contact persistence by pair key and feature id.
+//
+// The store is an array sorted by key rather than a hash table: the world's contacts arrive in
+// key order, so storing is a parallel filtered copy (count per worker block, prefix, copy)
+// and a lookup walks forward from the previous one (galloping), which is as cheap as a hash
+// probe for sorted input and still correct for any order.
 #include "contact_cache.h"
 
 #include <algorithm>
@@ -6,32 +11,24 @@
 namespace quadrant {
 namespace {
 
-// Fibonacci hashing spreads the (a << 32 | b) keys, whose low bits are the body index b.
-inline size_t Slot(uint64_t key, size_t mask) { return size_t((key * 0x9E3779B97F4A7C15ull) >> 20) & mask; }
+// Only contacts that carry something to the next step are stored: in sparse scenes most
+// speculative contacts end the step with zero impulses.
+bool Carries(const Contact& c) {
+  for (int k = 0; k < c.manifold.pointCount; ++k) {
+    const ManifoldPoint& p = c.manifold.points[k];
+    if (p.normalImpulse != 0 || p.tangentImpulse != 0) return true;
+  }
+  return false;
+}
 
 }  // namespace
 
-void ContactCache::Clear() { table_.clear(); }
+void ContactCache::Clear() { entries_.clear(); }
 
 void ContactCache::Store(std::span<const Contact> contacts) {
-  // Only contacts that carry something to the next step are stored: in sparse scenes most
-  // speculative contacts end the step with zero impulses.
-  auto carries = [](const Contact& c) {
-    for (int k = 0; k < c.manifold.pointCount; ++k) {
-      const ManifoldPoint& p = c.manifold.points[k];
-      if (p.normalImpulse != 0 || p.tangentImpulse != 0) return true;
-    }
-    return false;
-  };
-  size_t stored = 0;
-  for (const Contact& c : contacts) stored += carries(c) ? 1 : 0;
-  size_t capacity = 16;
-  while (capacity < 2 * stored) capacity <<= 1;
-  // Re-use the buffer: assign only re-allocates when the capacity grows.
-  table_.assign(capacity, Entry{kEmpty, 0, {0, 0}, {0, 0}, {0, 0}});
-  const size_t mask = capacity - 1;
+  entries_.clear();
   for (const Contact& c : contacts) {
-    if (!carries(c)) continue;
+    if (!Carries(c)) continue;
     const Manifold& m = c.manifold;
     Entry e{c.Key(), m.pointCount, {0, 0}, {0, 0}, {0, 0}};
     for (int k = 0; k < m.pointCount; ++k) {
@@ -39,26 +36,69 @@ void ContactCache::Store(std::span<const Contact> contacts) {
       e.normalImpulse[k] = m.points[k].normalImpulse;
       e.tangentImpulse[k] = m.points[k].tangentImpulse;
     }
-    size_t s = Slot(e.key, mask);
-    while (table_[s].key != kEmpty) s = (s + 1) & mask;
-    table_[s] = e;
+    entries_.push_back(e);
   }
+  Finish();
 }
 
-const ContactCache::Entry* ContactCache::Find(uint64_t key) const {
-  if (table_.empty()) return nullptr;
-  const size_t mask = table_.size() - 1;
-  for (size_t s = Slot(key, mask);; s = (s + 1) & mask) {
-    if (table_[s].key == key) return &table_[s];
-    if (table_[s].key == kEmpty) return nullptr;
+void ContactCache::Store(std::span<const Contact> contacts, StageRunner& run) {
+  const int count = static_cast<int>(contacts.size());
+  const int workers = run.Workers();
+  workerCount_.assign(size_t(workers) + 1, 0);
+  // Both passes split the same count with the same grain, so each worker sees the same block.
+  run.For(Stage::kPersistence, count, run.MinHeavyItems(), [&](int begin, int end, int worker) {
+    size_t n = 0;
+    for (int i = begin; i < end; ++i) n += Carries(contacts[i]) ? 1 : 0;
+    workerCount_[size_t(worker) + 1] = n;
+  });
+  for (int w = 0; w < workers; ++w) workerCount_[w + 1] += workerCount_[w];
+  entries_.resize(workerCount_[workers]);
+  run.For(Stage::kPersistence, count, run.MinHeavyItems(), [&](int begin, int end, int worker) {
+    size_t out = workerCount_[worker];
+    for (int i = begin; i < end; ++i) {
+      const Contact& c = contacts[i];
+      if (!Carries(c)) continue;
+      const Manifold& m = c.manifold;
+      Entry e{c.Key(), m.pointCount, {0, 0}, {0, 0}, {0, 0}};
+      for (int k = 0; k < m.pointCount; ++k) {
+        e.ids[k] = m.points[k].id;
+        e.normalImpulse[k] = m.points[k].normalImpulse;
+        e.tangentImpulse[k] = m.points[k].tangentImpulse;
+      }
+      entries_[out++] = e;
+    }
+  });
+  Finish();
+}
+
+void ContactCache::Finish() {
+  auto byKey = [](const Entry& x, const Entry& y) { return x.key < y.key; };
+  if (!std::is_sorted(entries_.begin(), entries_.end(), byKey)) {
+    std::stable_sort(entries_.begin(), entries_.end(), byKey);
   }
 }
 
 int ContactCache::Restore(std::span<Contact> contacts) const {
   int matched = 0;
+  const size_t size = entries_.size();
+  size_t cursor = 0;
+  uint64_t previous = 0;
   for (Contact& c : contacts) {
-    const Entry* e = Find(c.Key());
-    if (e == nullptr) continue;
+    const uint64_t key = c.Key();
+    if (key < previous) cursor = 0;  // out of order: search from the start
+    previous = key;
+    // Gallop from the last position, then binary search the bracket.
+    size_t lo = cursor, hi = cursor, step = 1;
+    while (hi < size && entries_[hi].key < key) {
+      lo = hi + 1;
+      hi += step;
+      step *= 2;
+    }
+    hi = std::min(hi, size);
+    const Entry* e = std::partition_point(entries_.data() + lo, entries_.data() + hi,
+                                          [&](const Entry& x) { return x.key < key; });
+    cursor = size_t(e - entries_.data());
+    if (cursor == size || e->key != key) continue;
     for (int k = 0; k < c.manifold.pointCount; ++k) {
       ManifoldPoint& p = c.manifold.points[k];
       for (int j = 0; j < e->pointCount; ++j) {

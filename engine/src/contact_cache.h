@@ -6,6 +6,7 @@
 #include <span>
 #include <vector>
 
+#include "stage_runner.h"
 #include "world_internal.h"
 
 namespace quadrant {
@@ -13,10 +14,13 @@ namespace quadrant {
 class ContactCache {
  public:
   /// Copies last step's impulses into the points of `contacts` whose pair and feature id match.
-  /// Returns the number of points matched.
+  /// Returns the number of points matched. Fastest when `contacts` are in key order.
   int Restore(std::span<Contact> contacts) const;
-  /// Remembers the impulses of `contacts` for the next step (replacing what was stored).
+  /// Remembers the impulses of `contacts` for the next step (replacing what was stored), on
+  /// the calling thread.
   void Store(std::span<const Contact> contacts);
+  /// The same, in parallel over `run`'s workers (timed as kPersistence).
+  void Store(std::span<const Contact> contacts, StageRunner& run);
   void Clear();
 
  private:
@@ -27,10 +31,12 @@ class ContactCache {
     Real normalImpulse[2];
     Real tangentImpulse[2];
   };
-  static constexpr uint64_t kEmpty = ~uint64_t(0);
-  const Entry* Find(uint64_t key) const;
+  void Finish();
 
-  std::vector<Entry> table_;  // open addressing, linear probing, power-of-two size
+  // Sorted by key (the world's contacts already are; other input is stably sorted, so among
+  // equal keys the first stored is found, as before).
+  std::vector<Entry> entries_;
+  std::vector<size_t> workerCount_;
 };
 
 }  // namespace quadrant

@@ -115,7 +115,7 @@ class ContactSolverBase : public Solver {
       if (count == 0) continue;
       // A constraint pass is cheap per item but the small colours that follow the first one
       // would otherwise stay serial: an eighth of the grain (256 by default).
-      run.For(Stage::kSolve, count, std::max(1, run.MinItems() / 8), [&](int b, int e, int) { fn(begin + b, begin + e); });
+      run.For(Stage::kSolve, count, run.MinHeavyItems(), [&](int b, int e, int) { fn(begin + b, begin + e); });
     }
     const int begin = colorStart_[kColors], end = colorStart_[kColors + 1];
     if (begin < end) run.Serial(Stage::kSolve, [&] { fn(begin, end); });

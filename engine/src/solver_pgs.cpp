@@ -55,7 +55,7 @@ class PgsSolver final : public ContactSolverBase {
 
     run.Serial(Stage::kSolve, [&] { Color(ctx); });
     const int m = static_cast<int>(constraints_.size());
-    run.For(Stage::kSolve, m, run.MinItems(), [&](int b, int e, int) { Prepare<kRotation>(ctx, b, e); });
+    run.For(Stage::kSolve, m, run.MinHeavyItems(), [&](int b, int e, int) { Prepare<kRotation>(ctx, b, e); });
     if (def.effects.warmStarting) ForEachColor(run, [&](int b, int e) { WarmStart<kRotation>(bodies, b, e); });
     const Real invDt = Real(1) / dt;
     if (def.effects.restitution) {
@@ -72,7 +72,7 @@ class PgsSolver final : public ContactSolverBase {
     for (int it = 0; it < def.velocityIterations; ++it) {
       ForEachColor(run, [&](int b, int e) { SolveVelocities<kRotation, kFriction>(bodies, invDt, b, e); });
     }
-    run.For(Stage::kSolve, m, run.MinItems(), [&](int b, int e, int) { StoreImpulses(ctx.contacts, b, e); });
+    run.For(Stage::kSolve, m, run.MinHeavyItems(), [&](int b, int e, int) { StoreImpulses(ctx.contacts, b, e); });
     auto t2 = Clock::now();
 
     const bool correct = def.positionIterations > 0 && m > 0;

@@ -73,7 +73,7 @@ class SoftStepSolver final : public ContactSolverBase {
     auto t0 = Clock::now();
     run.Serial(Stage::kSolve, [&] { Color(ctx); });
     const int m = static_cast<int>(constraints_.size());
-    run.For(Stage::kSolve, m, run.MinItems(), [&](int b, int e, int) { Prepare<kRotation>(ctx, b, e); });
+    run.For(Stage::kSolve, m, run.MinHeavyItems(), [&](int b, int e, int) { Prepare<kRotation>(ctx, b, e); });
     SnapshotPositions(run, bodies);
     if (def.effects.restitution) {
       for (int it = 0; it < def.restitutionIterations; ++it) {
@@ -98,7 +98,7 @@ class SoftStepSolver final : public ContactSolverBase {
       ForEachColor(run, [&](int b, int e) { Solve<kRotation, kFriction, false>(bodies, def, soft, staticSoft, invH, b, e); });
     }
     if (def.effects.restitution && m > 0) ForEachColor(run, [&](int b, int e) { ApplyBounceShifts(bodies, b, e); });
-    run.For(Stage::kSolve, m, run.MinItems(), [&](int b, int e, int) { StoreImpulses(ctx.contacts, b, e); });
+    run.For(Stage::kSolve, m, run.MinHeavyItems(), [&](int b, int e, int) { StoreImpulses(ctx.contacts, b, e); });
     const double total = Ms(t0, Clock::now());
     ctx.profile->integrate += integrateMs;
     ctx.profile->solve += total - integrateMs;

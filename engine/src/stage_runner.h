@@ -25,6 +25,10 @@ class StageRunner {
   int Workers() const { return tasks_.WorkerCount(); }
   /// Sections with fewer items run inline (WorldDef::minParallelItems).
   int MinItems() const { return minItems_; }
+  /// The grain for items that cost about ten times a body update (a pair's manifold, a
+  /// constraint's preparation, a contact's cache lookup): an eighth of MinItems, so a few
+  /// hundred of them already pay for a parallel-for instead of staying on one thread.
+  int MinHeavyItems() const { return std::max(1, minItems_ / 8); }
 
   /// Runs fn(begin, end, worker) over [0, count) in parallel when count >= minParallel,
   /// otherwise inline on the caller as one block (worker 0). Both give the same results for

@@ -145,13 +145,17 @@ struct World::Impl {
   ContactCache cache;
   std::vector<CandidatePair> pairs;
   std::vector<Contact> contacts;
-  std::vector<Contact> sortScratch;
   struct SortKey {
     uint64_t key;
     uint32_t index;
   };
-  std::vector<SortKey> keys, keyScratch;
-  std::vector<uint32_t> radixCounts;
+  // One per worker: the radix sort's buffers and the worker's contacts in key order.
+  struct SortPart {
+    std::vector<SortKey> keys, keyScratch;
+    std::vector<uint32_t> radixCounts;
+    std::vector<Contact> sorted;
+  };
+  std::vector<SortPart> sortParts;
   Profile profile;
   Counters counters;
 
@@ -185,6 +189,8 @@ struct World::Impl {
   void CountContacts(int candidatePairs);
   void NarrowPhase(Real dt);
   void SortContacts();
+  void SortPartContacts(const std::vector<Contact>& in, SortPart& part) const;
+  void MergeSortedParts(int ranges);
 };
 
 World::World(const WorldDef& def) : impl_(std::make_unique<Impl>()) {
@@ -326,10 +332,10 @@ void World::Impl::SubStep(Real dt) {
   auto t1 = Clock::now();
   NarrowPhase(dt);
   auto t2 = Clock::now();
-  run->Serial(Stage::kPersistence, [&] { SortContacts(); });
+  SortContacts();  // times itself (kPersistence)
   const bool persist = def.solver != SolverType::kThesis && def.effects.warmStarting;
   if (persist) {
-    run->For(Stage::kPersistence, static_cast<int>(contacts.size()), run->MinItems(),
+    run->For(Stage::kPersistence, static_cast<int>(contacts.size()), run->MinHeavyItems(),
              [&](int begin, int end, int) { cache.Restore(std::span<Contact>(contacts).subspan(begin, end - begin)); });
   }
   auto t3 = Clock::now();
@@ -344,7 +350,7 @@ void World::Impl::SubStep(Real dt) {
   solver->Step(ctx);
 
   auto t4 = Clock::now();
-  if (persist) run->Serial(Stage::kPersistence, [&] { cache.Store(contacts); });
+  if (persist) cache.Store(contacts, *run);
   auto t5 = Clock::now();
 
   profile.broadPhase += Ms(t0, t1);
@@ -370,14 +376,12 @@ void World::Impl::CountContacts(int candidatePairs) {
 void World::Impl::NarrowPhase(Real dt) {
   workerContacts.resize(run->Workers());
   for (std::vector<Contact>& part : workerContacts) part.clear();
-  run->For(Stage::kNarrowPhase, static_cast<int>(pairs.size()), run->MinItems(),
+  run->For(Stage::kNarrowPhase, static_cast<int>(pairs.size()), run->MinHeavyItems(),
            [&](int begin, int end, int worker) {
              CollidePairs(bodies, def, dt, std::span<const CandidatePair>(pairs).subspan(begin, end - begin),
                           workerContacts[worker]);
            });
-  // Concatenated in worker order: the same sequence as one thread would produce.
-  contacts.clear();
-  for (const std::vector<Contact>& part : workerContacts) contacts.insert(contacts.end(), part.begin(), part.end());
+  // The workers' contacts are put in key order and merged by SortContacts.
 }
 
 void CollidePairs(const Bodies& bodies, const WorldDef& def, Real dt, std::span<const CandidatePair> pairs,
@@ -428,23 +432,46 @@ void CollidePairs(const Bodies& bodies, const WorldDef& def, Real dt, std::span<
 }
 
 // Contacts are solved in pair-key order, not broad-phase order, so the result does not depend
-// on which broad phase found them (and, later, on how threads split the work). The key a*n+b
-// fits 32 bits for up to 65536 bodies; an LSD radix sort of (key, index) in 11-bit digits,
-// then one gather of the contacts, keeps it linear and moves each contact once.
+// on which broad phase found them or on how threads split the work. Keys are unique (the
+// broad phase reports a pair once), so the order is the same whichever way it is reached:
+// every worker sorts its own contacts (in parallel), then the sorted parts are merged in
+// parallel, each worker producing one range of keys.
 void World::Impl::SortContacts() {
-  const size_t count = contacts.size();
-  if (count < 2) return;
+  const int parts = static_cast<int>(workerContacts.size());
+  sortParts.resize(parts);
+  size_t total = 0;
+  for (const std::vector<Contact>& part : workerContacts) total += part.size();
+  // Few contacts: one thread does it all (a parallel-for would cost more than it saves).
+  const bool parallel = total >= size_t(run->MinHeavyItems());
+  run->For(Stage::kPersistence, parts, parallel ? 1 : parts + 1, [&](int begin, int end, int) {
+    for (int p = begin; p < end; ++p) SortPartContacts(workerContacts[p], sortParts[p]);
+  });
+  MergeSortedParts(parallel ? run->Workers() : 1);
+}
+
+// The key a*n+b fits 32 bits for up to 65536 bodies; an LSD radix sort of (key, index) in
+// 11-bit digits, then one gather of the contacts, keeps it linear and moves each contact once.
+void World::Impl::SortPartContacts(const std::vector<Contact>& in, SortPart& part) const {
+  const size_t count = in.size();
+  part.sorted.resize(count);
+  if (count < 2) {
+    std::copy(in.begin(), in.end(), part.sorted.begin());
+    return;
+  }
   const uint64_t n = uint64_t(bodies.Count());
+  std::vector<SortKey>& keys = part.keys;
+  std::vector<SortKey>& keyScratch = part.keyScratch;
   keys.resize(count);
   keyScratch.resize(count);
   uint64_t maxKey = 0;
   for (size_t i = 0; i < count; ++i) {
-    const uint64_t key = uint64_t(contacts[i].a) * n + uint64_t(contacts[i].b);
+    const uint64_t key = uint64_t(in[i].a) * n + uint64_t(in[i].b);
     keys[i] = {key, uint32_t(i)};
     maxKey = std::max(maxKey, key);
   }
   constexpr int kDigitBits = 11;
   constexpr size_t kBuckets = size_t(1) << kDigitBits;
+  std::vector<uint32_t>& radixCounts = part.radixCounts;
   radixCounts.resize(kBuckets + 1);
   for (int shift = 0; shift < 64 && (maxKey >> shift) != 0; shift += kDigitBits) {
     std::fill(radixCounts.begin(), radixCounts.end(), 0u);
@@ -453,9 +480,67 @@ void World::Impl::SortContacts() {
     for (const SortKey& k : keys) keyScratch[radixCounts[(k.key >> shift) & (kBuckets - 1)]++] = k;
     keys.swap(keyScratch);
   }
-  sortScratch.resize(count);
-  for (size_t i = 0; i < count; ++i) sortScratch[i] = contacts[keys[i].index];
-  contacts.swap(sortScratch);
+  for (size_t i = 0; i < count; ++i) part.sorted[i] = in[keys[i].index];
+}
+
+// Merges the sorted parts into `contacts`. The key space is cut into `ranges` ranges at evenly
+// spaced keys of the largest part (the parts are samples of the same scene, so the ranges hold
+// similar numbers of contacts); each range finds its start in every part by binary search, its
+// place in the output by adding those starts, and merges its share on its own.
+void World::Impl::MergeSortedParts(int ranges) {
+  int live = 0, largest = -1;
+  size_t total = 0;
+  for (int p = 0; p < static_cast<int>(sortParts.size()); ++p) {
+    const size_t size = sortParts[p].sorted.size();
+    total += size;
+    if (size == 0) continue;
+    ++live;
+    if (largest < 0 || size > sortParts[largest].sorted.size()) largest = p;
+  }
+  if (live <= 1) {  // one thread's case: the sorted part is the result
+    if (live == 0) contacts.clear();
+    else contacts.swap(sortParts[largest].sorted);
+    return;
+  }
+  contacts.resize(total);
+  const std::vector<Contact>& sample = sortParts[largest].sorted;
+  auto split = [&](int r) -> uint64_t {  // the first key of range r
+    if (r <= 0) return 0;
+    if (r >= ranges) return ~uint64_t(0);
+    return sample[sample.size() * size_t(r) / size_t(ranges)].Key();
+  };
+  auto lowerBound = [](const std::vector<Contact>& v, uint64_t key) -> size_t {
+    if (key == ~uint64_t(0)) return v.size();
+    return size_t(std::partition_point(v.begin(), v.end(), [&](const Contact& c) { return c.Key() < key; }) - v.begin());
+  };
+  const int parts = static_cast<int>(sortParts.size());
+  run->For(Stage::kPersistence, ranges, ranges > 1 ? 1 : 2, [&](int r0, int r1, int) {
+    size_t head[kMaxThreads], end[kMaxThreads];
+    for (int r = r0; r < r1; ++r) {
+      const uint64_t lo = split(r), hi = split(r + 1);
+      size_t out = 0;
+      for (int p = 0; p < parts; ++p) {
+        const std::vector<Contact>& v = sortParts[p].sorted;
+        head[p] = lowerBound(v, lo);
+        end[p] = lowerBound(v, hi);
+        out += head[p];
+      }
+      for (;;) {
+        int best = -1;
+        uint64_t bestKey = 0;
+        for (int p = 0; p < parts; ++p) {
+          if (head[p] == end[p]) continue;
+          const uint64_t key = sortParts[p].sorted[head[p]].Key();
+          if (best < 0 || key < bestKey) {
+            best = p;
+            bestKey = key;
+          }
+        }
+        if (best < 0) break;
+        contacts[out++] = sortParts[best].sorted[head[best]++];
+      }
+    }
+  });
 }
 
 Vec2 World::GetPosition(BodyId id) const { return impl_->bodies.xf[impl_->Dense(id)].p; }
