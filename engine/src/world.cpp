@@ -10,6 +10,7 @@
 #include "broad_phase.h"
 #include "contact_cache.h"
 #include "integrate.h"
+#include "islands.h"
 #include "narrow_phase.h"
 #include "quadrant/task_system.h"
 #include "quadrants_scheme.h"
@@ -64,6 +65,16 @@ void ValidateWorldDef(const WorldDef& d) {
   Require(d.minParallelItems >= 1, "WorldDef.minParallelItems must be >= 1");
   Require(d.scheme == ParallelScheme::kDeterministic || d.scheme == ParallelScheme::kQuadrants,
           "WorldDef.scheme is unknown");
+  Require(IsFinite(d.linearSleepTolerance) && d.linearSleepTolerance >= 0,
+          "WorldDef.linearSleepTolerance must be finite and >= 0");
+  Require(IsFinite(d.angularSleepTolerance) && d.angularSleepTolerance >= 0,
+          "WorldDef.angularSleepTolerance must be finite and >= 0");
+  Require(IsFinite(d.timeToSleep) && d.timeToSleep > 0, "WorldDef.timeToSleep must be finite and > 0");
+  // The quadrants scheme solves private copies of its regions' bodies (quadrants_scheme.cpp)
+  // that carry no sleep state, and its results depend on the thread count anyway; sleeping is
+  // refused there rather than half supported.
+  Require(!(d.effects.sleep && d.scheme == ParallelScheme::kQuadrants),
+          "WorldDef.effects.sleep is not supported with ParallelScheme::kQuadrants (use kDeterministic)");
 }
 
 // std::to_string prints 1e-40 as 0.000000; %g keeps the exponent.
@@ -143,6 +154,7 @@ struct World::Impl {
   std::unique_ptr<QuadrantsScheme> quadrants;  // only for ParallelScheme::kQuadrants
   std::vector<std::vector<Contact>> workerContacts;
   ContactCache cache;
+  Islands islands;  // only used when def.effects.sleep is on
   std::vector<CandidatePair> pairs;
   std::vector<Contact> contacts;
   struct SortKey {
@@ -183,6 +195,14 @@ struct World::Impl {
     box.lower = box.lower + Vec2{std::min(d.x, Real(0)) - margin, std::min(d.y, Real(0)) - margin};
     box.upper = box.upper + Vec2{std::max(d.x, Real(0)) + margin, std::max(d.y, Real(0)) + margin};
     bodies.aabb[i] = box;
+  }
+
+  // Sleep (effects.sleep on only): wakes the islands of sleeping bodies that body i's box
+  // overlaps, and body i's own island.
+  void WakeAround(int i) {
+    if (!def.effects.sleep) return;
+    islands.WakeIslandOf(bodies, i);
+    islands.WakeOverlapping(bodies, bodies.aabb[i]);
   }
 
   void SubStep(Real dt);
@@ -265,13 +285,18 @@ BodyId World::CreateBody(const BodyDef& def) {
   b.aabb.push_back({});
   b.dynamic.push_back(dynamic ? 1 : 0);
   b.slot.push_back(slot);
+  b.awake.push_back(def.type == BodyType::kStatic ? 0 : 1);
+  b.sleepTime.push_back(0);
+  b.islandOf.push_back(0);
   w.UpdateAABB(i, 0);
+  w.WakeAround(i);  // a body created touching a sleeping pile wakes it
   return BodyId{slot, w.generation[slot]};
 }
 
 void World::DestroyBody(BodyId id) {
   Impl& w = *impl_;
   const int i = w.Dense(id);
+  w.WakeAround(i);  // what rested on the body falls again
   const int last = w.bodies.Count() - 1;
   Bodies& b = w.bodies;
   auto moveLast = [&](auto& v) {
@@ -281,7 +306,7 @@ void World::DestroyBody(BodyId id) {
   moveLast(b.type); moveLast(b.xf); moveLast(b.center); moveLast(b.localCenter); moveLast(b.vel);
   moveLast(b.inv); moveLast(b.mass); moveLast(b.inertia); moveLast(b.linearDamping);
   moveLast(b.angularDamping); moveLast(b.shape); moveLast(b.boundRadius); moveLast(b.aabb);
-  moveLast(b.dynamic); moveLast(b.slot);
+  moveLast(b.dynamic); moveLast(b.slot); moveLast(b.awake); moveLast(b.sleepTime); moveLast(b.islandOf);
   if (i != last) w.denseOf[b.slot[i]] = i;
   w.denseOf[id.index] = -1;
   // Generation 0 means null, so skip it when the counter wraps.
@@ -316,11 +341,21 @@ void World::Step(Real dt, int subSteps) {
 void World::Impl::SubStep(Real dt) {
   const int n = bodies.Count();
   auto t0 = Clock::now();
-  run->For(Stage::kBroadPhase, n, run->MinItems(), [&](int begin, int end, int) {
-    for (int i = begin; i < end; ++i) {
-      if (bodies.type[i] != BodyType::kStatic) UpdateAABB(i, dt);
-    }
-  });
+  const bool sleepOn = def.effects.sleep;
+  if (sleepOn) {
+    // Sleeping bodies keep the box they fell asleep with (awake is 0 for them and for statics).
+    run->For(Stage::kBroadPhase, n, run->MinItems(), [&](int begin, int end, int) {
+      for (int i = begin; i < end; ++i) {
+        if (bodies.awake[i]) UpdateAABB(i, dt);
+      }
+    });
+  } else {
+    run->For(Stage::kBroadPhase, n, run->MinItems(), [&](int begin, int end, int) {
+      for (int i = begin; i < end; ++i) {
+        if (bodies.type[i] != BodyType::kStatic) UpdateAABB(i, dt);
+      }
+    });
+  }
   if (quadrants) {
     int pairCount = 0;
     profile.broadPhase += Ms(t0, Clock::now());  // the AABB update; the scheme times the rest
@@ -331,6 +366,16 @@ void World::Impl::SubStep(Real dt) {
   broadPhase->FindPairs(bodies.aabb, bodies.dynamic, pairs, *run);
   auto t1 = Clock::now();
   NarrowPhase(dt);
+  if (sleepOn) {
+    // An awake body touches a sleeping island: the island wakes in this step. Its bodies' pairs
+    // (among themselves and with the ground) were not searched, so the broad and narrow phases
+    // run again with them awake; repeated while that wakes further islands.
+    while (islands.WakeTouched(bodies, contacts) > 0) {
+      for (int i : islands.Changed()) UpdateAABB(i, dt);
+      broadPhase->FindPairs(bodies.aabb, bodies.dynamic, pairs, *run);
+      NarrowPhase(dt);
+    }
+  }
   auto t2 = Clock::now();
   SortContacts();  // times itself (kPersistence)
   const bool persist = def.solver != SolverType::kThesis && def.effects.warmStarting;
@@ -348,6 +393,16 @@ void World::Impl::SubStep(Real dt) {
   ctx.profile = &profile;
   ctx.run = run.get();
   solver->Step(ctx);
+  if (sleepOn) {
+    // Timed as part of the solve: Box2D 2.4 also builds its islands in the solve.
+    const auto ts = Clock::now();
+    run->Serial(Stage::kSolve, [&] {
+      islands.Update(bodies, contacts, def, dt);
+      // A sleeping body keeps its box until it wakes: the tight one at rest, not this step's sweep.
+      for (int i : islands.Changed()) UpdateAABB(i, 0);
+    });
+    profile.solve += Ms(ts, Clock::now());
+  }
 
   auto t4 = Clock::now();
   if (persist) cache.Store(contacts, *run);
@@ -566,6 +621,7 @@ void World::SetLinearVelocity(BodyId id, Vec2 v) {
   Require(std::abs(v.x) <= kMaxInputSpeed && std::abs(v.y) <= kMaxInputSpeed,
           "SetLinearVelocity: velocity is beyond the limit of 1e6 m/s");
   if (impl_->bodies.type[i] == BodyType::kStatic) return;  // static bodies have no velocity
+  if (impl_->def.effects.sleep) impl_->islands.WakeIslandOf(impl_->bodies, i);
   impl_->bodies.vel[i].v = v;
 }
 
@@ -574,6 +630,7 @@ void World::SetAngularVelocity(BodyId id, Real w) {
   Require(IsFinite(w), "SetAngularVelocity: angular velocity is not finite");
   Require(std::abs(w) <= kMaxInputSpeed, "SetAngularVelocity: angular velocity is beyond the limit of 1e6 rad/s");
   if (impl_->bodies.type[i] == BodyType::kStatic || !impl_->def.effects.rotation) return;
+  if (impl_->def.effects.sleep) impl_->islands.WakeIslandOf(impl_->bodies, i);
   impl_->bodies.vel[i].w = w;
 }
 
@@ -583,9 +640,11 @@ void World::SetTransform(BodyId id, Vec2 position, Real angle) {
   Require(IsFinite(position) && IsFinite(angle), "SetTransform: position or angle is not finite");
   Require(std::abs(position.x) <= kMaxCoordinate && std::abs(position.y) <= kMaxCoordinate,
           "SetTransform: position is beyond the coordinate limit of 1e6 m");
+  w.WakeAround(i);  // the body and what rested on it at its old place
   w.bodies.xf[i] = Transform{position, MakeRot(angle)};
   w.bodies.center[i] = TransformPoint(w.bodies.xf[i], w.bodies.localCenter[i]);
   w.UpdateAABB(i, 0);
+  w.WakeAround(i);  // what it lands on
 }
 
 void World::ApplyLinearImpulse(BodyId id, Vec2 impulse, Vec2 worldPoint) {
@@ -596,15 +655,32 @@ void World::ApplyLinearImpulse(BodyId id, Vec2 impulse, Vec2 worldPoint) {
           "ApplyLinearImpulse: point is beyond the coordinate limit of 1e6 m");
   if (w.bodies.type[i] != BodyType::kDynamic) return;
   // Compute in double and check before writing: the world must stay as it was if refused.
-  const double vx = double(w.bodies.vel[i].v.x) + double(w.bodies.inv[i].invMass) * impulse.x;
-  const double vy = double(w.bodies.vel[i].v.y) + double(w.bodies.inv[i].invMass) * impulse.y;
+  // A sleeping body's stored inverse mass is 0; the impulse acts on its awake one.
+  const BodyInverseMass inv = w.def.effects.sleep ? Islands::AwakeInverseMass(w.bodies, i) : w.bodies.inv[i];
+  const double vx = double(w.bodies.vel[i].v.x) + double(inv.invMass) * impulse.x;
+  const double vy = double(w.bodies.vel[i].v.y) + double(inv.invMass) * impulse.y;
   const Vec2 r = worldPoint - w.bodies.center[i];
   const double wz = double(w.bodies.vel[i].w) +
-                    (w.def.effects.rotation ? double(w.bodies.inv[i].invInertia) * (double(r.x) * impulse.y - double(r.y) * impulse.x) : 0.0);
+                    (w.def.effects.rotation ? double(inv.invInertia) * (double(r.x) * impulse.y - double(r.y) * impulse.x) : 0.0);
   Require(std::abs(vx) <= kMaxInputSpeed && std::abs(vy) <= kMaxInputSpeed && std::abs(wz) <= kMaxInputSpeed,
           "ApplyLinearImpulse: the resulting velocity is beyond the limit of 1e6 m/s (rad/s)");
+  if (w.def.effects.sleep) w.islands.WakeIslandOf(w.bodies, i);
   w.bodies.vel[i].v = {Real(vx), Real(vy)};
   w.bodies.vel[i].w = Real(wz);
+}
+
+bool World::IsAwake(BodyId id) const { return impl_->bodies.awake[impl_->Dense(id)] != 0; }
+
+void World::SetAwake(BodyId id, bool awake) {
+  Impl& w = *impl_;
+  const int i = w.Dense(id);
+  if (w.bodies.type[i] != BodyType::kDynamic || !w.def.effects.sleep) return;
+  if (awake) {
+    w.islands.WakeIslandOf(w.bodies, i);
+  } else if (w.bodies.awake[i]) {
+    Islands::Sleep(w.bodies, i, w.bodies.slot[i]);  // an island of its own
+    w.UpdateAABB(i, 0);
+  }
 }
 
 int World::GetBodyCount() const { return impl_->bodies.Count(); }

@@ -40,6 +40,12 @@ struct Bodies {
   std::vector<AABB> aabb;
   std::vector<uint8_t> dynamic;        ///< 1 for dynamic bodies: pairs need at least one
   std::vector<uint32_t> slot;          ///< dense index -> id slot
+  // Sleep (islands.cpp; read and written only when effects.sleep is on). A sleeping dynamic
+  // body has awake 0, dynamic 0, velocity 0 and inverse mass 0, so every stage treats it as
+  // static without a sleep test of its own; waking restores them from mass and inertia.
+  std::vector<uint8_t> awake;          ///< 1 for simulated bodies: kinematic and awake dynamic
+  std::vector<Real> sleepTime;         ///< seconds the body has been below the sleep tolerances
+  std::vector<uint32_t> islandOf;      ///< while asleep: the id of the island it fell asleep with
 
   int Count() const { return static_cast<int>(type.size()); }
 };

@@ -98,6 +98,11 @@ struct Effects {
   /// contacts are created only within speculativeDistance (a fast body can pass through a
   /// thin one).
   bool continuous = true;
+  /// Sleeping (islands.cpp): a group of dynamic bodies connected by contacts that has been slow
+  /// for WorldDef::timeToSleep stops being simulated (no integration, no AABB update, no pairs
+  /// among sleeping or with static bodies) until something touches or moves it. Off: no island
+  /// bookkeeping at all, every body is simulated every step.
+  bool sleep = false;
 };
 
 /// How a world with threadCount > 1 splits its work.
@@ -145,6 +150,12 @@ struct WorldDef {
   /// only to exercise threading on small scenes (the tests do). >= 1.
   int minParallelItems = 2048;
   int quadTreeMaxDepth = 8;             ///< quad-tree levels below the root, 1..12
+  // Sleep settings (used only when effects.sleep is on), Box2D 2.4's defaults. A body is slow
+  // while its speed is at most linearSleepTolerance and its angular speed at most
+  // angularSleepTolerance; an island sleeps once all its bodies have been slow for timeToSleep.
+  Real linearSleepTolerance = Real(0.01);                       ///< m/s, finite, >= 0
+  Real angularSleepTolerance = Real(2.0 / 180.0 * 3.14159265358979);  ///< rad/s (2 deg/s), finite, >= 0
+  Real timeToSleep = Real(0.5);                                 ///< s, finite, > 0
   Effects effects;
 };
 
@@ -232,6 +243,19 @@ class World {
   void SetAngularVelocity(BodyId id, Real w);
   void SetTransform(BodyId id, Vec2 position, Real angle);
   void ApplyLinearImpulse(BodyId id, Vec2 impulse, Vec2 worldPoint);
+
+  /// Whether the body is simulated. Static bodies are never awake (they are not simulated);
+  /// kinematic bodies always are; a dynamic body is asleep only when effects.sleep is on and
+  /// its island fell asleep (or SetAwake(false)). A sleeping body reads back velocity 0.
+  /// Throws quadrant::Error on a stale id.
+  bool IsAwake(BodyId id) const;
+  /// Wakes a sleeping dynamic body and its whole island (true), or puts the body to sleep with
+  /// velocity 0 (false; it wakes again at the next step if an awake body touches it). No effect
+  /// on static or kinematic bodies, and SetAwake(false) has none when effects.sleep is off.
+  /// SetLinearVelocity, SetAngularVelocity, ApplyLinearImpulse and SetTransform wake the body
+  /// too, and creating, destroying or moving a body wakes the sleeping bodies its box overlaps.
+  /// Throws quadrant::Error on a stale id.
+  void SetAwake(BodyId id, bool awake);
 
   int GetBodyCount() const;
   /// Live ids in creation order (destroying a body moves the last body into its place).
