@@ -29,9 +29,7 @@ struct PointConstraint {
   Real normalMass, tangentMass;
   Real normalImpulse, tangentImpulse;
   Real separation;        // at collision time
-  Real relativeVelocity;  // normal approach speed before the solve
   Real bounceShift;       // early-bounce correction (m) applied after integration, 0 if none
-  Real maxNormalImpulse;  // largest accumulated normal impulse this step (did the point push?)
   Real collisionImpulse;  // normal impulse of this step's collisions (pgs), not warm-started
 };
 
@@ -140,8 +138,6 @@ class ContactSolverBase : public Solver {
       cc.pointCount = contact.manifold.pointCount;
       const Vec2 n = cc.normal;
       const Vec2 t = RightPerp(n);
-      const BodyVelocity va = bodies.vel[cc.a];
-      const BodyVelocity vb = bodies.vel[cc.b];
       for (int k = 0; k < cc.pointCount; ++k) {
         const ManifoldPoint& mp = contact.manifold.points[k];
         PointConstraint& pc = cc.points[k];
@@ -149,22 +145,18 @@ class ContactSolverBase : public Solver {
         pc.rB = mp.point - bodies.center[cc.b];
         Real kn = cc.invMassA + cc.invMassB;
         Real kt = kn;
-        Vec2 dv = vb.v - va.v;
         if constexpr (kRotation) {
           const Real rnA = Cross(pc.rA, n), rnB = Cross(pc.rB, n);
           const Real rtA = Cross(pc.rA, t), rtB = Cross(pc.rB, t);
           kn += cc.invIA * rnA * rnA + cc.invIB * rnB * rnB;
           kt += cc.invIA * rtA * rtA + cc.invIB * rtB * rtB;
-          dv += Cross(vb.w, pc.rB) - Cross(va.w, pc.rA);
         }
         pc.normalMass = kn > 0 ? Real(1) / kn : Real(0);
         pc.tangentMass = kt > 0 ? Real(1) / kt : Real(0);
         pc.normalImpulse = mp.normalImpulse;
         pc.tangentImpulse = mp.tangentImpulse;
-        pc.maxNormalImpulse = 0;
         pc.collisionImpulse = 0;
         pc.separation = mp.separation;
-        pc.relativeVelocity = Dot(dv, n);
         pc.bounceShift = 0;
       }
       cc.k12 = 0;
@@ -219,35 +211,6 @@ class ContactSolverBase : public Solver {
     Vec2 dv = vb.v - va.v;
     if constexpr (kRotation) dv += Cross(vb.w, pc.rB) - Cross(va.w, pc.rA);
     return dv;
-  }
-
-  // Restitution after the iterations, from the approach speed measured before them (as Box2D 3
-  // does), so the bounce does not depend on which step the gap closed in.
-  //
-  // A speculative point (still apart by s) that bounces reverses this step although the true
-  // impact happens s/|vn| into it: integrated with the bounce velocity for the whole step, the
-  // pair would end (1 + e) s farther apart than the exact motion puts it. Speed and energy are
-  // right; the position is not, and it would raise every rebound (a ball dropped from 3 m came
-  // back 10 cm higher). The point records that distance and ApplyBounceShifts moves the pair
-  // back by it after integration, which makes an isolated collision exact in both.
-  template <bool kRotation>
-  void ApplyRestitution(Bodies& bodies, Real threshold, int begin, int end) {
-    for (int c = begin; c < end; ++c) {
-      ContactConstraint& cc = constraints_[c];
-      if (cc.restitution == 0) continue;
-      for (int k = 0; k < cc.pointCount; ++k) {
-        PointConstraint& pc = cc.points[k];
-        // Only points that approached fast enough and actually pushed bounce.
-        if (pc.relativeVelocity > -threshold || pc.maxNormalImpulse == 0) continue;
-        const Real vn = Dot(RelativeVelocity<kRotation>(bodies.vel[cc.a], bodies.vel[cc.b], pc), cc.normal);
-        const Real target = -cc.restitution * pc.relativeVelocity;
-        const Real newImpulse = std::max(pc.normalImpulse - pc.normalMass * (vn - target), Real(0));
-        const Real lambda = newImpulse - pc.normalImpulse;
-        pc.normalImpulse = newImpulse;
-        ApplyImpulse<kRotation>(bodies, cc, pc, lambda * cc.normal);
-        if (pc.separation > 0) pc.bounceShift = (Real(1) + cc.restitution) * pc.separation;
-      }
-    }
   }
 
   // Restitution as pairwise collisions, before the velocity iterations (pgs). Each contact
@@ -324,9 +287,14 @@ class ContactSolverBase : public Solver {
     return any;
   }
 
-  // Moves each pair that bounced early back together along the normal by its recorded
-  // distance, split by inverse mass (the linear part only: enough for the bounce, and it cannot
-  // spin a body). Only bodies that move are touched.
+  // A speculative point (still apart by s) that bounces reverses this step although the true
+  // impact happens s/|vn| into it: integrated with the bounce velocity for the whole step, the
+  // pair would end (1 + e) s farther apart than the exact motion puts it. Speed and energy are
+  // right; the position is not, and it would raise every rebound (a ball dropped from 3 m came
+  // back 10 cm higher). ApplyCollisions records that distance and this moves each pair back
+  // together along the normal by it after integration, split by inverse mass (the linear part
+  // only: enough for the bounce, and it cannot spin a body), which makes an isolated collision
+  // exact in both. Only bodies that move are touched.
   void ApplyBounceShifts(Bodies& bodies, int begin, int end) {
     for (int c = begin; c < end; ++c) {
       const ContactConstraint& cc = constraints_[c];

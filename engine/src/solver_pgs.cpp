@@ -129,7 +129,6 @@ class PgsSolver final : public ContactSolverBase {
           const Real newImpulse = std::max(pc.normalImpulse - pc.normalMass * (vn + gap), Real(0));
           const Real lambda = newImpulse - pc.normalImpulse;
           pc.normalImpulse = newImpulse;
-          pc.maxNormalImpulse = std::max(pc.maxNormalImpulse, newImpulse);
           apply(pc, lambda * n);
         }
       }
@@ -166,8 +165,6 @@ class PgsSolver final : public ContactSolverBase {
     }
     p0.normalImpulse = x0;
     p1.normalImpulse = x1;
-    p0.maxNormalImpulse = std::max(p0.maxNormalImpulse, x0);
-    p1.maxNormalImpulse = std::max(p1.maxNormalImpulse, x1);
   }
 
   template <bool kRotation>

@@ -141,7 +141,6 @@ class SoftStepSolver final : public ContactSolverBase {
         const Real newImpulse = std::max(pc.normalImpulse + impulse, Real(0));
         const Real lambda = newImpulse - pc.normalImpulse;
         pc.normalImpulse = newImpulse;
-        pc.maxNormalImpulse = std::max(pc.maxNormalImpulse, newImpulse);
         apply(pc, lambda * n);
       }
       if constexpr (kFriction) {
