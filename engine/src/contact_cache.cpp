@@ -25,18 +25,21 @@ bool Carries(const Contact& c) {
 
 void ContactCache::Clear() { entries_.clear(); }
 
+ContactCache::Entry ContactCache::MakeEntry(const Contact& c) {
+  const Manifold& m = c.manifold;
+  Entry e{c.Key(), m.pointCount, {0, 0}, {0, 0}, {0, 0}};
+  for (int k = 0; k < m.pointCount; ++k) {
+    e.ids[k] = m.points[k].id;
+    e.normalImpulse[k] = m.points[k].normalImpulse;
+    e.tangentImpulse[k] = m.points[k].tangentImpulse;
+  }
+  return e;
+}
+
 void ContactCache::Store(std::span<const Contact> contacts) {
   entries_.clear();
   for (const Contact& c : contacts) {
-    if (!Carries(c)) continue;
-    const Manifold& m = c.manifold;
-    Entry e{c.Key(), m.pointCount, {0, 0}, {0, 0}, {0, 0}};
-    for (int k = 0; k < m.pointCount; ++k) {
-      e.ids[k] = m.points[k].id;
-      e.normalImpulse[k] = m.points[k].normalImpulse;
-      e.tangentImpulse[k] = m.points[k].tangentImpulse;
-    }
-    entries_.push_back(e);
+    if (Carries(c)) entries_.push_back(MakeEntry(c));
   }
   Finish();
 }
@@ -56,16 +59,7 @@ void ContactCache::Store(std::span<const Contact> contacts, StageRunner& run) {
   run.For(Stage::kPersistence, count, run.MinHeavyItems(), [&](int begin, int end, int worker) {
     size_t out = workerCount_[worker];
     for (int i = begin; i < end; ++i) {
-      const Contact& c = contacts[i];
-      if (!Carries(c)) continue;
-      const Manifold& m = c.manifold;
-      Entry e{c.Key(), m.pointCount, {0, 0}, {0, 0}, {0, 0}};
-      for (int k = 0; k < m.pointCount; ++k) {
-        e.ids[k] = m.points[k].id;
-        e.normalImpulse[k] = m.points[k].normalImpulse;
-        e.tangentImpulse[k] = m.points[k].tangentImpulse;
-      }
-      entries_[out++] = e;
+      if (Carries(contacts[i])) entries_[out++] = MakeEntry(contacts[i]);
     }
   });
   Finish();

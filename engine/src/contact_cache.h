@@ -31,6 +31,7 @@ class ContactCache {
     Real normalImpulse[2];
     Real tangentImpulse[2];
   };
+  static Entry MakeEntry(const Contact& c);
   void Finish();
 
   // Sorted by key (the world's contacts already are; other input is stably sorted, so among
