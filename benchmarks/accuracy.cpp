@@ -382,13 +382,9 @@ using quadrant::report::SplitList;
 }
 
 int PositiveInt(const std::string& flag, const std::string& value, int most) {
-  char* end = nullptr;
-  errno = 0;
-  const long v = std::strtol(value.c_str(), &end, 10);
-  if (value.empty() || *end != '\0' || errno != 0 || v < 1 || v > most) {
-    Usage(flag + " must be an integer in [1, " + std::to_string(most) + "]");
-  }
-  return int(v);
+  const std::optional<int> v = quadrant::report::ParseInt(value, 1, most);
+  if (!v) Usage(flag + " must be an integer in [1, " + std::to_string(most) + "]");
+  return *v;
 }
 
 Args Parse(int argc, char** argv) {

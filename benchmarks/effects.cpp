@@ -223,13 +223,9 @@ std::optional<double> PositionDifference(const Comparison& c) {
 }
 
 int IntArg(const std::string& flag, const std::string& value, int least, int most) {
-  char* end = nullptr;
-  errno = 0;
-  const long v = std::strtol(value.c_str(), &end, 10);
-  if (value.empty() || *end != '\0' || errno != 0 || v < least || v > most) {
-    Usage(flag + " must be an integer in [" + std::to_string(least) + ", " + std::to_string(most) + "]");
-  }
-  return int(v);
+  const std::optional<int> v = quadrant::report::ParseInt(value, least, most);
+  if (!v) Usage(flag + " must be an integer in [" + std::to_string(least) + ", " + std::to_string(most) + "]");
+  return *v;
 }
 
 Args Parse(int argc, char** argv) {

@@ -56,13 +56,9 @@ Args Parse(int argc, char** argv) {
     } else if (flag == "--cases") {
       a.cases = SplitList(value);
     } else if (flag == "--soak-steps") {
-      char* end = nullptr;
-      errno = 0;
-      const long v = std::strtol(value.c_str(), &end, 10);
-      if (value.empty() || *end != '\0' || errno != 0 || v < 1 || v > 100000000) {
-        Usage("--soak-steps must be an integer in [1, 1e8]");
-      }
-      a.soakSteps = int(v);
+      const std::optional<int> v = quadrant::report::ParseInt(value, 1, 100000000);
+      if (!v) Usage("--soak-steps must be an integer in [1, 1e8]");
+      a.soakSteps = *v;
     } else {
       Usage("unknown option " + flag);
     }

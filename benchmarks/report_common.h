@@ -2,7 +2,9 @@
 // scalars, Markdown cells, list options and the run's context. Header-only: no library needed.
 #pragma once
 
+#include <cerrno>
 #include <cmath>
+#include <optional>
 #include <cstdio>
 #include <cstdlib>
 #include <ctime>
@@ -12,6 +14,16 @@
 #include <vector>
 
 namespace quadrant::report {
+
+/// A whole decimal integer in [least, most], or nothing (empty, trailing characters, overflow
+/// or out of range): the caller reports the flag.
+inline std::optional<int> ParseInt(const std::string& text, long least, long most) {
+  char* end = nullptr;
+  errno = 0;
+  const long v = std::strtol(text.c_str(), &end, 10);
+  if (text.empty() || *end != '\0' || errno != 0 || v < least || v > most) return std::nullopt;
+  return int(v);
+}
 
 /// The items of a comma-separated command-line list ("a,b,c"), empty items dropped.
 inline std::vector<std::string> SplitList(const std::string& text) {
