@@ -411,8 +411,10 @@ void RunJob(benchmark::State& state, const Job& job) {
   // RSS growth (peak) while making, loading and warming up this adapter, MB; see MemoryProbe.
   state.counters["memory_mb"] = Counter(memoryMb);
   state.counters["heap_mb"] = Counter(heapMb);
-  // Load balance over the timed steps (engines that time their stages): thread CPU work over
-  // the critical path, the speed-up this thread count allows whatever the machine's cores.
+  // Load balance over the timed steps (engines that time their stages): work over the critical
+  // path, the speed-up this thread count allows whatever the machine's cores (see StageRunner:
+  // thread CPU time when oversubscribed, wall time otherwise; one thread is not measured, its
+  // bound is 1).
   const auto stagesAfter = adapter->StageTotals();
   double work = 0, critical = 0;
   for (size_t k = 0; k < stagesAfter.size() && k < stagesBefore.size(); ++k) {
@@ -420,7 +422,11 @@ void RunJob(benchmark::State& state, const Job& job) {
     if (stagesAfter[k].first.starts_with("work_")) work += delta;
     if (stagesAfter[k].first.starts_with("critical_")) critical += delta;
   }
-  if (critical > 0) state.counters["balance_bound"] = Counter(work / critical);
+  if (critical > 0) {
+    state.counters["balance_bound"] = Counter(work / critical);
+  } else if (!stagesAfter.empty() && job.threads == 1) {
+    state.counters["balance_bound"] = Counter(1.0);
+  }
   state.SetLabel(fmt::format("{:016x}", adapter->StateHash()));
 }
 
