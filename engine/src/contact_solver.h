@@ -106,14 +106,18 @@ class ContactSolverBase : public Solver {
     constraints_.resize(m);
   }
 
+  static int MinColorItems(const StageRunner& run) { return std::max(1, run.MinItems() / 32); }
+
   template <class Fn>
   void ForEachColor(StageRunner& run, Fn&& fn) {
     for (int color = 0; color < kColors; ++color) {
       const int begin = colorStart_[color], count = colorStart_[color + 1] - begin;
       if (count == 0) continue;
-      // A constraint pass is cheap per item but the small colours that follow the first one
-      // would otherwise stay serial: an eighth of the grain (256 by default).
-      run.For(Stage::kSolve, count, run.MinHeavyItems(), [&](int b, int e, int) { fn(begin + b, begin + e); });
+      // The first colour holds most constraints (polygon stress, N = 16000: 1259, 140 and 9 of
+      // 1408); the next ones are small but would stay serial through every pass at the
+      // heavy-item grain (256 by default). A 32nd of the grain (64) splits them too: the solve
+      // stage's load-balance bound at 4 threads went from 2.35 to 3.05 on that scene.
+      run.For(Stage::kSolve, count, MinColorItems(run), [&](int b, int e, int) { fn(begin + b, begin + e); });
     }
     const int begin = colorStart_[kColors], end = colorStart_[kColors + 1];
     if (begin < end) run.Serial(Stage::kSolve, [&] { fn(begin, end); });
