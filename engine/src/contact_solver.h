@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <bit>
 #include <chrono>
+#include <utility>
 #include <vector>
 
 #include "integrate.h"
@@ -75,38 +76,51 @@ class ContactSolverBase : public Solver {
 
   // Greedy colouring in contact order (deterministic): each constraint takes the lowest colour
   // that neither of its dynamic bodies has yet. Then the constraints' order is grouped by colour.
-  void Color(const StepContext& ctx) {
+  //
+  // The greedy pass is inherently serial (a constraint's colour depends on every earlier one
+  // that shares a body), so everything else is moved out of it: the contacts' dynamic ends are
+  // gathered in parallel first (the serial loop then reads 8 bytes per contact, in order, not
+  // the contact and both bodies' masses), and the body masks are cleared in parallel after.
+  void Color(StageRunner& run, const StepContext& ctx) {
     const Bodies& bodies = *ctx.bodies;
     const int m = static_cast<int>(ctx.contacts.size());
-    bodyColors_.resize(bodies.Count(), 0);
+    bodyColors_.resize(bodies.Count(), 0);  // all zero between steps
+    ends_.resize(m);
     colorOf_.resize(m);
-    int counts[kColors + 1] = {};
-    for (int c = 0; c < m; ++c) {
-      const int a = ctx.contacts[c].a, b = ctx.contacts[c].b;
-      const bool dynA = bodies.inv[a].invMass > 0, dynB = bodies.inv[b].invMass > 0;
-      const uint64_t used = (dynA ? bodyColors_[a] : 0) | (dynB ? bodyColors_[b] : 0);
-      const int color = used == ~uint64_t(0) ? kColors : std::countr_one(used);
-      colorOf_[c] = color;
-      ++counts[color];
-      if (color < kColors) {
-        if (dynA) bodyColors_[a] |= uint64_t(1) << color;
-        if (dynB) bodyColors_[b] |= uint64_t(1) << color;
+    run.For(Stage::kSolve, m, run.MinHeavyItems(), [&](int begin, int end, int) {
+      for (int c = begin; c < end; ++c) {
+        const int a = ctx.contacts[c].a, b = ctx.contacts[c].b;
+        ends_[c] = {bodies.inv[a].invMass > 0 ? a : -1, bodies.inv[b].invMass > 0 ? b : -1};
       }
+    });
+    run.Serial(Stage::kSolve, [&] {
+      int counts[kColors + 1] = {};
+      for (int c = 0; c < m; ++c) {
+        const auto [a, b] = ends_[c];
+        const uint64_t used = (a >= 0 ? bodyColors_[a] : 0) | (b >= 0 ? bodyColors_[b] : 0);
+        const int color = used == ~uint64_t(0) ? kColors : std::countr_one(used);
+        colorOf_[c] = color;
+        ++counts[color];
+        if (color < kColors) {
+          if (a >= 0) bodyColors_[a] |= uint64_t(1) << color;
+          if (b >= 0) bodyColors_[b] |= uint64_t(1) << color;
+        }
+      }
+      colorStart_.assign(kColors + 2, 0);
+      for (int k = 0; k <= kColors; ++k) colorStart_[k + 1] = colorStart_[k] + counts[k];
+      order_.resize(m);
+      fill_.assign(colorStart_.begin(), colorStart_.end() - 1);
+      for (int c = 0; c < m; ++c) order_[fill_[colorOf_[c]]++] = c;
+    });
+    if (m > 0) {  // leave the masks zeroed for the next step
+      run.For(Stage::kSolve, bodies.Count(), run.MinItems(), [&](int begin, int end, int) {
+        std::fill(bodyColors_.begin() + begin, bodyColors_.begin() + end, uint64_t(0));
+      });
     }
-    for (int c = 0; c < m; ++c) {  // leave the masks zeroed for the next step
-      bodyColors_[ctx.contacts[c].a] = 0;
-      bodyColors_[ctx.contacts[c].b] = 0;
-    }
-    colorStart_.assign(kColors + 2, 0);
-    for (int k = 0; k <= kColors; ++k) colorStart_[k + 1] = colorStart_[k] + counts[k];
-    order_.resize(m);
-    std::vector<int>& fill = fill_;
-    fill.assign(colorStart_.begin(), colorStart_.end() - 1);
-    for (int c = 0; c < m; ++c) order_[fill[colorOf_[c]]++] = c;
     constraints_.resize(m);
   }
 
-  static int MinColorItems(const StageRunner& run) { return std::max(1, run.MinItems() / 32); }
+  static int MinColorItems(const StageRunner& run) { return std::max(1, run.MinItems() / 128); }
 
   template <class Fn>
   void ForEachColor(StageRunner& run, Fn&& fn) {
@@ -114,9 +128,11 @@ class ContactSolverBase : public Solver {
       const int begin = colorStart_[color], count = colorStart_[color + 1] - begin;
       if (count == 0) continue;
       // The first colour holds most constraints (polygon stress, N = 16000: 1259, 140 and 9 of
-      // 1408); the next ones are small but would stay serial through every pass at the
-      // heavy-item grain (256 by default). A 32nd of the grain (64) splits them too: the solve
-      // stage's load-balance bound at 4 threads went from 2.35 to 3.05 on that scene.
+      // 1408; circle stress: 679 and 39 of 718); the next ones are small but would stay serial
+      // through every pass (about 20 per step) at the heavy-item grain (256 by default). They
+      // are split from a 128th of the grain (16): the solve stage's load-balance bound at 4
+      // threads on polygon stress went from 2.35 to 3.05 at 64; at 2 threads splitting from 16
+      // measured no slower than from 64 (the sync is about a microsecond).
       run.For(Stage::kSolve, count, MinColorItems(run), [&](int b, int e, int) { fn(begin + b, begin + e); });
     }
     const int begin = colorStart_[kColors], end = colorStart_[kColors + 1];
@@ -375,6 +391,7 @@ class ContactSolverBase : public Solver {
   std::vector<ContactConstraint> constraints_;
   std::vector<uint64_t> bodyColors_;
   std::vector<int> colorOf_, colorStart_, order_, fill_;
+  std::vector<std::pair<int, int>> ends_;  // per contact: its dynamic bodies, -1 for others
   std::vector<Vec2> center0_;
   std::vector<Rot> rot0_;
 };

@@ -53,7 +53,7 @@ class PgsSolver final : public ContactSolverBase {
     IntegrateVelocities(bodies, def, dt, run);
     auto t1 = Clock::now();
 
-    run.Serial(Stage::kSolve, [&] { Color(ctx); });
+    Color(run, ctx);
     const int m = static_cast<int>(constraints_.size());
     run.For(Stage::kSolve, m, run.MinHeavyItems(), [&](int b, int e, int) { Prepare<kRotation>(ctx, b, e); });
     if (def.effects.warmStarting) ForEachColor(run, [&](int b, int e) { WarmStart<kRotation>(bodies, b, e); });

@@ -71,7 +71,7 @@ class SoftStepSolver final : public ContactSolverBase {
 
     double integrateMs = 0;
     auto t0 = Clock::now();
-    run.Serial(Stage::kSolve, [&] { Color(ctx); });
+    Color(run, ctx);
     const int m = static_cast<int>(constraints_.size());
     run.For(Stage::kSolve, m, run.MinHeavyItems(), [&](int b, int e, int) { Prepare<kRotation>(ctx, b, e); });
     SnapshotPositions(run, bodies);
