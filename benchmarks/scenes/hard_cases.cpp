@@ -148,6 +148,24 @@ Scene MakePyramid(int base, Vec2 offset, Mixing mixing) {
   return s;
 }
 
+Scene MakePyramidField(int pyramids, int base, Mixing mixing) {
+  RequireRange(pyramids, 1, 10000, "pyramid field count");
+  RequireRange(base, 1, 100, "pyramid field base");
+  Scene s = BaseScene("pyramid_field");
+  const Real f = Coef(mixing, Real(0.6));
+  const Real pitch = Real(1.1);
+  // Neighbouring pyramids 2 m apart at their bases, so they never touch.
+  const Real spacing = pitch * Real(base) + 2;
+  const Real halfWidth = Real(0.5) * spacing * Real(pyramids) + 5;
+  s.bodies.push_back(Ground({0, 0}, halfWidth, f));
+  for (int k = 0; k < pyramids; ++k) {
+    const Real x = (Real(k) - Real(0.5) * Real(pyramids - 1)) * spacing;
+    AddPyramidBoxes(s, base, {x, 0}, pitch, 1, f);
+  }
+  s.bounds = Bounds({-halfWidth, -1}, {halfWidth, Real(base) + 1});
+  return s;
+}
+
 Scene MakeMassRatio(int ratio, Mixing mixing) {
   const Real f = Coef(mixing, Real(0.6));
   if (ratio == 100) {

@@ -63,6 +63,10 @@ Scene MakeVerticalStack(int count = 15, Mixing mixing = Mixing::kBox2d);
 /// Ground, then base (base+1)/2 1 m boxes row by row from the bottom (friction 0.6, centres 1.1 m
 /// apart in a row, rows 1 m apart), everything shifted by `offset`. The last body is the apex.
 Scene MakePyramid(int base = 20, Vec2 offset = {}, Mixing mixing = Mixing::kBox2d);
+/// Ground, then `pyramids` pyramids of base `base` as MakePyramid builds them, side by side 2 m
+/// apart, left to right: a wide pile of small stacks that comes to rest (the effects tool's sleep
+/// scene; a single pyramid of 2000 boxes does not settle at 8 iterations).
+Scene MakePyramidField(int pyramids, int base, Mixing mixing = Mixing::kBox2d);
 /// ratio 100: ground, a base-10 pyramid of 1 m boxes (density 1), then a 1 m box of density 100
 /// on its apex. ratio 400: ground, two 1 m boxes (1 kg) at x = -9 and 9, then a 20 m x 1 m plank
 /// of 400 kg (density 20) on them. Friction 0.6. Throws quadrant::Error for other ratios.

@@ -6,7 +6,9 @@
 #include <vector>
 
 #include "adapter.h"
+#include "quadrant/error.h"
 #include "quadrant/math.h"
+#include "scenes.h"
 
 namespace quadrant::scene {
 namespace {
@@ -46,6 +48,33 @@ TEST(QuadrantAdapterSleep, QuadrantsSchemeRefusesSleep) {
   EXPECT_FALSE(a->Caps().sleep);
   EXPECT_THROW(a->Load(CreepingBody(true), 2), Unsupported);
   EXPECT_NO_THROW(a->Load(CreepingBody(false), 2));
+}
+
+// The effects tool's sleep scene must really come to rest, or its sleep row would time an
+// engine that cannot sleep: after 120 steps every box of the field reads velocity 0 and the
+// state no longer changes.
+TEST(QuadrantAdapterSleep, PyramidFieldFallsAsleep) {
+  Scene field = MakePyramidField(4, 8);
+  ASSERT_EQ(field.bodies.size(), 1u + 4u * 36u);
+  field.effects.sleep = true;
+  auto a = MakeAdapter("quadrant");
+  a->Load(field, 1);
+  for (int s = 0; s < 120; ++s) a->Step();
+  const uint64_t settled = a->StateHash();
+  std::vector<BodyState> out;
+  a->ReadBodies(out);
+  for (size_t i = 1; i < out.size(); ++i) {
+    EXPECT_EQ(out[i].velocity.x, 0) << "box " << i;
+    EXPECT_EQ(out[i].velocity.y, 0) << "box " << i;
+  }
+  for (int s = 0; s < 30; ++s) a->Step();
+  EXPECT_EQ(a->StateHash(), settled);
+}
+
+TEST(QuadrantAdapterSleep, PyramidFieldRefusesBadSizes) {
+  EXPECT_THROW(MakePyramidField(0, 8), Error);
+  EXPECT_THROW(MakePyramidField(4, 0), Error);
+  EXPECT_THROW(MakePyramidField(4, 101), Error);
 }
 
 }  // namespace
