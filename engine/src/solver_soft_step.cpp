@@ -76,10 +76,11 @@ class SoftStepSolver final : public ContactSolverBase {
     run.For(Stage::kSolve, m, run.MinHeavyItems(), [&](int b, int e, int) { Prepare<kRotation>(ctx, b, e); });
     SnapshotPositions(run, bodies);
     if (def.effects.restitution) {
+      const Vec2 stepGravity = def.effects.gravity ? ctx.dt * def.gravity : Vec2{};
       for (int it = 0; it < def.restitutionIterations; ++it) {
         std::atomic<bool> collided{false};
         ForEachColor(run, [&](int b, int e) {
-          if (ApplyCollisions<kRotation>(bodies, def.restitutionThreshold, Real(1) / ctx.dt, b, e)) {
+          if (ApplyCollisions<kRotation>(bodies, def.restitutionThreshold, Real(1) / ctx.dt, stepGravity, b, e)) {
             collided.store(true, std::memory_order_relaxed);
           }
         });
