@@ -37,9 +37,9 @@ void IntegrateVelocitiesImpl(Bodies& bodies, const WorldDef& def, Real dt, Stage
 }
 
 template <bool kSleep>
-void IntegratePositionsImpl(Bodies& bodies, const WorldDef& def, Real dt, int begin, int end) {
+void IntegratePositionsImpl(Bodies& bodies, const WorldDef& def, Real dt, Real stepDt, int begin, int end) {
   const Real maxSpeed2 = def.maxLinearSpeed * def.maxLinearSpeed;
-  const Real maxAngularSpeed = def.maxRotation / dt;
+  const Real maxAngularSpeed = def.maxRotation / stepDt;
   const bool rotation = def.effects.rotation;
   for (int i = begin; i < end; ++i) {
     if constexpr (kSleep) {
@@ -71,15 +71,24 @@ void IntegrateVelocities(Bodies& bodies, const WorldDef& def, Real dt, StageRunn
 }
 
 void IntegratePositions(Bodies& bodies, const WorldDef& def, Real dt, StageRunner& run) {
-  run.For(Stage::kIntegrate, bodies.Count(), run.MinItems(),
-          [&](int begin, int end, int) { IntegratePositionsRange(bodies, def, dt, begin, end); });
+  IntegratePositions(bodies, def, dt, dt, run);
+}
+
+void IntegratePositions(Bodies& bodies, const WorldDef& def, Real dt, Real stepDt, StageRunner& run) {
+  run.For(Stage::kIntegrate, bodies.Count(), run.MinItems(), [&](int begin, int end, int) {
+    if (def.effects.sleep) {
+      IntegratePositionsImpl<true>(bodies, def, dt, stepDt, begin, end);
+    } else {
+      IntegratePositionsImpl<false>(bodies, def, dt, stepDt, begin, end);
+    }
+  });
 }
 
 void IntegratePositionsRange(Bodies& bodies, const WorldDef& def, Real dt, int begin, int end) {
   if (def.effects.sleep) {
-    IntegratePositionsImpl<true>(bodies, def, dt, begin, end);
+    IntegratePositionsImpl<true>(bodies, def, dt, dt, begin, end);
   } else {
-    IntegratePositionsImpl<false>(bodies, def, dt, begin, end);
+    IntegratePositionsImpl<false>(bodies, def, dt, dt, begin, end);
   }
 }
 

@@ -15,6 +15,12 @@ void IntegrateVelocities(Bodies& bodies, const WorldDef& def, Real dt, StageRunn
 /// them (numerical guards, as in Box2D).
 void IntegratePositions(Bodies& bodies, const WorldDef& def, Real dt, StageRunner& run);
 
+/// The same over a sub-step dt of a world step stepDt: the angular speed limit stays
+/// def.maxRotation / stepDt. It is a limit per world step (WorldDef::maxRotation), which a
+/// sub-stepping solver would otherwise raise by its sub-step count (as Box2D 3: B2_MAX_ROTATION
+/// times the inverse of the whole step).
+void IntegratePositions(Bodies& bodies, const WorldDef& def, Real dt, Real stepDt, StageRunner& run);
+
 /// The same for bodies [begin, end), on the calling thread.
 void IntegratePositionsRange(Bodies& bodies, const WorldDef& def, Real dt, int begin, int end);
 

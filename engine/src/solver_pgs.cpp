@@ -62,7 +62,7 @@ class PgsSolver final : public ContactSolverBase {
       for (int it = 0; it < def.restitutionIterations; ++it) {
         std::atomic<bool> collided{false};
         ForEachColor(run, [&](int b, int e) {
-          if (ApplyCollisions<kRotation>(bodies, def.restitutionThreshold, invDt, b, e)) {
+          if (ApplyCollisions<kRotation>(bodies, def.restitutionThreshold, invDt, Vec2{}, b, e)) {
             collided.store(true, std::memory_order_relaxed);
           }
         });

@@ -1,5 +1,6 @@
 // The hard cases on Quadrant: every case's criterion (benchmarks/scenes/hard_case_checks.cpp, the
-// same code tools/quadrant hardcases runs) must pass. The soak runs 3000 steps here instead of the
+// same code tools/quadrant hardcases runs) must pass, with pgs (the default) and with soft_step
+// (except the cases listed as its known failures). The soak runs 3000 steps here instead of the
 // tool's 100000 (2.5 minutes instead of 28 of simulated time) to keep the suite, which CI also
 // runs under ASan, fast. Also: the scene builders' contracts (body counts, order, materials) and
 // the penetration measure the criteria rely on.
@@ -38,6 +39,42 @@ TEST_P(QuadrantHardCase, Passes) {
 }
 
 INSTANTIATE_TEST_SUITE_P(All, QuadrantHardCase, ::testing::ValuesIn(HardCaseNames()),
+                         [](const ::testing::TestParamInfo<std::string>& info) { return info.param; });
+
+// The soft step solver (Box2D 3's family, 4 sub-steps) on the same cases and criteria. The cases
+// it does not pass yet are listed with the reason; they still run, are reported as skipped with
+// their figures, and fail the test once they pass (so the list cannot go stale).
+struct KnownFailure {
+  const char* name;
+  const char* reason;
+};
+constexpr KnownFailure kSoftStepKnownFailures[] = {
+    {"mass_ratio_100", "soft contacts sag by load / (m_eff (2 pi 30 Hz)^2): 0.10 m under 100 kg (limit 0.02)"},
+    {"mass_ratio_400", "soft contacts sag by load / (m_eff (2 pi 30 Hz)^2): 1000 N per point on a 1 kg box's "
+                       "corner (m_eff 0.4 kg) is 0.071 m (limit 0.02)"},
+    {"overlap_recovery", "push-out at 3 m/s per contact adds up along the rows; one relax pass cannot take it "
+                         "back: 10.8 m/s (limit 2)"},
+    {"confined", "push-out at 3 m/s per contact adds up across the 25 x 25 lattice: 15.6 m/s (limit 2)"},
+};
+
+class QuadrantSoftStepHardCase : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(QuadrantSoftStepHardCase, Passes) {
+  HardCaseOptions options;
+  options.soakSteps = kTestSoakSteps;
+  const HardCaseResult r = RunHardCase(GetParam(), "quadrant:soft_step", options);
+  EXPECT_TRUE(r.supported) << r.unsupported;
+  EXPECT_FALSE(r.measured.empty());
+  for (const KnownFailure& k : kSoftStepKnownFailures) {
+    if (GetParam() != k.name) continue;
+    EXPECT_FALSE(r.pass) << GetParam() << " passes on soft_step now: remove it from kSoftStepKnownFailures";
+    if (!r.pass) GTEST_SKIP() << "known soft_step failure (" << k.reason << ")\n" << Describe(r);
+    return;
+  }
+  EXPECT_TRUE(r.pass) << Describe(r);
+}
+
+INSTANTIATE_TEST_SUITE_P(All, QuadrantSoftStepHardCase, ::testing::ValuesIn(HardCaseNames()),
                          [](const ::testing::TestParamInfo<std::string>& info) { return info.param; });
 
 TEST(HardCases, NamesAndRegistry) {

@@ -125,7 +125,7 @@ struct WorldDef {
   int positionIterations = 3;           ///< pgs position pass, >= 0 (Box2D 2.4 default 3)
   /// Restitution passes, >= 1. pgs: most passes of pairwise collisions before the velocity
   /// iterations (they stop early once no contact collides; a row of k touching bodies needs
-  /// about k / 2). soft_step: restitution passes after the sub-steps.
+  /// about k / 2). soft_step: the same, before its sub-steps.
   int restitutionIterations = 4;
   int softSubSteps = 4;                 ///< soft_step sub-steps per step, >= 1 (Box2D 3 default 4)
   Real contactHertz = 30;               ///< soft_step contact stiffness (Hz), > 0 (Box2D 3: 30)
