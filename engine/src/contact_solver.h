@@ -120,19 +120,26 @@ class ContactSolverBase : public Solver {
     constraints_.resize(m);
   }
 
-  static int MinColorItems(const StageRunner& run) { return std::max(1, run.MinItems() / 128); }
+  // The smallest colour split across threads. The first colour holds most constraints
+  // (polygon stress, N = 16000: 1259, 140 and 9 of 1408; circle stress: 679 and 39 of 718); the
+  // next ones are small but would stay serial through every pass (about 20 per step) at the
+  // heavy-item grain (256 by default). In a solve large enough to run in parallel at all (at
+  // least that grain of constraints) they are split from a 128th of the grain (16): the solve
+  // stage's load-balance bound at 4 threads on polygon stress went from 2.35 to 3.05 at 64 and
+  // on circles at N = 8000 (315, 16 and 1) the 16 are no longer serial. A small solve stays on
+  // one thread: each split costs a wake-up (about a microsecond), and at N = 1000 (about 40
+  // constraints, some 17 passes a step) splitting made a 2-thread step 20 % slower than one
+  // thread (0.137 against 0.113 ms, measured).
+  int MinColorItems(const StageRunner& run) const {
+    return static_cast<int>(constraints_.size()) >= run.MinHeavyItems() ? std::max(1, run.MinItems() / 128)
+                                                                       : run.MinHeavyItems();
+  }
 
   template <class Fn>
   void ForEachColor(StageRunner& run, Fn&& fn) {
     for (int color = 0; color < kColors; ++color) {
       const int begin = colorStart_[color], count = colorStart_[color + 1] - begin;
       if (count == 0) continue;
-      // The first colour holds most constraints (polygon stress, N = 16000: 1259, 140 and 9 of
-      // 1408; circle stress: 679 and 39 of 718); the next ones are small but would stay serial
-      // through every pass (about 20 per step) at the heavy-item grain (256 by default). They
-      // are split from a 128th of the grain (16): the solve stage's load-balance bound at 4
-      // threads on polygon stress went from 2.35 to 3.05 at 64; at 2 threads splitting from 16
-      // measured no slower than from 64 (the sync is about a microsecond).
       run.For(Stage::kSolve, count, MinColorItems(run), [&](int b, int e, int) { fn(begin + b, begin + e); });
     }
     const int begin = colorStart_[kColors], end = colorStart_[kColors + 1];

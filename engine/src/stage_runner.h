@@ -49,7 +49,7 @@ class StageRunner {
   template <class Fn>
   void For(Stage stage, int count, int minParallel, Fn&& fn) {
     if (count <= 0) return;
-    if (tasks_.WorkerCount() == 1 || count < minParallel) {
+    if (tasks_.WorkerCount() == 1 || count < std::max(2, minParallel)) {  // one item cannot be split
       Serial(stage, [&] { fn(0, count, 0); });
       return;
     }

@@ -60,8 +60,10 @@ class UniformGrid final : public BroadPhase {
     const int n = static_cast<int>(aabbs.size());
     extent_.resize(n);
     const int chunks = (n + kChunk - 1) / kChunk;
+    // In parallel only from MinItems bodies, as every other per-body pass.
+    const int minChunks = n >= run.MinItems() ? 2 : chunks + 1;
     partial_.assign(chunks, Partial{});
-    run.For(Stage::kBroadPhase, chunks, std::max(1, run.MinItems() / kChunk), [&](int c0, int c1, int) {
+    run.For(Stage::kBroadPhase, chunks, minChunks, [&](int c0, int c1, int) {
       for (int c = c0; c < c1; ++c) {
         Partial& p = partial_[c];
         for (int i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i) {
@@ -91,7 +93,7 @@ class UniformGrid final : public BroadPhase {
     // The cell must hold the largest ordinary body that can meet a movable one (max is exact
     // in any order, so per-chunk maxima combine deterministically).
     cellMax_.assign(chunks, 1e-3);
-    run.For(Stage::kBroadPhase, chunks, std::max(1, run.MinItems() / kChunk), [&](int c0, int c1, int) {
+    run.For(Stage::kBroadPhase, chunks, minChunks, [&](int c0, int c1, int) {
       for (int c = c0; c < c1; ++c) {
         double cell = 1e-3;
         for (int i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i) {
