@@ -76,11 +76,13 @@ class ThreadPool final : public TaskSystem {
   // next job): it spins for a while, then sleeps on a condition variable.
   //
   // With no more threads than cores it spins with the pause instruction, keeping its core,
-  // for up to kPauseMicros (longer than the usual wait between two blocks of a stage or two
-  // stages of a step), then sleeps. It never yields: a yield is a system call that hands the
-  // core to any other runnable process, even a niced one, for a whole time slice. With yields,
-  // a step of 16000 circles at 2 threads took 5.8 ms beside a nice -n 19 build instead of
-  // 1.2 ms, and a step of 1000 circles 0.41 ms instead of 0.11 (measured).
+  // for up to kPauseMicros, then sleeps. It never yields: a yield is a system call that hands
+  // the core to any other runnable process, even a niced one, for a whole time slice (with
+  // yields, a step of 16000 circles at 2 threads took 5.8 ms beside a nice -n 19 build instead
+  // of 1.2 ms, measured). The spin is long because a sleeping worker takes about 100 us to wake
+  // on these VMs, and a small step has serial gaps of that order between its parallel
+  // sections: 2000 circles at 2 threads took 0.65 ms per step with a 100 us spin and 0.24 ms
+  // with 1 ms (one thread: 0.22). A worker left spinning after a step burns at most 1 ms.
   //
   // With more threads than cores the partner a spinner waits for is usually a preempted worker
   // of the pool, so there it yields (kYields times, about 10-50 us) and then sleeps.
