@@ -127,13 +127,13 @@ class SoftStepSolver final : public ContactSolverBase {
       IntegrateVelocities(bodies, def, h, run);
       integrateMs += Ms(ti, Clock::now());
       if (def.effects.warmStarting) ForEachColor(run, [&](int b, int e) { WarmStart<kRotation>(bodies, b, e); });
-ForEachColor(run, [&](int b, int e) { Solve<kRotation, kFriction, true>(bodies, def, soft, staticSoft, invH, b, e); });
+      ForEachColor(run, [&](int b, int e) { Solve<kRotation, kFriction, true>(bodies, def, soft, staticSoft, invH, b, e); });
       ti = Clock::now();
       // The rotation guard is per world step: per sub-step it allowed n times the turn (188 rad/s
       // instead of 47 at 4 sub-steps), and spinning triangles of the soak left the box.
       IntegratePositions(bodies, def, h, ctx.dt, run);
       integrateMs += Ms(ti, Clock::now());
-ForEachColor(run, [&](int b, int e) { Solve<kRotation, kFriction, false>(bodies, def, soft, staticSoft, invH, b, e); });
+      ForEachColor(run, [&](int b, int e) { Solve<kRotation, kFriction, false>(bodies, def, soft, staticSoft, invH, b, e); });
     }
     if (def.effects.restitution && m > 0) ForEachColor(run, [&](int b, int e) { ApplyBounceShifts(bodies, b, e); });
     // Overlap deeper than the soft contacts push out (contactPushMaxDepth) is moved out here, by pgs's
