@@ -361,9 +361,7 @@ class ContactSolverBase : public Solver {
     }
   }
 
-  // One non-linear Gauss-Seidel pass: the separation is re-evaluated from how far the bodies
-  // have moved and turned since the manifold was computed, and the position error beyond the
-  // slop is reduced by the Baumgarte fraction, at most maxLinearCorrection at a time.
+  // Where every body is before the step moves it: CurrentSeparation measures from here.
   void SnapshotPositions(StageRunner& run, const Bodies& bodies) {
     center0_.resize(bodies.Count());
     rot0_.resize(bodies.Count());
@@ -402,6 +400,42 @@ class ContactSolverBase : public Solver {
     const Vec2 d = (bodies.center[cc.b] - center0_[cc.b]) - (bodies.center[cc.a] - center0_[cc.a]) + (rB - pc.rB) -
                    (rA - pc.rA);
     return pc.separation + Dot(cc.normal, d);
+  }
+
+  // One non-linear Gauss-Seidel pass over positions: the separation is re-evaluated from how far
+  // the bodies have moved and turned since the manifold was computed, and the penetration beyond
+  // `allowed` is reduced by the Baumgarte fraction, at most maxLinearCorrection at a time. It
+  // moves bodies without giving them velocity. pgs allows linearSlop; soft_step allows the depth
+  // its soft contacts push out themselves (solver_soft_step.cpp says why).
+  template <bool kRotation>
+  void SolvePositions(Bodies& bodies, const WorldDef& def, Real allowed, int begin, int end) {
+    for (int c = begin; c < end; ++c) {
+      const ContactConstraint& cc = constraints_[c];
+      const Vec2 n = cc.normal;
+      for (int k = 0; k < cc.pointCount; ++k) {
+        const PointConstraint& pc = cc.points[k];
+        Vec2 rA, rB;
+        const Real s = CurrentSeparation<kRotation>(bodies, cc, pc, rA, rB);
+        const Real C = std::clamp(def.baumgarte * (s + allowed), -def.maxLinearCorrection, Real(0));
+        if (C == 0) continue;
+        Real K = cc.invMassA + cc.invMassB;
+        if constexpr (kRotation) {
+          const Real rnA = Cross(rA, n), rnB = Cross(rB, n);
+          K += cc.invIA * rnA * rnA + cc.invIB * rnB * rnB;
+        }
+        if (K <= 0) continue;
+        const Vec2 P = (-C / K) * n;
+        // Static and kinematic bodies (inverse mass 0) are left untouched bit for bit.
+        if (cc.invMassA > 0) {
+          bodies.center[cc.a] -= cc.invMassA * P;
+          if constexpr (kRotation) bodies.xf[cc.a].q = IntegrateRot(bodies.xf[cc.a].q, -cc.invIA * Cross(rA, P));
+        }
+        if (cc.invMassB > 0) {
+          bodies.center[cc.b] += cc.invMassB * P;
+          if constexpr (kRotation) bodies.xf[cc.b].q = IntegrateRot(bodies.xf[cc.b].q, cc.invIB * Cross(rB, P));
+        }
+      }
+    }
   }
 
   std::vector<ContactConstraint> constraints_;

@@ -82,7 +82,7 @@ class PgsSolver final : public ContactSolverBase {
     auto t3 = Clock::now();
     if (correct) {
       for (int it = 0; it < def.positionIterations; ++it) {
-        ForEachColor(run, [&](int b, int e) { SolvePositions<kRotation>(bodies, def, b, e); });
+        ForEachColor(run, [&](int b, int e) { SolvePositions<kRotation>(bodies, def, def.linearSlop, b, e); });
       }
       SyncContactBodies(run, bodies);
     }
@@ -166,38 +166,6 @@ class PgsSolver final : public ContactSolverBase {
     p0.normalImpulse = x0;
     p1.normalImpulse = x1;
   }
-
-  template <bool kRotation>
-  void SolvePositions(Bodies& bodies, const WorldDef& def, int begin, int end) {
-    for (int c = begin; c < end; ++c) {
-      const ContactConstraint& cc = constraints_[c];
-      const Vec2 n = cc.normal;
-      for (int k = 0; k < cc.pointCount; ++k) {
-        const PointConstraint& pc = cc.points[k];
-        Vec2 rA, rB;
-        const Real s = CurrentSeparation<kRotation>(bodies, cc, pc, rA, rB);
-        const Real C = std::clamp(def.baumgarte * (s + def.linearSlop), -def.maxLinearCorrection, Real(0));
-        if (C == 0) continue;
-        Real K = cc.invMassA + cc.invMassB;
-        if constexpr (kRotation) {
-          const Real rnA = Cross(rA, n), rnB = Cross(rB, n);
-          K += cc.invIA * rnA * rnA + cc.invIB * rnB * rnB;
-        }
-        if (K <= 0) continue;
-        const Vec2 P = (-C / K) * n;
-        // Static and kinematic bodies (inverse mass 0) are left untouched bit for bit.
-        if (cc.invMassA > 0) {
-          bodies.center[cc.a] -= cc.invMassA * P;
-          if constexpr (kRotation) bodies.xf[cc.a].q = IntegrateRot(bodies.xf[cc.a].q, -cc.invIA * Cross(rA, P));
-        }
-        if (cc.invMassB > 0) {
-          bodies.center[cc.b] += cc.invMassB * P;
-          if constexpr (kRotation) bodies.xf[cc.b].q = IntegrateRot(bodies.xf[cc.b].q, cc.invIB * Cross(rB, P));
-        }
-      }
-    }
-  }
-
 };
 
 }  // namespace

@@ -43,6 +43,7 @@ void ValidateWorldDef(const WorldDef& d) {
   Require(IsFinite(d.contactDampingRatio) && d.contactDampingRatio >= 0, "WorldDef.contactDampingRatio must be >= 0");
   Require(IsFinite(d.contactPushMaxVelocity) && d.contactPushMaxVelocity > 0,
           "WorldDef.contactPushMaxVelocity must be > 0");
+  Require(IsFinite(d.contactPushMaxDepth) && d.contactPushMaxDepth > 0, "WorldDef.contactPushMaxDepth must be > 0");
   Require(d.broadPhase == BroadPhaseType::kQuadTree || d.broadPhase == BroadPhaseType::kUniformGrid,
           "WorldDef.broadPhase is unknown");
   Require(d.velocityIterations >= 1, "WorldDef.velocityIterations must be >= 1");

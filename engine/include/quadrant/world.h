@@ -131,6 +131,10 @@ struct WorldDef {
   Real contactHertz = 30;               ///< soft_step contact stiffness (Hz), > 0 (Box2D 3: 30)
   Real contactDampingRatio = 10;        ///< soft_step contact damping ratio, >= 0 (Box2D 3: 10)
   Real contactPushMaxVelocity = 3;      ///< soft_step fastest push-out of penetration (m/s), > 0
+  /// soft_step: the deepest penetration at which its contacts are soft (m), > 0; deeper points are
+  /// rigid rows pushing out at the rate they have at this depth, and the rest of the overlap is
+  /// moved out by a position pass (positionIterations) that adds no velocity.
+  Real contactPushMaxDepth = Real(0.01);
   Real linearSlop = Real(0.005);        ///< allowed penetration (m), as Box2D
   Real baumgarte = Real(0.2);           ///< fraction of penetration removed per position iteration
   Real maxLinearCorrection = Real(0.2); ///< most a position iteration moves a contact (m)
