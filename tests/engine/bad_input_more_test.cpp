@@ -308,6 +308,15 @@ TEST(BadInputMoreTest, WorldDefMoreRefusals) {
   refuse([](WorldDef& d) { d.solver = static_cast<SolverType>(9); }, "WorldDef.solver is unknown", "solver 9");
   refuse([](WorldDef& d) { d.broadPhase = static_cast<BroadPhaseType>(9); }, "WorldDef.broadPhase is unknown",
          "broad phase 9");
+  // soft_step's contact settings (checked whichever solver is chosen).
+  refuse([](WorldDef& d) { d.softSubSteps = 0; }, "softSubSteps must be >= 1", "soft sub-steps 0");
+  refuse([](WorldDef& d) { d.contactHertz = 0; }, "contactHertz must be > 0", "hertz 0");
+  refuse([](WorldDef& d) { d.contactHertz = kNaN; }, "contactHertz must be > 0", "hertz NaN");
+  refuse([](WorldDef& d) { d.contactDampingRatio = -1; }, "contactDampingRatio", "damping ratio -1");
+  refuse([](WorldDef& d) { d.contactPushMaxVelocity = 0; }, "contactPushMaxVelocity must be > 0", "push speed 0");
+  refuse([](WorldDef& d) { d.contactPushMaxDepth = 0; }, "contactPushMaxDepth must be > 0", "push depth 0");
+  refuse([](WorldDef& d) { d.contactPushMaxDepth = kInf; }, "contactPushMaxDepth must be > 0", "push depth inf");
+  refuse([](WorldDef& d) { d.contactPushMaxDepth = kNaN; }, "contactPushMaxDepth must be > 0", "push depth NaN");
   WorldDef two;
   two.threadCount = 2;
   EXPECT_NO_THROW(World w(two));
