@@ -5,60 +5,29 @@
 // position integration, and one relax solve (the same rows with no bias, removing the push-out
 // velocity). Restitution comes first, as pairwise collisions before the sub-steps (shared with
 // pgs: ApplyCollisions in contact_solver.h); the early-bounce shifts follow the last sub-step.
-// Restitution applied after the sub-steps from the pre-step approach speed (Box2D 3's way)
-// gained energy here: elastic polygon stress +63 % kinetic energy over the accuracy run at 4
-// sub-steps, and the 3000-step soak ended 64 times as energetic with 56 bodies out of the box.
-// With collisions first: -0.6 % and 1 body 0.29 m out (and Newton's cradle passes); with the
-// rotation guard per world step as well, none out.
-//
-// Deep overlap: a contact point is soft (a spring, as above) only down to contactPushMaxDepth
-// (0.01 m) of penetration. A deeper point is a rigid row in the soft solve (full mass, no
-// softness: it holds whatever load it carries, as pgs's rows do) whose push-out bias is the one a
-// soft point has at the cap (biasRate * 0.01 m, so the push speed does not jump where a point
-// turns soft); the rest of the overlap is moved out after the sub-steps by pgs's position pass
-// (SolvePositions in contact_solver.h, positionIterations of it, allowing the cap), which changes
-// positions and not velocities. Why the push is bounded: pushed out entirely by velocity, each
-// contact of a row of overlapping bodies moved apart at up to contactPushMaxVelocity and the rows
-// added those speeds up, which the relax pass cannot take back (overlap_recovery 10.8 m/s,
-// confined 15.6 m/s; 2 allowed). Now: 1.32 and 1.54 m/s.
-// Why deep points are rigid: with soft deep points whose bias alone was capped (72b6974, cap
-// 0.015 m) the cap also capped the load a contact holds (its spring force stopped growing past
-// it). At the scenes' budgets that passed all 13 hard cases, but on the default 4 sub-steps at
-// 30 Hz (quadrant:soft_step+sub4), where the mass ratios sag 0.10 and 0.088 m, the 100 kg box
-// fell through the pyramid (drift 12.2 m; 0.076 m with no cap) and the 400 kg plank sank its two
-// boxes into the ground (penetration 0.555 m; 0.088 m with no cap). With rigid deep points at
-// 0.01 m there: box drift 0.097 m, penetration 0.013 m (it stays on the apex); plank penetration
-// 0.060 m, but the plank and its boxes creep sideways (plank 0.53 m, boxes 0.17 and 0.28 m in
-// 9 s; 0.053 m with no cap): the mass ratios still fail there, as they did with no cap, now by
-// that creep rather than sag. At the scenes' budgets all 13 pass, the other 11 with the figures
-// they had with no cap except arch (fourth digit), far_from_origin's reported penetration (0.013
-// -> 0.010 m, within its read-back's 7.8 mm) and the 3000-step soak (fastest body 9.70 -> 10.18
-// m/s, deepest centre past a wall 0.074 -> 0.037 m; nothing leaves the box).
-// Caps measured (rigid deep points with this bias): 0.0125 m: confined 1.89 m/s (too close to
-// 2), box drift 0.033 m, plank 0.48 m at sub4; 0.015 m: confined 2.02 m/s (fails). Half that
-// bias on deep points: confined's kinetic energy rises after 1 s (1.9 J over 40 J at 0.01 m; 1 %
-// allowed). Deep points rigid with no push-out bias at all (the overlap left to the position
-// pass): confined fails at every cap tried, 0.005 to 0.015 m, as its energy at 1 s is small and
-// rises while points the position pass brings within the cap turn soft and push (0.24 J over
-// 0.049 J at 0.005 m, 1.3 J over 0.40 J at 0.01 m).
-// The mass ratios sag with 30 Hz contacts because a contact is a spring of stiffness
-// m_eff (2 pi contactHertz)^2: at rest it sags by load / that (1000 N on a 1 kg box's corner,
-// m_eff 0.4 kg, 30 Hz: 0.071 m; mass_ratio_100/400 allow 0.02), whatever the sub-step; the
-// Quadrant adapter turns a scene's larger budget into more sub-steps with the stiffness scaled
-// along (quadrant_adapter.cpp says why).
-//
-// Tried for the deep overlap before the split (measured, not kept): extra relax passes after the
-// last sub-step only (3, 10, 50: overlap_recovery 9.0, 7.7, 7.7 m/s; confined 12.4, 10.0, 9.3 m/s:
-// relax can only take back the last sub-step's push, the earlier ones are momentum by then);
-// push-out capped at 0.15 m/s (confined passes at 1.45 m/s, but the cap also caps the load a
-// contact holds, so at 4 sub-steps the 100 kg box sank 0.63 m into the pyramid and fell through
-// instead of sagging 0.10 m); velocities restored after the position update so the push moves
-// positions only (the 15-box stack's top crept 0.016 m, the pyramid's apex moved 0.50 m, the card
-// house fell, and confined circles merged, 0.96 m deep).
 //
 // Why: many small steps converge where many iterations of one big step do not (Macklin et al.
 // 2019, "Small steps in physics simulation"), which is what stacks and large mass ratios need.
 // The separation of each point is re-evaluated every sub-step from how far its bodies moved.
+//
+// Why restitution comes first: applied after the sub-steps from the pre-step approach speed
+// (Box2D 3's way) it gained energy here (elastic polygon stress +63 % kinetic energy; the
+// 3000-step soak ended with 56 bodies out of the box).
+//
+// Deep overlap: a contact point is soft only down to contactPushMaxDepth (0.01 m) of
+// penetration. A deeper point is a rigid row (full mass: it holds whatever load it carries, as
+// pgs's rows do) whose push-out bias is the one a soft point has at that depth; the rest of the
+// overlap is moved out after the sub-steps by pgs's position pass (SolvePositions), which changes
+// positions, not velocities. Pushed out entirely by velocity, a row of overlapping bodies added
+// up the push speeds of its contacts, which the relax pass cannot take back (overlap_recovery
+// 10.8 m/s, confined 15.6 m/s; 2 allowed; now 1.32 and 1.54). A soft deep point with only its
+// bias capped would cap the load it holds too: at 4 sub-steps the 100 kg box of mass_ratio_100
+// fell through the pyramid. docs/soft_step.md gives the figures of every variant measured.
+//
+// Heavy loads sag: a soft contact is a spring of stiffness m_eff (2 pi contactHertz)^2 and sags
+// by load / stiffness whatever the sub-step (1000 N on a 1 kg box's corner at 30 Hz: 0.071 m).
+// The Quadrant adapter turns a scene's larger solver budget into more sub-steps with the
+// stiffness scaled along (quadrant_adapter.cpp says why).
 #include <atomic>
 #include <cmath>
 #include <numbers>
