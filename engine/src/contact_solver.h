@@ -127,9 +127,9 @@ class ContactSolverBase : public Solver {
   // least that grain of constraints) they are split from a 128th of the grain (16): the solve
   // stage's load-balance bound at 4 threads on polygon stress went from 2.35 to 3.05 at 64 and
   // on circles at N = 8000 (315, 16 and 1) the 16 are no longer serial. A small solve stays on
-  // one thread: each split costs a wake-up (about a microsecond), and at N = 1000 (about 40
-  // constraints, some 17 passes a step) splitting made a 2-thread step 20 % slower than one
-  // thread (0.137 against 0.113 ms, measured).
+  // one thread: each split costs a hand-over to the other threads (about a microsecond, see
+  // task_overhead.txt), more than a colour of a few dozen constraints takes (about 40 ns each),
+  // and a step has some 17 passes (circle stress at N = 1000: about 40 constraints).
   int MinColorItems(const StageRunner& run) const {
     return static_cast<int>(constraints_.size()) >= run.MinHeavyItems() ? std::max(1, run.MinItems() / 128)
                                                                        : run.MinHeavyItems();
