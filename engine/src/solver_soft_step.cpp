@@ -28,7 +28,6 @@
 // by load / stiffness whatever the sub-step (1000 N on a 1 kg box's corner at 30 Hz: 0.071 m).
 // The Quadrant adapter turns a scene's larger solver budget into more sub-steps with the
 // stiffness scaled along (quadrant_adapter.cpp says why).
-#include <atomic>
 #include <cmath>
 #include <numbers>
 
@@ -92,15 +91,7 @@ class SoftStepSolver final : public ContactSolverBase {
     SnapshotPositions(run, bodies);
     if (def.effects.restitution) {
       const Vec2 stepGravity = def.effects.gravity ? ctx.dt * def.gravity : Vec2{};
-      for (int it = 0; it < def.restitutionIterations; ++it) {
-        std::atomic<bool> collided{false};
-        ForEachColor(run, [&](int b, int e) {
-          if (ApplyCollisions<kRotation>(bodies, def.restitutionThreshold, Real(1) / ctx.dt, stepGravity, b, e)) {
-            collided.store(true, std::memory_order_relaxed);
-          }
-        });
-        if (!collided.load(std::memory_order_relaxed)) break;
-      }
+      ApplyCollisionPasses<kRotation>(run, bodies, def, Real(1) / ctx.dt, stepGravity);
     }
     for (int sub = 0; sub < n; ++sub) {
       auto ti = Clock::now();
@@ -118,12 +109,7 @@ class SoftStepSolver final : public ContactSolverBase {
     if (def.effects.restitution && m > 0) ForEachColor(run, [&](int b, int e) { ApplyBounceShifts(bodies, b, e); });
     // Overlap deeper than the soft contacts push out (contactPushMaxDepth) is moved out here, by pgs's
     // position pass: positions change, velocities do not, so deep overlap cannot fling bodies.
-    if (def.positionIterations > 0 && m > 0) {
-      for (int it = 0; it < def.positionIterations; ++it) {
-        ForEachColor(run, [&](int b, int e) { SolvePositions<kRotation>(bodies, def, def.contactPushMaxDepth, b, e); });
-      }
-      SyncContactBodies(run, bodies);
-    }
+    if (m > 0) CorrectPositions<kRotation>(run, bodies, def, def.contactPushMaxDepth, def.positionIterations);
     run.For(Stage::kSolve, m, run.MinHeavyItems(), [&](int b, int e, int) { StoreImpulses(ctx.contacts, b, e); });
     const double total = Ms(t0, Clock::now());
     ctx.profile->integrate += integrateMs;
