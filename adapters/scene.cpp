@@ -45,6 +45,24 @@ void ValidatePolygonOrder(const BodyDesc& b, int index) {
 
 }  // namespace
 
+BodyDesc MakeCircleBody(Vec2 position, Real radius, bool dynamic) {
+  BodyDesc b;
+  b.dynamic = dynamic;
+  b.shape = ShapeKind::kCircle;
+  b.radius = radius;
+  b.position = position;
+  return b;
+}
+
+BodyDesc MakeBoxBody(Vec2 position, Real hx, Real hy, bool dynamic) {
+  BodyDesc b;
+  b.dynamic = dynamic;
+  b.shape = ShapeKind::kPolygon;
+  b.vertices = {{-hx, -hy}, {hx, -hy}, {hx, hy}, {-hx, hy}};
+  b.position = position;
+  return b;
+}
+
 MassProperties ComputeMassProperties(const BodyDesc& body) {
   MassData md = body.shape == ShapeKind::kCircle
                     ? ComputeMass(Circle{{0, 0}, body.radius}, body.density)

@@ -69,6 +69,12 @@ struct Scene {
   uint64_t seed = 0;                  ///< the seed it was generated with (0 = hand-built)
 };
 
+/// A circle body of `radius` at `position` (other fields at their defaults).
+BodyDesc MakeCircleBody(Vec2 position, Real radius, bool dynamic = true);
+/// An axis-aligned box body of half-widths hx, hy at `position`, vertices counter-clockwise
+/// (other fields at their defaults).
+BodyDesc MakeBoxBody(Vec2 position, Real hx, Real hy, bool dynamic = true);
+
 /// Exact mass (kg) and rotational inertia about the centre of mass (kg m^2) of a body as the
 /// scene defines it; every adapter gives its engine these values where the engine lets it.
 struct MassProperties {

@@ -141,18 +141,9 @@ qs::Scene MakeFastBody() {
   s.restitutionThreshold = 1;
   s.effects.restitution = false;
   s.effects.continuous = false;
-  qs::BodyDesc plank;
-  plank.dynamic = false;
-  plank.shape = qs::ShapeKind::kPolygon;
-  const quadrant::Real t = quadrant::Real(0.1);  // half the plank's thickness
-  plank.vertices = {{-2, -t}, {2, -t}, {2, t}, {-2, t}};
-  plank.position = {0, 0};
-  s.bodies.push_back(plank);
-  qs::BodyDesc box;
-  box.shape = qs::ShapeKind::kPolygon;
-  const quadrant::Real h = quadrant::Real(0.25);
-  box.vertices = {{-h, -h}, {h, -h}, {h, h}, {-h, h}};
-  box.position = {0, quadrant::Real(3.25)};
+  // A static plank 4 m x 0.2 m at the origin.
+  s.bodies.push_back(qs::MakeBoxBody({0, 0}, 2, quadrant::Real(0.1), /*dynamic=*/false));
+  qs::BodyDesc box = qs::MakeBoxBody({0, quadrant::Real(3.25)}, quadrant::Real(0.25), quadrant::Real(0.25));
   box.velocity = {0, -50};
   s.bodies.push_back(box);
   s.bounds = {{-3, -1}, {3, 4}};

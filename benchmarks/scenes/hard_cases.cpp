@@ -43,15 +43,9 @@ Scene BaseScene(const char* name) {
   return s;
 }
 
-std::vector<Vec2> BoxVertices(Real hx, Real hy) { return {{-hx, -hy}, {hx, -hy}, {hx, hy}, {-hx, hy}}; }
-
 BodyDesc Box(Vec2 position, Real hx, Real hy, bool dynamic, Real friction, Real density = 1,
              Real angle = 0) {
-  BodyDesc b;
-  b.dynamic = dynamic;
-  b.shape = ShapeKind::kPolygon;
-  b.vertices = BoxVertices(hx, hy);
-  b.position = position;
+  BodyDesc b = MakeBoxBody(position, hx, hy, dynamic);
   b.angle = angle;
   b.density = density;
   b.friction = friction;
@@ -60,11 +54,7 @@ BodyDesc Box(Vec2 position, Real hx, Real hy, bool dynamic, Real friction, Real 
 }
 
 BodyDesc Ball(Vec2 position, Real radius, Real friction, Real restitution) {
-  BodyDesc b;
-  b.dynamic = true;
-  b.shape = ShapeKind::kCircle;
-  b.radius = radius;
-  b.position = position;
+  BodyDesc b = MakeCircleBody(position, radius);
   b.density = 1;
   b.friction = friction;
   b.restitution = restitution;

@@ -58,10 +58,7 @@ Scene Base(const char* name, bool gravity) {
 }
 
 BodyDesc Ball(Vec2 position, Real radius, Real density, Real friction, Real restitution) {
-  BodyDesc b;
-  b.shape = ShapeKind::kCircle;
-  b.radius = radius;
-  b.position = position;
+  BodyDesc b = MakeCircleBody(position, radius);
   b.density = density;
   b.friction = friction;
   b.restitution = restitution;
@@ -69,11 +66,7 @@ BodyDesc Ball(Vec2 position, Real radius, Real density, Real friction, Real rest
 }
 
 BodyDesc Box(Vec2 position, Real hx, Real hy, Real angle, bool dynamic, Real friction, Real restitution) {
-  BodyDesc b;
-  b.dynamic = dynamic;
-  b.shape = ShapeKind::kPolygon;
-  b.vertices = {{-hx, -hy}, {hx, -hy}, {hx, hy}, {-hx, hy}};
-  b.position = position;
+  BodyDesc b = MakeBoxBody(position, hx, hy, dynamic);
   b.angle = angle;
   b.density = dynamic ? 1 : 0;
   b.friction = friction;

@@ -21,22 +21,8 @@ namespace {
 
 constexpr Real kDt = Real(1.0 / 60.0);
 
-BodyDesc Circle(Vec2 position, Real radius = Real(0.5)) {
-  BodyDesc b;
-  b.shape = ShapeKind::kCircle;
-  b.radius = radius;
-  b.position = position;
-  return b;
-}
-
-BodyDesc Box(Vec2 position, Real hx, Real hy, bool dynamic = true) {
-  BodyDesc b;
-  b.dynamic = dynamic;
-  b.shape = ShapeKind::kPolygon;
-  b.vertices = {{-hx, -hy}, {hx, -hy}, {hx, hy}, {-hx, hy}};
-  b.position = position;
-  return b;
-}
+BodyDesc Circle(Vec2 position, Real radius = Real(0.5)) { return MakeCircleBody(position, radius); }
+BodyDesc Box(Vec2 position, Real hx, Real hy, bool dynamic = true) { return MakeBoxBody(position, hx, hy, dynamic); }
 
 // A static ground whose top face is at y = 0.5.
 BodyDesc Ground() { return Box({0, 0}, 10, Real(0.5), /*dynamic=*/false); }

@@ -18,14 +18,7 @@ namespace {
 
 constexpr double kDt = 1.0 / 60.0;
 
-BodyDesc Box(Vec2 position, Real half, bool dynamic) {
-  BodyDesc b;
-  b.dynamic = dynamic;
-  b.shape = ShapeKind::kPolygon;
-  b.vertices = {{-half, -half}, {half, -half}, {half, half}, {-half, half}};
-  b.position = position;
-  return b;
-}
+BodyDesc Box(Vec2 position, Real half, bool dynamic) { return MakeBoxBody(position, half, half, dynamic); }
 
 std::vector<BodyState> RunScene(const std::string& engine, const Scene& s, int steps) {
   auto a = MakeAdapter(engine);

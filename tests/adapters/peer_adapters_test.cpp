@@ -23,26 +23,8 @@ using Factory = std::function<std::unique_ptr<Adapter>()>;
 constexpr Real kDt = Real(1.0 / 60.0);
 constexpr Real kGroundTop = Real(0.5);
 
-BodyDesc CircleBody(Vec2 position, Real radius, bool dynamic = true) {
-  BodyDesc b;
-  b.dynamic = dynamic;
-  b.shape = ShapeKind::kCircle;
-  b.radius = radius;
-  b.position = position;
-  return b;
-}
-
-BodyDesc BoxBody(Vec2 position, Real hx, Real hy, bool dynamic = true) {
-  BodyDesc b;
-  b.dynamic = dynamic;
-  b.shape = ShapeKind::kPolygon;
-  b.vertices = {{-hx, -hy}, {hx, -hy}, {hx, hy}, {-hx, hy}};
-  b.position = position;
-  return b;
-}
-
 // A wide static slab whose top face is at y = kGroundTop.
-BodyDesc Ground() { return BoxBody({0, 0}, 50, kGroundTop, /*dynamic=*/false); }
+BodyDesc Ground() { return MakeBoxBody({0, 0}, 50, kGroundTop, /*dynamic=*/false); }
 
 Scene ZeroGravityScene() {
   Scene s;
@@ -66,7 +48,7 @@ void StepN(Adapter& a, int n) {
 
 void CheckBallFallsAndRestsOnGround(const Factory& make, int threads) {
   Scene s;
-  s.bodies = {Ground(), CircleBody({0, 3}, Real(0.5))};
+  s.bodies = {Ground(), MakeCircleBody({0, 3}, Real(0.5))};
   auto a = make();
   a->Load(s, threads);
   ASSERT_EQ(a->BodyCount(), 2);
@@ -94,10 +76,10 @@ void CheckBallFallsAndRestsOnGround(const Factory& make, int threads) {
 void CheckHeadOnElasticCollision(const Factory& make) {
   // Masses 1 : 3, v = (2, 0): a perfectly elastic hit leaves (-1, 1).
   Scene s = ZeroGravityScene();
-  BodyDesc light = CircleBody({-2, 0}, Real(0.5));
+  BodyDesc light = MakeCircleBody({-2, 0}, Real(0.5));
   light.velocity = {2, 0};
   light.restitution = 1;
-  BodyDesc heavy = CircleBody({1, 0}, Real(0.5));
+  BodyDesc heavy = MakeCircleBody({1, 0}, Real(0.5));
   heavy.density = 3;
   heavy.restitution = 1;
   s.bodies = {light, heavy};
@@ -179,8 +161,8 @@ void CheckSceneOrder(const Factory& make) {
   Scene s = ZeroGravityScene();
   for (int i = 0; i < 6; ++i) {
     const Vec2 p{Real(3 * i), Real(-2 * i)};
-    s.bodies.push_back(i % 2 == 0 ? CircleBody(p, Real(0.4), i % 3 != 0)
-                                  : BoxBody(p, Real(0.5), Real(0.3), i % 3 != 0));
+    s.bodies.push_back(i % 2 == 0 ? MakeCircleBody(p, Real(0.4), i % 3 != 0)
+                                  : MakeBoxBody(p, Real(0.5), Real(0.3), i % 3 != 0));
   }
   auto a = make();
   a->Load(s, 1);
@@ -196,7 +178,7 @@ void CheckSceneOrder(const Factory& make) {
 Scene SlidingDiskScene(bool friction) {
   Scene s;
   s.effects.friction = friction;
-  BodyDesc disk = CircleBody({0, kGroundTop + Real(0.5)}, Real(0.5));
+  BodyDesc disk = MakeCircleBody({0, kGroundTop + Real(0.5)}, Real(0.5));
   disk.velocity = {2, 0};
   s.bodies = {Ground(), disk};
   return s;
@@ -225,7 +207,7 @@ void CheckRestitutionEffect(const Factory& make) {
     s.effects.restitution = restitution;
     BodyDesc ground = Ground();
     ground.restitution = 1;
-    BodyDesc ball = CircleBody({0, 3}, Real(0.5));
+    BodyDesc ball = MakeCircleBody({0, 3}, Real(0.5));
     ball.restitution = 1;
     s.bodies = {ground, ball};
     auto a = make();
@@ -246,7 +228,7 @@ void CheckRotationOff(const Factory& make) {
   auto angleAfterLanding = [&make](bool rotation) {
     Scene s;
     s.effects.rotation = rotation;
-    BodyDesc box = BoxBody({0, 2}, Real(0.5), Real(0.5));
+    BodyDesc box = MakeBoxBody({0, 2}, Real(0.5), Real(0.5));
     box.angle = Real(0.3);
     box.angularVelocity = 1;  // ignored without rotation
     s.bodies = {Ground(), box};
@@ -268,7 +250,7 @@ void CheckGravityOff(const Factory& make) {
   Scene s;
   s.effects.gravity = false;
   s.gravity = {3, -20};
-  s.bodies = {CircleBody({1, 2}, Real(0.5))};
+  s.bodies = {MakeCircleBody({1, 2}, Real(0.5))};
   auto a = make();
   a->Load(s, 1);
   StepN(*a, 60);
@@ -285,7 +267,7 @@ void CheckSleep(const Factory& make) {
   auto distance = [&make](bool sleep) {
     Scene s = ZeroGravityScene();
     s.effects.sleep = sleep;
-    BodyDesc b = CircleBody({0, 0}, Real(0.5));
+    BodyDesc b = MakeCircleBody({0, 0}, Real(0.5));
     b.velocity = {Real(0.005), 0};
     s.bodies = {b};
     auto a = make();
@@ -301,9 +283,9 @@ void CheckContactsSurviveSleep(const Factory& make) {
   // Sleeping bodies still touch: their contacts count.
   Scene s;
   s.effects.sleep = true;
-  s.bodies = {Ground(), CircleBody({0, kGroundTop + Real(0.5)}, Real(0.5)),
-              BoxBody({3, kGroundTop + Real(0.5)}, Real(0.5), Real(0.5)),
-              BoxBody({3, kGroundTop + Real(1.5)}, Real(0.5), Real(0.5))};
+  s.bodies = {Ground(), MakeCircleBody({0, kGroundTop + Real(0.5)}, Real(0.5)),
+              MakeBoxBody({3, kGroundTop + Real(0.5)}, Real(0.5), Real(0.5)),
+              MakeBoxBody({3, kGroundTop + Real(1.5)}, Real(0.5), Real(0.5))};
   auto a = make();
   a->Load(s, 1);
   StepN(*a, 300);
@@ -316,8 +298,8 @@ void CheckContactsSurviveSleep(const Factory& make) {
 void CheckStackContacts(const Factory& make) {
   // Two boxes stacked on the ground: two touching pairs, one of them dynamic-dynamic.
   Scene s;
-  s.bodies = {Ground(), BoxBody({0, 1}, Real(0.5), Real(0.5)),
-              BoxBody({0, 2}, Real(0.5), Real(0.5))};
+  s.bodies = {Ground(), MakeBoxBody({0, 1}, Real(0.5), Real(0.5)),
+              MakeBoxBody({0, 2}, Real(0.5), Real(0.5))};
   auto a = make();
   a->Load(s, 1);
   StepN(*a, 120);
@@ -328,7 +310,7 @@ void CheckStackContacts(const Factory& make) {
 
 void CheckDriver(const Factory& make) {
   Scene s = ZeroGravityScene();
-  s.bodies = {CircleBody({0, 0}, Real(0.5))};
+  s.bodies = {MakeCircleBody({0, 0}, Real(0.5))};
   std::vector<int> seen;
   s.driver = [&seen](int step, Adapter& adapter) {
     seen.push_back(step);
@@ -344,9 +326,9 @@ void CheckDriver(const Factory& make) {
 
 void CheckLoadTwice(const Factory& make) {
   Scene first;
-  first.bodies = {Ground(), CircleBody({0, 3}, Real(0.5)), CircleBody({2, 3}, Real(0.5))};
+  first.bodies = {Ground(), MakeCircleBody({0, 3}, Real(0.5)), MakeCircleBody({2, 3}, Real(0.5))};
   Scene second = ZeroGravityScene();
-  second.bodies = {CircleBody({7, 8}, Real(0.25))};
+  second.bodies = {MakeCircleBody({7, 8}, Real(0.25))};
   auto a = make();
   a->Load(first, 1);
   StepN(*a, 10);
@@ -362,7 +344,7 @@ void CheckLoadTwice(const Factory& make) {
 
 void CheckSetVelocity(const Factory& make) {
   Scene s = ZeroGravityScene();
-  s.bodies = {Ground(), CircleBody({0, 5}, Real(0.5))};
+  s.bodies = {Ground(), MakeCircleBody({0, 5}, Real(0.5))};
   auto a = make();
   a->Load(s, 1);
   EXPECT_THROW(a->SetVelocity(-1, {1, 0}, 0), quadrant::Error);
@@ -376,7 +358,7 @@ void CheckSetVelocity(const Factory& make) {
 
 void CheckRefusals(const Factory& make, int refusedThreads) {
   Scene ok;
-  ok.bodies = {Ground(), CircleBody({0, 3}, Real(0.5))};
+  ok.bodies = {Ground(), MakeCircleBody({0, 3}, Real(0.5))};
   auto a = make();
   a->Load(ok, 1);
   EXPECT_THROW(a->Load(ok, refusedThreads), Unsupported);
@@ -433,9 +415,9 @@ TEST(Box2dAdapter, ContinuousFlagDecidesTunnelling) {
   auto finalY = [](bool continuous) {
     Scene s = ZeroGravityScene();
     s.effects.continuous = continuous;
-    BodyDesc ball = CircleBody({0, 5}, Real(0.1));
+    BodyDesc ball = MakeCircleBody({0, 5}, Real(0.1));
     ball.velocity = {0, -120};
-    s.bodies = {BoxBody({0, 0}, 2, Real(0.05), false), ball};
+    s.bodies = {MakeBoxBody({0, 0}, 2, Real(0.05), false), ball};
     auto a = MakeBox2dAdapter();
     a->Load(s, 1);
     StepN(*a, 5);
@@ -452,7 +434,7 @@ TEST(Box2dAdapter, RestitutionThresholdFromScene) {
     s.restitutionThreshold = threshold;
     BodyDesc ground = Ground();
     ground.restitution = 1;
-    BodyDesc ball = CircleBody({0, Real(1.2)}, Real(0.5));
+    BodyDesc ball = MakeCircleBody({0, Real(1.2)}, Real(0.5));
     ball.restitution = 1;
     ball.velocity = {0, Real(-0.5)};
     s.bodies = {ground, ball};
@@ -503,7 +485,7 @@ TEST(ChipmunkAdapter, TwoThreadsRunAHastySpace) {
   CheckBallFallsAndRestsOnGround(kChipmunk, 2);
   // Loading a hasty space over a plain one and back frees each with its own function.
   Scene s;
-  s.bodies = {Ground(), CircleBody({0, 3}, Real(0.5))};
+  s.bodies = {Ground(), MakeCircleBody({0, 3}, Real(0.5))};
   auto a = MakeChipmunkAdapter();
   a->Load(s, 1);
   a->Load(s, 2);
@@ -515,7 +497,7 @@ TEST(ChipmunkAdapter, TwoThreadsRunAHastySpace) {
 
 TEST(ChipmunkAdapter, RefusesContinuousAndWarmStartingOff) {
   Scene s;
-  s.bodies = {CircleBody({0, 3}, Real(0.5))};
+  s.bodies = {MakeCircleBody({0, 3}, Real(0.5))};
   s.effects.continuous = true;
   auto a = MakeChipmunkAdapter();
   EXPECT_THROW(a->Load(s, 1), Unsupported);
