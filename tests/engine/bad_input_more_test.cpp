@@ -21,27 +21,11 @@
 namespace quadrant {
 namespace {
 
-using test::AddBox;
-using test::AddCircle;
-using test::AddGround;
-using test::kDt;
-using test::StepN;
+using namespace test;  // the small-world builders of test_helpers.h
 
 constexpr Real kNaN = std::numeric_limits<Real>::quiet_NaN();
 constexpr Real kInf = std::numeric_limits<Real>::infinity();
 constexpr Real kHuge = Real(3e38);  // finite, near float's largest
-
-/// Expects `call` to throw quadrant::Error whose message contains `message`.
-void ExpectError(const std::function<void()>& call, const std::string& message, const std::string& what) {
-  SCOPED_TRACE(what);
-  try {
-    call();
-    ADD_FAILURE() << "no quadrant::Error thrown; expected one containing '" << message << "'";
-  } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find(message), std::string::npos)
-        << "message '" << e.what() << "' lacks '" << message << "'";
-  }
-}
 
 /// ExpectError, and the world's hash and body count unchanged.
 void ExpectRefused(World& world, const std::function<void()>& call, const std::string& message,

@@ -14,11 +14,7 @@
 namespace quadrant {
 namespace {
 
-using test::AddBox;
-using test::AddCircle;
-using test::AddGround;
-using test::kDt;
-using test::StepN;
+using namespace test;  // the small-world builders of test_helpers.h
 
 constexpr Real kNaN = std::numeric_limits<Real>::quiet_NaN();
 constexpr Real kInf = std::numeric_limits<Real>::infinity();

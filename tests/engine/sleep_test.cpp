@@ -16,11 +16,7 @@
 namespace quadrant {
 namespace {
 
-using test::AddBox;
-using test::AddCircle;
-using test::AddGround;
-using test::kDt;
-using test::StepN;
+using namespace test;  // the small-world builders of test_helpers.h
 
 // A pyramid of boxes (side 1 m, `base` boxes in the bottom row) on a static ground whose top is
 // at y = 0. Returns the boxes.
@@ -212,17 +208,6 @@ TEST(DeterministicSchemeSleep, StateHashIsThreadCountInvariant) {
     int asleep = 0;
     EXPECT_EQ(run(threads, asleep), h1) << threads << " threads";
     EXPECT_EQ(asleep, asleep1) << threads << " threads";
-  }
-}
-
-void ExpectError(const std::function<void()>& call, const std::string& message, const std::string& what) {
-  SCOPED_TRACE(what);
-  try {
-    call();
-    ADD_FAILURE() << "no quadrant::Error thrown; expected one containing '" << message << "'";
-  } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find(message), std::string::npos)
-        << "message '" << e.what() << "' lacks '" << message << "'";
   }
 }
 

@@ -5,10 +5,13 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <functional>
+#include <string>
 #include <cmath>
 #include <ostream>
 #include <vector>
 
+#include "quadrant/error.h"
 #include "quadrant/math.h"
 #include "quadrant/shapes.h"
 #include "quadrant/world.h"
@@ -84,6 +87,19 @@ inline ::testing::AssertionResult VecNear(Vec2 got, Vec2 want, double tol) {
   }
   return ::testing::AssertionFailure() << "got (" << got.x << ", " << got.y << "), want ("
                                        << want.x << ", " << want.y << ") within " << tol;
+}
+
+/// Expects `call` to throw quadrant::Error whose message contains `message` (`what` names the
+/// case in the failure).
+inline void ExpectError(const std::function<void()>& call, const std::string& message, const std::string& what) {
+  SCOPED_TRACE(what);
+  try {
+    call();
+    ADD_FAILURE() << "no quadrant::Error thrown; expected one containing '" << message << "'";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find(message), std::string::npos)
+        << "message '" << e.what() << "' lacks '" << message << "'";
+  }
 }
 
 }  // namespace quadrant::test

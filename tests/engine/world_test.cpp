@@ -16,14 +16,7 @@
 namespace quadrant {
 namespace {
 
-using test::AddBox;
-using test::AddCircle;
-using test::AddGround;
-using test::DeepestPenetration;
-using test::kDt;
-using test::NoGravityDef;
-using test::StepN;
-using test::VecNear;
+using namespace test;  // the small-world builders of test_helpers.h
 
 std::string SolverName(const ::testing::TestParamInfo<SolverType>& info) {
   return info.param == SolverType::kThesis ? "Thesis" : "Pgs";
