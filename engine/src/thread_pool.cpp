@@ -279,9 +279,17 @@ class ThreadPool final : public TaskSystem {
 
 }  // namespace
 
+#if defined(QUADRANT_TBB)
+std::unique_ptr<TaskSystem> MakeTbbTaskSystem(int threadCount);  // tbb_task_system.cpp
+#endif
+
 std::unique_ptr<TaskSystem> MakeThreadPool(int threadCount) {
   if (threadCount <= 1) return std::make_unique<InlineTaskSystem>();
+#if defined(QUADRANT_TBB)
+  return MakeTbbTaskSystem(threadCount);
+#else
   return std::make_unique<ThreadPool>(threadCount);
+#endif
 }
 
 }  // namespace quadrant
