@@ -1,19 +1,27 @@
 // The default task system: a small purpose-built pool whose blocks are claimed dynamically.
 //
 // Why it was rewritten (issue 14). The first pool bound block w of every parallel-for to
-// thread w and made the caller wait, spinning for up to 1 ms, for every block. On a machine
-// with another busy process that collapses: measured at c70fd1b on this 2-core VM with one
-// shell busy loop, 16000 circles took 5.35 ms per step on 1 thread and 42.1 ms on 2, the
-// base-100 pyramid 26.4 ms and 103 ms (the VM also carried other users' builds, load average
-// 4-6). Timing each parallel-for inside the pool showed where the time went: for 16000 circles
-// at 2 threads, 70 steps ran 3443 parallel-fors (49 per step); the caller's own blocks took
-// 0.17 s in all and its waits for the worker's block 2.4 s, 581 of them longer than 1 ms and
-// the longest 24 ms (the pyramid: 5667 parallel-fors, own blocks 0.54 s, waits 6.3 s). So a
-// step waited, dozens of times, for a worker that the scheduler had not run yet; the waits are
-// scheduler time slices (milliseconds), not work. The spinning made it worse in two ways: a
-// worker spinning 1 ms between sections uses up its fair share of the core (CFS charges the
-// spin like work), so when a block arrives it is the thread the scheduler preempts, mid-block;
-// and a caller spinning on its core keeps the scheduler from moving the waiting worker there.
+// thread w and made the caller wait, spinning for up to 1 ms, for every block. Beside one other
+// busy process that collapses. Measured on this 2-core VM with one shell busy loop (the VM also
+// carried other users' niced builds, load average 6.5), 60 + 10 steps per run: 16000 circles
+// took 3.49 ms per step on 1 thread and 161 ms on 2; the base-100 pyramid 18.1 and 139 ms.
+// Timing each parallel-for inside the pool showed where the time went. For the circles, 70
+// steps ran 3443 parallel-fors (49 per step); the caller's own blocks took 0.10 s in all and
+// its waits for the worker's block 10.0 s, 3211 of the waits longer than 1 ms, the longest
+// 9.3 ms. The pyramid: 5667 parallel-fors, own blocks 0.52 s, waits 9.7 s, 2997 over 1 ms.
+// (Again at load average 14: circles 4.55 / 5.22 ms, pyramid 15.9 / 143 ms, its waits 8.5 s
+// against 0.71 s of own blocks.) So a step waited, dozens of times, for a worker that the
+// scheduler was not running: the waits are time slices of other processes, not work. The
+// spinning made it worse: a worker spinning 1 ms between sections uses up its fair share of
+// the core (CFS charges the spin like work), so when a block arrives it is the thread the
+// scheduler preempts, mid-block; and a caller spinning on its core keeps the scheduler from
+// moving the waiting worker there.
+//
+// With this pool, interleaved with the first one and with oneTBB (README) in one run, one busy
+// loop, load average 10-19 (first pool / this pool, ms per step at 1, 2, 3, 4 threads):
+// circles 16000 3.92 / 4.17, 234 / 4.91, 113 / 3.32, 73.0 / 2.67; pyramid 23.0 / 24.9,
+// 681 / 9.49, 445 / 42.9, 34.4 / 9.67. (Under that much foreign load the figures are noisy;
+// the busy-machine table of speedup.md is the measurement on an otherwise quiet machine.)
 //
 // What this pool does instead:
 // - Any thread takes any block. Blocks are claimed from one atomic counter (tagged with the job
@@ -23,10 +31,10 @@
 //   per-block outputs concatenated in block order are unchanged (determinism).
 // - Waiting adapts to contention. A spinning thread reads the clock every few pause
 //   instructions; a jump of more than kPreemptedMicros between two reads means the scheduler
-//   took its core for something else, and a caller that waited longer than kMaxSpinMicros for a
-//   block means a worker holding one was not running. Either marks the pool contended for
-//   kContendedMillis: then every thread waits on a futex (std::atomic::wait) after a few
-//   microseconds, so no spinner takes the core from the thread it waits for, and a sleeping
+//   took its core for something else, and a caller whose wait for the other blocks outlasts
+//   twice its own blocks plus kMaxSpinMicros means a worker holding one was not running. Either
+//   marks the pool contended for kContendedMillis: then every thread waits on a futex after a
+//   few microseconds, so no spinner takes the core from the thread it waits for, and a sleeping
 //   thread keeps its scheduler credit for the moment it has work. On a quiet machine nothing
 //   is ever preempted and waiting is what it was: up to kMaxSpinMicros of pause spinning,
 //   because a sleeping worker takes about 100 us to wake on these VMs and a step's serial gaps
@@ -82,9 +90,11 @@ class InlineTaskSystem final : public TaskSystem {
 constexpr int kMaxSpinMicros = 1000;
 // Spin before a futex wait when the pool is contended: about one futex system call.
 constexpr int kContendedSpinMicros = 5;
-// A gap this long between two clock reads of a spin loop means the spinner was descheduled.
-// The loop reads the clock every 32 pause instructions (1-5 us on x86-64).
-constexpr int kPreemptedMicros = 50;
+// A gap this long between two clock reads of a spin loop means the spinner was descheduled for
+// another thread. The loop reads the clock every 32 pause instructions (1-5 us on x86-64); a
+// scheduler time slice is 0.75 ms or more, while interrupts and a VM's short steals are tens of
+// microseconds and must not count.
+constexpr int kPreemptedMicros = 200;
 // How long one sign of contention keeps the pool in futex-waiting mode.
 constexpr int kContendedMillis = 200;
 
@@ -151,7 +161,7 @@ class ThreadPool final : public TaskSystem {
 
     const Clock::time_point start = Clock::now();
     RunBlocks();
-    WaitForBlocks(start);
+    WaitForBlocks(Clock::now() - start);
     fn_ = nullptr;
     if (error_) {
       std::exception_ptr error = std::exchange(error_, nullptr);
@@ -227,17 +237,20 @@ class ThreadPool final : public TaskSystem {
     }
   }
 
-  // The caller, after its own blocks: waits until every claimed block has finished.
-  void WaitForBlocks(Clock::time_point start) {
+  // The caller, after its own blocks (which took `own`): waits until every claimed block has
+  // finished.
+  void WaitForBlocks(Clock::duration own) {
     auto done = [this] { return remaining_.load(std::memory_order_acquire) == 0; };
+    const Clock::time_point start = Clock::now();
     if (Spin(done)) return;
     callerSleeping_.store(true, std::memory_order_seq_cst);
     for (uint32_t left; (left = remaining_.load(std::memory_order_seq_cst)) != 0;) WaitWhileEqual(remaining_, left);
     callerSleeping_.store(false, std::memory_order_relaxed);
-    // A wait longer than a whole spin budget was a wait for a worker the scheduler was not
-    // running: another process wants these cores.
+    // Blocks are about equal, so a worker's block that ends much later than the caller's own
+    // (twice as long, and a whole spin budget more) was one the scheduler was not running:
+    // another process wants these cores.
     const Clock::time_point now = Clock::now();
-    if (now - start > std::chrono::microseconds(2 * kMaxSpinMicros)) MarkContended(now);
+    if (now - start > 2 * own + std::chrono::microseconds(kMaxSpinMicros)) MarkContended(now);
   }
 
   void WorkerLoop() {
