@@ -7,6 +7,7 @@
 // The cases, their scenes and their criteria live in benchmarks/scenes (hard_cases.cpp,
 // hard_case_checks.cpp), shared with tests/adapters/hard_cases_test.cpp. Exit status: 0 when
 // every Quadrant case passes, 1 when one fails (peers never change it), 2 on bad arguments.
+#include <algorithm>
 #include <cerrno>
 #include <cstdio>
 #include <cstdlib>
@@ -36,10 +37,32 @@ struct Args {
 using quadrant::report::SplitList;
 
 [[noreturn]] void Usage(const std::string& problem) {
-  std::cerr << "quadrant_hardcases: " << problem << "\n"
-            << "usage: quadrant_hardcases --out DIR [--peers box2d,bullet,chipmunk|none] [--cases a,b] "
-               "[--soak-steps N]\n";
+  // One line (issue 16): the problem and the usage, no more.
+  std::cerr << "quadrant_hardcases: " << problem
+            << " (usage: quadrant_hardcases --out DIR [--peers box2d,bullet,chipmunk|none] [--cases a,b] "
+               "[--soak-steps N])\n";
   std::exit(2);
+}
+
+/// Every peer and case name is checked before the first case runs: a mistyped name is one line
+/// and exit 2, not minutes of cases and then an error from inside a case.
+void CheckNames(const Args& a) {
+  for (const std::string& peer : a.peers) {
+    try {
+      qs::MakeAdapter(peer);
+    } catch (const quadrant::Error& e) {
+      Usage(std::string("--peers: ") + e.what() + ", or none");
+    }
+  }
+  const std::vector<std::string> known = qs::HardCaseNames();
+  for (const std::string& name : a.cases) {
+    if (std::find(known.begin(), known.end(), name) == known.end()) {
+      std::string list;
+      for (const std::string& k : known) list += (list.empty() ? "" : ", ") + k;
+      Usage("--cases: unknown case '" + name + "' (accepted: " + list + ")");
+    }
+  }
+  if (a.cases.empty()) Usage("--cases: empty list");
 }
 
 Args Parse(int argc, char** argv) {
@@ -185,6 +208,7 @@ void Write(const std::filesystem::path& path, const std::string& text) {
 
 int main(int argc, char** argv) {
   const Args args = Parse(argc, argv);
+  CheckNames(args);
   std::vector<Row> rows;
   bool allPass = true;
   try {
@@ -213,7 +237,7 @@ int main(int argc, char** argv) {
   const std::string markdown = Markdown(rows, args);
   Write(dir / "hardcases.json", Json(rows, args));
   Write(dir / "hardcases.md", markdown);
-  std::cout << markdown;
+  std::cout << markdown << std::flush;  // before the closing line on stderr, so a 2>&1 pipe keeps them apart
   std::fprintf(stderr, "quadrant_hardcases: wrote %s and %s; Quadrant %s\n", (dir / "hardcases.json").c_str(),
                (dir / "hardcases.md").c_str(), allPass ? "passes every case" : "FAILS a case");
   return allPass ? 0 : 1;
