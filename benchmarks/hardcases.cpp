@@ -44,6 +44,12 @@ using quadrant::report::SplitList;
   std::exit(2);
 }
 
+/// A refused name: one line, exit 2.
+[[noreturn]] void Refuse(const std::string& problem) {
+  std::cerr << "quadrant_hardcases: " << problem << "\n";
+  std::exit(2);
+}
+
 /// Every peer and case name is checked before the first case runs: a mistyped name is one line
 /// and exit 2, not minutes of cases and then an error from inside a case.
 void CheckNames(const Args& a) {
@@ -51,7 +57,7 @@ void CheckNames(const Args& a) {
     try {
       qs::MakeAdapter(peer);
     } catch (const quadrant::Error& e) {
-      Usage(std::string("--peers: ") + e.what() + ", or none");
+      Refuse(std::string("--peers: ") + e.what() + "; or none");
     }
   }
   const std::vector<std::string> known = qs::HardCaseNames();
@@ -59,10 +65,10 @@ void CheckNames(const Args& a) {
     if (std::find(known.begin(), known.end(), name) == known.end()) {
       std::string list;
       for (const std::string& k : known) list += (list.empty() ? "" : ", ") + k;
-      Usage("--cases: unknown case '" + name + "' (accepted: " + list + ")");
+      Refuse("--cases: unknown case '" + name + "' (accepted: " + list + ")");
     }
   }
-  if (a.cases.empty()) Usage("--cases: empty list");
+  if (a.cases.empty()) Refuse("--cases: empty list (accepted: hard case names, tools/quadrant help)");
 }
 
 Args Parse(int argc, char** argv) {

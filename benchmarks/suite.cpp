@@ -491,6 +491,7 @@ int main(int argc, char** argv) {
 
   std::vector<std::string> unsupported;
   std::map<std::string, int> unsupportedReasons;  // reason -> combinations, for the summary line
+  std::string unsupportedSummary;
   std::vector<std::string> errors;
   int registered = 0;
   try {
@@ -557,10 +558,10 @@ int main(int argc, char** argv) {
 
     // One line for the unsupported combinations, counted by reason (issue 16: it was one line
     // per combination, 80 in the default run); the full list goes into the JSON context.
-    if (!unsupported.empty()) {
-      std::string summary;
-      for (const auto& [reason, n] : unsupportedReasons)
-        summary += fmt::format("{}{} x {}", summary.empty() ? "" : "; ", n, reason);
+    for (const auto& [reason, n] : unsupportedReasons)
+      unsupportedSummary += fmt::format("{}{} x {}", unsupportedSummary.empty() ? "" : "; ", n, reason);
+    if (!unsupported.empty() && registered > 0) {
+      const std::string& summary = unsupportedSummary;
       std::fprintf(stderr, "quadrant_bench: %zu of %zu combinations skipped as unsupported (%s); the list is in the JSON context 'unsupported'\n",
                    unsupported.size(), unsupported.size() + size_t(registered), summary.c_str());
     }
@@ -604,8 +605,8 @@ int main(int argc, char** argv) {
   if (registered == 0 && errors.empty()) {
     // Every combination unsupported (e.g. --engines box2d --threads 2): say so in one line
     // instead of Google Benchmark's "Failed to match any benchmarks".
-    std::fprintf(stderr, "quadrant_bench: nothing to run: all %zu combinations are unsupported\n",
-                 unsupported.size());
+    std::fprintf(stderr, "quadrant_bench: nothing to run: all %zu combinations are unsupported (%s)\n",
+                 unsupported.size(), unsupportedSummary.c_str());
     return 2;
   }
   g_total = filtered ? 0 : registered * repetitions;
