@@ -25,13 +25,8 @@ import re
 import statistics
 import sys
 
-# <scene>/<engine>/n:<N>/threads:<T>, then what Google Benchmark appends: /iterations:<k>,
-# /real_time or /manual_time, and _<aggregate> on aggregate rows. Engine names may hold
-# variants ("quadrant:pgs").
-NAME_RE = re.compile(
-    r"^(?P<scene>[A-Za-z0-9_.\-]+)/(?P<engine>[A-Za-z0-9_.:\-]+)/n:(?P<n>\d+)/threads:(?P<threads>\d+)"
-    r"(?:/iterations:\d+)?(?:/(?:real_time|manual_time))?(?:_(?P<aggregate>[A-Za-z0-9]+))?$"
-)
+import gbench_json  # the one reader of Google Benchmark names in tools/
+
 LABEL_RE = re.compile(r"^[0-9a-f]{16}$")
 SCENE_NOUNS = {"circle_stress": "circles", "polygon_stress": "polygons"}
 THESIS_FIGURES = {"circle_stress": "Figure 14", "polygon_stress": "Figure 15"}
@@ -58,10 +53,13 @@ def load_json(path):
 
 
 def parse_name(name):
-    m = NAME_RE.match(name or "")
-    if not m:
+    """(scene, engine, n, threads, aggregate or None) of a row's name, by the one rule of
+    gbench_json (which also accepts variant names with '+', e.g. quadrant:pgs+it8)."""
+    parsed = gbench_json.parse_quadrant_name(name)
+    if not parsed:
         return None
-    return m.group("scene"), m.group("engine"), int(m.group("n")), int(m.group("threads")), m.group("aggregate")
+    m = gbench_json.AGGREGATE_RE.search(name)
+    return parsed + (m.group("aggregate") if m else None,)
 
 
 def is_aggregate(row):

@@ -39,22 +39,16 @@ mann_whitney_u). tests/tools/compare_test.py checks the p values against values 
 
 import argparse
 import glob
-import json
 import math
 import os
-import re
 import statistics
 import sys
 
 import scipy.stats  # Debian python3-scipy (tools/quadrant setup installs it)
 
-# Google Benchmark appends these to a benchmark's name; they are not part of its identity
-# (a run with a different iteration count or time mode is still the same benchmark).
-SUFFIX_RE = re.compile(
-    r"/(?:iterations:\d+|repeats:\d+|min_time:[0-9.]+s?|min_warmup_time:[0-9.]+s?"
-    r"|real_time|manual_time|process_time)$"
-)
-AGGREGATE_RE = re.compile(r"_(?:mean|median|stddev|cv)$")
+import gbench_json
+from gbench_json import base_name  # noqa: F401  (compare.base_name: the pairing rule, tested)
+
 TIME_UNITS_MS = {"ns": 1e-6, "us": 1e-3, "ms": 1.0, "s": 1e3}
 
 # Context keys whose difference makes a comparison questionable: warned about on stderr.
@@ -104,19 +98,6 @@ def mann_whitney_u(x, y, method="auto"):
 # ---- Reading Google Benchmark JSON ------------------------------------------------------------
 
 
-def base_name(name):
-    """The benchmark's identity: its name without Google Benchmark's run suffixes."""
-    prev = None
-    while prev != name:
-        prev, name = name, SUFFIX_RE.sub("", name)
-    return name
-
-
-def is_aggregate(row):
-    return (row.get("run_type") == "aggregate" or bool(row.get("aggregate_name"))
-            or bool(AGGREGATE_RE.search(row.get("name", ""))))
-
-
 class Side:
     """One side of the comparison: the repetitions of every benchmark, from one or more files."""
 
@@ -146,30 +127,16 @@ class Side:
 
     def _read(self, path):
         try:
-            with open(path, encoding="utf-8") as f:
-                data = json.load(f)
-        except OSError as e:
-            raise InputError(f"{path}: cannot read: {e.strerror or e}")
-        except (json.JSONDecodeError, UnicodeDecodeError) as e:
-            raise InputError(f"{path}: not valid JSON ({e})")
-        if not isinstance(data, dict) or not isinstance(data.get("benchmarks"), list):
-            raise InputError(f'{path}: not Google Benchmark JSON (no "benchmarks" array; '
-                             "write it with --benchmark_out=FILE --benchmark_out_format=json)")
+            data = gbench_json.load(path)
+            rows = gbench_json.Rows(data, path, strict=True)
+        except gbench_json.GBenchError as e:
+            raise InputError(str(e))
         if isinstance(data.get("context"), dict):
             self.contexts.append(data["context"])
-        for i, row in enumerate(data["benchmarks"]):
-            if not isinstance(row, dict) or not isinstance(row.get("name"), str):
-                raise InputError(f"{path}: benchmarks[{i}] is not a benchmark row (no name)")
-            if row.get("error_occurred"):
-                name = base_name(row.get("run_name") or row["name"])
-                self.failed[name] = row.get("error_message", "no message")
-                continue
-            if is_aggregate(row):
-                if (row.get("aggregate_name") or "") == "median" or row["name"].endswith("_median"):
-                    name = base_name(row.get("run_name") or AGGREGATE_RE.sub("", row["name"]))
-                    self.medians[name] = row
-                continue
-            self.reps.setdefault(base_name(row["name"]), []).append(row)
+        self.failed.update(rows.failed)
+        self.medians.update(rows.medians)
+        for name, reps in rows.reps.items():
+            self.reps.setdefault(name, []).extend(reps)
 
     def names(self):
         return set(self.reps) | set(self.medians)

@@ -20,16 +20,15 @@ per step (log scale when the lines span more than a factor 10, as 1000 and 16000
 import argparse
 import csv
 import datetime
-import json
 import os
 import re
 import statistics
 import sys
 
+import gbench_json
+
 FIELDS = ["record", "date", "commit", "machine", "benchmark", "steps_per_second", "ms_per_step",
           "repetitions"]
-SUFFIX_RE = re.compile(r"(?:/iterations:\d+|/repeats:\d+|/real_time|/manual_time|/process_time)+$")
-TIME_UNITS_S = {"ns": 1e-9, "us": 1e-6, "ms": 1e-3, "s": 1.0}
 
 
 class HistoryError(Exception):
@@ -43,15 +42,9 @@ def natural_key(text):
 
 def load_run(path):
     try:
-        with open(path, encoding="utf-8") as f:
-            data = json.load(f)
-    except OSError as e:
-        raise HistoryError(f"{path}: cannot read: {e.strerror or e}")
-    except json.JSONDecodeError as e:
-        raise HistoryError(f"{path}: not valid JSON ({e})")
-    if not isinstance(data, dict) or not isinstance(data.get("benchmarks"), list):
-        raise HistoryError(f'{path}: not Google Benchmark JSON (no "benchmarks" array)')
-    return data
+        return gbench_json.load(path)
+    except gbench_json.GBenchError as e:
+        raise HistoryError(str(e))
 
 
 def run_date_utc(context):
@@ -69,23 +62,15 @@ def run_date_utc(context):
 def medians(data):
     """{benchmark: (steps_per_second, ms_per_step, repetitions)} from the per-repetition rows."""
     per = {}
-    for row in data["benchmarks"]:
-        if not isinstance(row, dict) or row.get("error_occurred"):
-            continue
-        if row.get("run_type") == "aggregate" or row.get("aggregate_name"):
-            continue
-        name = SUFFIX_RE.sub("", row.get("name", ""))
-        ms = row.get("ms_per_step")
-        if not isinstance(ms, (int, float)):
-            unit = TIME_UNITS_S.get(row.get("time_unit", "ns"), 1e-9)
-            real, steps = row.get("real_time"), row.get("steps", 1)
-            if not isinstance(real, (int, float)):
+    for name, rows in gbench_json.Rows(data).reps.items():
+        for row in rows:
+            ms = gbench_json.ms_per_step(row)
+            if ms is None:
                 continue
-            ms = real * unit * 1e3 / (steps or 1)
-        sps = row.get("steps_per_second")
-        if not isinstance(sps, (int, float)):
-            sps = 1e3 / ms if ms > 0 else float("nan")
-        per.setdefault(name, []).append((float(sps), float(ms)))
+            sps = row.get("steps_per_second")
+            if not isinstance(sps, (int, float)):
+                sps = 1e3 / ms if ms > 0 else float("nan")
+            per.setdefault(name, []).append((float(sps), float(ms)))
     return {name: (statistics.median(v[0] for v in values), statistics.median(v[1] for v in values),
                    len(values))
             for name, values in per.items()}
