@@ -54,6 +54,7 @@
 #include <vector>
 
 #include "adapter.h"
+#include "progress_reporter.h"
 #include "quadrant/error.h"
 #include "scene.h"
 #include "scenes.h"
@@ -380,17 +381,7 @@ struct Job {
   std::string name;
 };
 
-std::atomic<int> g_started{0};
-int g_total = 0;  // registered benchmarks x repetitions; 0 when unknown (a filter is in use)
-
 void RunJob(benchmark::State& state, const Job& job) {
-  const int k = ++g_started;
-  if (g_total > 0)
-    std::fprintf(stderr, "[%d/%d] %s\n", k, g_total, job.name.c_str());
-  else
-    std::fprintf(stderr, "[%d] %s\n", k, job.name.c_str());
-  std::fflush(stderr);
-
   // Setup, untimed, repeated for every repetition so that repetitions are independent.
   std::unique_ptr<qs::Adapter> adapter;
   MemoryProbe memory;
@@ -609,8 +600,10 @@ int main(int argc, char** argv) {
                  unsupported.size(), unsupportedSummary.c_str());
     return 2;
   }
-  g_total = filtered ? 0 : registered * repetitions;
-  benchmark::RunSpecifiedBenchmarks();
+  // Progress on stderr, one line per finished run with an ETA (progress_reporter.h); the JSON
+  // file reporter (--benchmark_out) is Google Benchmark's own.
+  quadrant::bench::ProgressReporter progress(filtered ? 0 : registered * repetitions, QUADRANT_BUILD_TYPE);
+  benchmark::RunSpecifiedBenchmarks(&progress);
   benchmark::Shutdown();
   return errors.empty() ? 0 : 1;
 }
