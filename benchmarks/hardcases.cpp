@@ -220,6 +220,7 @@ int main(int argc, char** argv) {
   try {
     qs::HardCaseOptions options;
     options.soakSteps = args.soakSteps;
+    options.progressSeconds = 10;  // a line at least every 10 s during the minutes-long soaks
     for (const std::string& name : args.cases) {
       Row row;
       row.quadrant = qs::RunHardCase(name, "quadrant", options);
