@@ -22,6 +22,41 @@ std::unique_ptr<Adapter> MakeAdapter(std::string_view name) {
               "' (known: quadrant, quadrant:<variant>, box2d, bullet, chipmunk)");
 }
 
+void Adapter::Load(const Scene& scene, int threads) {
+  ValidateScene(scene);
+  // Fewer than one thread is bad input (an Error); more than the engine runs is a limit of the
+  // engine (Unsupported), which the suite reports and skips.
+  if (threads < 1) throw Error(Name() + ": threads must be >= 1, got " + std::to_string(threads));
+  const Capabilities caps = Caps();
+  if (threads > caps.maxThreads) {
+    throw Unsupported(Name() + " runs at most " + std::to_string(caps.maxThreads) + " thread(s), asked for " +
+                      std::to_string(threads) + (caps.threadLimit.empty() ? "" : ": " + caps.threadLimit));
+  }
+  DoLoad(scene, threads);  // throws before replacing the world: the old one stays loaded
+  loaded_ = true;
+  driver_ = scene.driver;
+  step_ = 0;
+}
+
+void Adapter::Step() {
+  if (!loaded_) throw Error(Name() + ": Step before Load");
+  if (driver_) driver_(step_, *this);
+  DoStep();
+  ++step_;
+}
+
+void Adapter::SetVelocity(int body, Vec2 velocity, Real angularVelocity) {
+  if (!loaded_ || body < 0 || body >= BodyCount()) {
+    throw Error(Name() + ": SetVelocity: body index " + std::to_string(body) + " is outside [0, " +
+                std::to_string(loaded_ ? BodyCount() : 0) + ")");
+  }
+  // Both checked before either is set, so a refused call changes nothing.
+  if (!IsFinite(velocity) || !IsFinite(angularVelocity)) {
+    throw Error(Name() + ": SetVelocity: velocity is not finite");
+  }
+  DoSetVelocity(body, velocity, angularVelocity);
+}
+
 uint64_t Adapter::StateHash() const {
   std::vector<BodyState> states;
   ReadBodies(states);

@@ -62,6 +62,7 @@ class QuadrantAdapter final : public Adapter {
   Capabilities Caps() const override {
     Capabilities c;
     c.maxThreads = kMaxThreads;
+    c.threadLimit = "WorldDef.threadCount is at most 64";
     c.disableRotation = true;
     c.disableFriction = true;
     c.disableWarmStarting = true;
@@ -77,9 +78,7 @@ class QuadrantAdapter final : public Adapter {
     return c;
   }
 
-  void Load(const Scene& scene, int threads) override {
-    ValidateScene(scene);
-    if (threads < 1 || threads > kMaxThreads) throw Error("quadrant: threads must be in [1, 64]");
+  void DoLoad(const Scene& scene, int threads) override {
     if (scene.effects.sleep && scheme_ == ParallelScheme::kQuadrants) {
       throw Unsupported("quadrant's quadrants scheme has no sleeping (the deterministic scheme has)");
     }
@@ -129,14 +128,10 @@ class QuadrantAdapter final : public Adapter {
     scene_ = &scene;
     dt_ = scene.timeStep;
     subSteps_ = scene.subSteps;
-    driver_ = scene.driver;
-    step_ = 0;
     totals_ = Profile{};
   }
 
-  void Step() override {
-    if (!world_) throw Error("quadrant: Step before Load");
-    if (driver_) driver_(step_, *this);
+  void DoStep() override {
     world_->Step(dt_, subSteps_);
     const Profile& p = world_->GetProfile();
     totals_.broadPhase += p.broadPhase;
@@ -149,7 +144,6 @@ class QuadrantAdapter final : public Adapter {
       totals_.balance[k].workMs += p.balance[k].workMs;
       totals_.balance[k].criticalMs += p.balance[k].criticalMs;
     }
-    ++step_;
   }
 
   std::vector<std::pair<std::string, double>> StageTotals() const override {
@@ -204,10 +198,7 @@ class QuadrantAdapter final : public Adapter {
     return out;
   }
 
-  void SetVelocity(int body, Vec2 velocity, Real angularVelocity) override {
-    if (body < 0 || body >= static_cast<int>(ids_.size())) throw Error("SetVelocity: body index out of range");
-    // Both checked before either is set, so a refused call changes nothing.
-    if (!IsFinite(velocity) || !IsFinite(angularVelocity)) throw Error("SetVelocity: velocity is not finite");
+  void DoSetVelocity(int body, Vec2 velocity, Real angularVelocity) override {
     world_->SetLinearVelocity(ids_[body], velocity);
     world_->SetAngularVelocity(ids_[body], angularVelocity);
   }
@@ -239,10 +230,8 @@ class QuadrantAdapter final : public Adapter {
   std::unique_ptr<World> world_;
   std::vector<BodyId> ids_;
   const Scene* scene_ = nullptr;
-  Driver driver_;
   Real dt_ = Real(1.0 / 60.0);
   int subSteps_ = 1;
-  int step_ = 0;
   Profile totals_;
 };
 
