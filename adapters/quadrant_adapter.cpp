@@ -175,11 +175,16 @@ class QuadrantAdapter final : public Adapter {
   std::vector<ContactReadback> Contacts() const override {
     std::vector<ContactReadback> out;
     if (!world_) return out;
-    auto sceneIndex = [this](BodyId id) {
-      for (size_t i = 0; i < ids_.size(); ++i) {
-        if (ids_[i] == id) return static_cast<int>(i);
-      }
-      return -1;
+    // Slot index -> scene index, once per call: the lookup was a scan of every id per contact
+    // end (O(contacts x N)); slot indices are below the number of slots ever used.
+    uint32_t slots = 0;
+    for (BodyId id : ids_) slots = std::max(slots, id.index + 1);
+    std::vector<int> bySlot(slots, -1);
+    for (size_t i = 0; i < ids_.size(); ++i) bySlot[ids_[i].index] = static_cast<int>(i);
+    auto sceneIndex = [&](BodyId id) {
+      if (id.index >= slots) return -1;
+      const int i = bySlot[id.index];
+      return i >= 0 && ids_[size_t(i)] == id ? i : -1;  // the generation must match too
     };
     for (const ContactInfo& c : world_->GetContacts()) {
       ContactReadback r;
