@@ -27,9 +27,15 @@ namespace rp = quadrant::report;
 
 namespace {
 
+std::vector<std::string> PeerNames() {
+  std::vector<std::string> peers = qs::AdapterNames();
+  peers.erase(peers.begin());  // "quadrant"
+  return peers;
+}
+
 struct Args {
   std::string out = ".";
-  std::vector<std::string> peers = {"box2d", "bullet", "chipmunk"};
+  std::vector<std::string> peers = PeerNames();  // the peers this build has
   std::vector<std::string> cases = qs::HardCaseNames();
   int soakSteps = 100000;
 };
