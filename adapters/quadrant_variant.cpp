@@ -89,14 +89,7 @@ WorldDef QuadrantVariant::MakeWorldDef(const Scene& scene, int threads) const {
   def.restitutionThreshold = scene.restitutionThreshold;
   def.threadCount = threads;
   def.scheme = scheme;
-  def.effects.gravity = scene.effects.gravity;
-  def.effects.friction = scene.effects.friction;
-  def.effects.restitution = scene.effects.restitution;
-  def.effects.rotation = scene.effects.rotation;
-  def.effects.warmStarting = scene.effects.warmStarting;
-  def.effects.continuous = scene.effects.continuous;
-  def.effects.damping = scene.effects.damping;
-  def.effects.sleep = scene.effects.sleep;  // Box2D 2.4's tolerances: the WorldDef defaults
+  def.effects = scene.effects;  // one type (scene.h); sleep with Box2D 2.4's tolerances, WorldDef's defaults
   return def;
 }
 
