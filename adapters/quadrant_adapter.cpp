@@ -1,7 +1,8 @@
 // The Quadrant adapter: a scene becomes a World once, at load time.
 //
 // Variants ("quadrant:<tokens>", tokens joined by '+'): solver "thesis" or "pgs", broad phase
-// "quadtree" or "grid", parallel scheme "deterministic" or "quadrants". The default is pgs with
+// "quadtree" or "grid", parallel scheme "deterministic" or "quadrants", "b2rest" for Box2D 2.4.1's
+// restitution (RestitutionPolicy::kBox2d, pgs only). The default is pgs with
 // the uniform grid and the deterministic scheme, the combination the suite measured fastest
 // on the stress scenes (see README).
 //
@@ -41,6 +42,8 @@ class QuadrantAdapter final : public Adapter {
       } else if (token.size() > 3 && token.starts_with("sub") && ParseCount(token.substr(3), &softSubSteps_)) {
       } else if (token.size() > 2 && token.starts_with("it") && ParseCount(token.substr(2), &iterations_)) {
       } else if (token.size() > 3 && token.starts_with("pos") && ParseCount(token.substr(3), &positionIterations_)) {
+      } else if (token == "b2rest") {
+        restitution_ = RestitutionPolicy::kBox2d;
       } else if (token == "quadtree") {
         broadPhase_ = BroadPhaseType::kQuadTree;
       } else if (token == "grid") {
@@ -50,7 +53,7 @@ class QuadrantAdapter final : public Adapter {
       } else if (token == "quadrants") {
         scheme_ = ParallelScheme::kQuadrants;
       } else {
-        throw Error("unknown quadrant variant '" + std::string(token) + "' (known: thesis, pgs, soft_step, quadtree, grid, deterministic, quadrants, sub<N>, it<N>, pos<N>)");
+        throw Error("unknown quadrant variant '" + std::string(token) + "' (known: thesis, pgs, soft_step, quadtree, grid, deterministic, quadrants, sub<N>, it<N>, pos<N>, b2rest)");
       }
       if (end == std::string_view::npos) break;
       start = end + 1;
@@ -96,6 +99,7 @@ class QuadrantAdapter final : public Adapter {
     }
     def.positionIterations = positionIterations_ > 0 ? positionIterations_ : scene.positionIterations;
     def.restitutionThreshold = scene.restitutionThreshold;
+    def.restitution = restitution_;
     def.threadCount = threads;
     def.scheme = scheme_;
     def.effects.gravity = scene.effects.gravity;
@@ -219,6 +223,7 @@ class QuadrantAdapter final : public Adapter {
  private:
   std::string variant_;
   SolverType solver_ = SolverType::kPgs;
+  RestitutionPolicy restitution_ = RestitutionPolicy::kCollisions;
   BroadPhaseType broadPhase_ = BroadPhaseType::kUniformGrid;
   ParallelScheme scheme_ = ParallelScheme::kDeterministic;
   int softSubSteps_ = 0;  // 0: the engine's default

@@ -115,4 +115,8 @@ class Random {
   uint64_t state_;
 };
 
+/// A random convex polygon of 3..8 vertices on a circle of `circumradius`, counter-clockwise,
+/// centred on its centroid (the stress scenes' polygons; also the random validation hits').
+std::vector<Vec2> RandomConvexPolygon(Random& rng, Real circumradius);
+
 }  // namespace quadrant::scene

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "integrate.h"
+#include "restitution_policy.h"
 #include "solver.h"
 
 namespace quadrant {
@@ -33,6 +34,7 @@ struct PointConstraint {
   Real separation;        // at collision time
   Real bounceShift;       // early-bounce correction (m) applied after integration, 0 if none
   Real collisionImpulse;  // normal impulse of this step's collisions (pgs), not warm-started
+  Real restitutionBias;   // RestitutionPolicy::kBox2d: the row's target velocity (m/s), else 0
 };
 
 struct ContactConstraint {
@@ -186,6 +188,13 @@ class ContactSolverBase : public Solver {
         pc.collisionImpulse = 0;
         pc.separation = mp.separation;
         pc.bounceShift = 0;
+        pc.restitutionBias = 0;
+        if (ctx.def->restitution == RestitutionPolicy::kBox2d && ctx.def->effects.restitution) {
+          const BodyVelocity& va = bodies.vel[cc.a];
+          const BodyVelocity& vb = bodies.vel[cc.b];
+          const Real vn = Dot(RelativeVelocity<kRotation>(va, vb, pc), n);
+          pc.restitutionBias = Box2dRestitutionBias(cc.restitution, ctx.def->restitutionThreshold, vn, pc.separation);
+        }
       }
       cc.k12 = 0;
       cc.block = false;

@@ -59,6 +59,10 @@ void ValidateWorldDef(const WorldDef& d) {
           "WorldDef.speculativeDistance must be finite and >= 0");
   Require(IsFinite(d.restitutionThreshold) && d.restitutionThreshold >= 0,
           "WorldDef.restitutionThreshold must be finite and >= 0");
+  Require(d.restitution == RestitutionPolicy::kCollisions || d.restitution == RestitutionPolicy::kBox2d,
+          "WorldDef.restitution is unknown");
+  Require(d.restitution == RestitutionPolicy::kCollisions || d.solver == SolverType::kPgs,
+          "WorldDef.restitution = kBox2d needs SolverType::kPgs");
   Require(IsFinite(d.maxLinearSpeed) && d.maxLinearSpeed > 0, "WorldDef.maxLinearSpeed must be > 0");
   Require(IsFinite(d.maxRotation) && d.maxRotation > 0, "WorldDef.maxRotation must be > 0");
   Require(d.threadCount >= 1 && d.threadCount <= kMaxThreads, "WorldDef.threadCount must be in [1, 64]");
