@@ -346,6 +346,8 @@ std::vector<CampaignRun> DefaultCampaignRuns() {
       {"quadrant:soft_step", "default", "quadrant:soft_step"},
       {"quadrant:thesis", "default", "quadrant:thesis"},
       {"quadrant:pgs", "box2d_restitution", "quadrant:pgs+b2rest"},
+      {"quadrant:pgs", "box2d_skin", "quadrant:pgs+b2skin"},
+      {"quadrant:pgs", "box2d_restitution+skin", "quadrant:pgs+b2rest+b2skin"},
   };
 }
 

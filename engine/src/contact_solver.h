@@ -166,6 +166,8 @@ class ContactSolverBase : public Solver {
       cc.invIA = kRotation ? bodies.inv[cc.a].invInertia : Real(0);
       cc.invIB = kRotation ? bodies.inv[cc.b].invInertia : Real(0);
       cc.pointCount = contact.manifold.pointCount;
+      const Real skin = PolygonSkin(*ctx.def, bodies.shape[cc.a].type == ShapeType::kPolygon,
+                                    bodies.shape[cc.b].type == ShapeType::kPolygon);
       const Vec2 n = cc.normal;
       const Vec2 t = RightPerp(n);
       for (int k = 0; k < cc.pointCount; ++k) {
@@ -186,7 +188,7 @@ class ContactSolverBase : public Solver {
         pc.normalImpulse = mp.normalImpulse;
         pc.tangentImpulse = mp.tangentImpulse;
         pc.collisionImpulse = 0;
-        pc.separation = mp.separation;
+        pc.separation = mp.separation - skin;
         pc.bounceShift = 0;
         pc.restitutionBias = 0;
         if (ctx.def->restitution == RestitutionPolicy::kBox2d && ctx.def->effects.restitution) {

@@ -35,4 +35,11 @@ inline Real NormalRowOffset(Real separation, Real restitutionBias, Real invDt) {
   return separation > 0 ? separation * invDt : Real(0);
 }
 
+/// The separation a pair's points lose to WorldDef::polygonSkin (Box2D 2.4.1's polygon radius):
+/// one skin per polygon of the pair. Here with the restitution policy because the two together
+/// are what reproduces Box2D's responses; neither changes anything at its default.
+inline Real PolygonSkin(const WorldDef& def, bool polygonA, bool polygonB) {
+  return def.polygonSkin * Real(int(polygonA) + int(polygonB));
+}
+
 }  // namespace quadrant

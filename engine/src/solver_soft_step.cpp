@@ -174,7 +174,7 @@ class SoftStepSolver final : public ContactSolverBase {
         for (int k = 0; k < cc.pointCount; ++k) {
           PointConstraint& pc = cc.points[k];
           const Real vt = Dot(RelativeVelocity<kRotation>(va, vb, pc), t);
-          const Real maxFriction = cc.friction * pc.normalImpulse;
+          const Real maxFriction = cc.friction * (pc.normalImpulse + pc.collisionImpulse);
           const Real newImpulse = std::clamp(pc.tangentImpulse - pc.tangentMass * vt, -maxFriction, maxFriction);
           const Real lambda = newImpulse - pc.tangentImpulse;
           pc.tangentImpulse = newImpulse;

@@ -63,6 +63,8 @@ void ValidateWorldDef(const WorldDef& d) {
           "WorldDef.restitution is unknown");
   Require(d.restitution == RestitutionPolicy::kCollisions || d.solver == SolverType::kPgs,
           "WorldDef.restitution = kBox2d needs SolverType::kPgs");
+  Require(IsFinite(d.polygonSkin) && d.polygonSkin >= 0 && 2 * d.polygonSkin <= d.speculativeDistance,
+          "WorldDef.polygonSkin must be in [0, speculativeDistance / 2]");
   Require(IsFinite(d.maxLinearSpeed) && d.maxLinearSpeed > 0, "WorldDef.maxLinearSpeed must be > 0");
   Require(IsFinite(d.maxRotation) && d.maxRotation > 0, "WorldDef.maxRotation must be > 0");
   Require(d.threadCount >= 1 && d.threadCount <= kMaxThreads, "WorldDef.threadCount must be in [1, 64]");

@@ -127,7 +127,7 @@ TEST(ImpactAnalytic, RodSlipReverses) {
   in.a = Wall();
   in.b.invMass = 1;
   in.b.invInertia = 12;
-  in.b.vx = -0.2;
+  in.b.vx = 0.2;  // slipping towards +x, the way the impact's K_tn slows (slip the other way grows)
   in.b.vy = -1;
   in.b.rx = -0.5 * c;
   in.b.ry = -0.5 * s;
