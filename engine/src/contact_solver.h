@@ -166,8 +166,10 @@ class ContactSolverBase : public Solver {
       cc.invIA = kRotation ? bodies.inv[cc.a].invInertia : Real(0);
       cc.invIB = kRotation ? bodies.inv[cc.b].invInertia : Real(0);
       cc.pointCount = contact.manifold.pointCount;
-      const Real skin = PolygonSkin(*ctx.def, bodies.shape[cc.a].type == ShapeType::kPolygon,
-                                    bodies.shape[cc.b].type == ShapeType::kPolygon);
+      // Shapes are read only with a skin: the quadrants scheme's private body copies carry none.
+      const Real skin = ctx.def->polygonSkin > 0 ? PolygonSkin(*ctx.def, bodies.shape[cc.a].type == ShapeType::kPolygon,
+                                                               bodies.shape[cc.b].type == ShapeType::kPolygon)
+                                                 : Real(0);
       const Vec2 n = cc.normal;
       const Vec2 t = RightPerp(n);
       for (int k = 0; k < cc.pointCount; ++k) {

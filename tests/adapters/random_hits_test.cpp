@@ -109,6 +109,8 @@ TEST(RandomHits, Box2dSettingsAreRefusedWhereTheyDoNotApply) {
   def.polygonSkin = Real(0.01);
   def.restitution = RestitutionPolicy::kBox2d;
   EXPECT_NO_THROW(World{def});
+  def.scheme = ParallelScheme::kQuadrants;
+  EXPECT_THROW(World{def}, Error);
 }
 
 }  // namespace

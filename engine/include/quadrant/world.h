@@ -160,6 +160,7 @@ struct WorldDef {
   /// points within them are touching rows and bodies rest that far apart. 0 (the default): shapes
   /// are exactly their vertices. Box2D 2.4.1's b2_polygonRadius is 0.01; with it and
   /// RestitutionPolicy::kBox2d Quadrant reproduces Box2D's responses (README "validation").
+  /// Deterministic scheme only (World refuses it with kQuadrants).
   Real polygonSkin = 0;
   Real maxLinearSpeed = Real(400);      ///< m/s; a numerical guard, as Box2D 3's default
   /// Most a body turns in one step (rad), as Box2D 3's 0.25 pi: a numerical guard. Speculative
