@@ -6,7 +6,11 @@
 // row per hit and run, for the plot: tools/validation_random_plot.py).
 //
 //   quadrant_validate --out DIR [--cases a,b]
-//   quadrant_validate --out DIR --random N [--seed S]
+//   quadrant_validate --out DIR --random N [--seed S] [--runs quadrant:VARIANT,...]
+//
+// --runs adds Quadrant variants (adapter names, e.g. quadrant:soft_step+sub16) to the campaign's
+// runs, reported as engine "quadrant:<solver>" and setting "<the other tokens>": how a
+// difference is traced to one modelling choice.
 //
 // The cases, their tolerances and the reasons for them live in
 // benchmarks/scenes/validation_cases.cpp, shared with tests/adapters/validation_test.cpp. Exit
@@ -36,11 +40,12 @@ struct Args {
   std::vector<std::string> cases = qs::ValidationCaseNames();
   int random = 0;  ///< hits of the random campaign; 0: the canonical cases
   uint64_t seed = 17;
+  std::vector<std::string> extraRuns;  ///< --runs: more Quadrant variants for the campaign
 };
 
 [[noreturn]] void Usage(const std::string& problem) {
   std::cerr << "quadrant_validate: " << problem << "\nusage: quadrant_validate --out DIR [--cases a,b]\n"
-            << "       quadrant_validate --out DIR --random N [--seed S]\n";
+            << "       quadrant_validate --out DIR --random N [--seed S] [--runs quadrant:VARIANT,...]\n";
   std::exit(2);
 }
 
@@ -63,6 +68,8 @@ Args Parse(int argc, char** argv) {
       const std::optional<int> s = rp::ParseInt(value, 0, 2147483647);
       if (!s) Usage("--seed needs a whole number in [0, 2147483647], got '" + value + "'");
       a.seed = uint64_t(*s);
+    } else if (flag == "--runs") {
+      a.extraRuns = rp::SplitList(value);
     } else {
       Usage("unknown option " + flag);
     }
@@ -136,7 +143,7 @@ int main(int argc, char** argv) {
   const Args args = Parse(argc, argv);
   if (args.random > 0) {
     try {
-      return quadrant::report::RunRandomCampaign(args.out, args.random, args.seed);
+      return quadrant::report::RunRandomCampaign(args.out, args.random, args.seed, args.extraRuns);
     } catch (const quadrant::Error& e) {
       Usage(e.what());
     }

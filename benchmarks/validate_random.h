@@ -3,6 +3,7 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "quadrant/error.h"
 
@@ -10,6 +11,7 @@ namespace quadrant::report {
 
 /// Runs the random campaign (hits 0..hits-1 of seed `seed`) and writes validation_random.json,
 /// validation_random.md and validation_random_hits.csv into outDir. Throws quadrant::Error.
-int RunRandomCampaign(const std::string& outDir, int hits, uint64_t seed);
+/// extraRuns: more adapter names ("quadrant:<variant>") run besides DefaultCampaignRuns().
+int RunRandomCampaign(const std::string& outDir, int hits, uint64_t seed, const std::vector<std::string>& extraRuns);
 
 }  // namespace quadrant::report
