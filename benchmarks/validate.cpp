@@ -2,8 +2,8 @@
 // DIR/validation.json and DIR/validation.md; or, with --random N, the randomised campaign of N
 // oblique hits (benchmarks/scenes/random_hits.h) on every Quadrant solver and setting and on
 // Box2D, against Box2D and the analytic single-point impact, and writes
-// DIR/validation_random.json, DIR/validation_random.md and DIR/validation_random_hits.csv (one
-// row per hit and run, for the plot: tools/validation_random_plot.py).
+// DIR/validation_random.json, DIR/validation_random.md and DIR/validation_random_hits.csv (a
+// row per hit, for the plot: tools/validation_random_plot.py).
 //
 //   quadrant_validate --out DIR [--cases a,b]
 //   quadrant_validate --out DIR --random N [--seed S] [--runs quadrant:VARIANT,...]

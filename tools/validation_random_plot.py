@@ -32,24 +32,33 @@ def main():
             rows = list(csv.DictReader(f))
     except OSError as e:
         sys.exit(f"validation_random_plot: cannot read {path}: {e.strerror}")
-    if not rows or "to_box2d" not in rows[0]:
+    if not rows or "analytic:to_box2d" not in rows[0]:
         sys.exit(f"validation_random_plot: {path} is not a campaign's per-hit CSV")
 
-    runs, classes = [], []
+    # Columns "<engine>/<setting>:<quantity>", one triple per run, in run order.
+    keys = []
+    for column in rows[0].keys():
+        if column.endswith(":to_box2d"):
+            keys.append(column[: -len(":to_box2d")])
+
+    def label(key):
+        engine, _, setting = key.partition("/")
+        return engine if setting in ("", "default") else engine + " / " + setting
+
+    runs = [label(k) for k in keys]
+    classes = []
     to_box2d, to_analytic = {}, {}
     for r in rows:
-        run = r["engine"] + ("" if r["setting"] in ("default", "single_point") else " / " + r["setting"])
-        if run not in runs:
-            runs.append(run)
         if r["class"] not in classes:
             classes.append(r["class"])
-        if r["to_box2d"] != "" and r["engine"] != "box2d":
-            to_box2d.setdefault(run, {}).setdefault(r["class"], []).append(float(r["to_box2d"]))
-        if r["to_analytic"] != "":
-            to_analytic.setdefault(run, []).append(float(r["to_analytic"]))
+        for key, run in zip(keys, runs):
+            if r[key + ":to_box2d"] != "" and not key.startswith("box2d/"):
+                to_box2d.setdefault(run, {}).setdefault(r["class"], []).append(float(r[key + ":to_box2d"]))
+            if r.get(key + ":to_analytic", "") != "":
+                to_analytic.setdefault(run, []).append(float(r[key + ":to_analytic"]))
     order = ["polygon-polygon", "circle-polygon", "circle-circle"]
     classes.sort(key=lambda c: (order.index(c.split(" ")[0]) if c.split(" ")[0] in order else 9, c))
-    hits = len({r["hit"] for r in rows})
+    hits = len(rows)
 
     import matplotlib
     matplotlib.use("Agg")
