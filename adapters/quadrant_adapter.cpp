@@ -3,7 +3,8 @@
 // Variants ("quadrant:<tokens>", tokens joined by '+'): solver "thesis" or "pgs", broad phase
 // "quadtree" or "grid", parallel scheme "deterministic" or "quadrants", "b2rest" for Box2D 2.4.1's
 // restitution (RestitutionPolicy::kBox2d, pgs only), "b2skin" for its 0.01 m polygon skin
-// (WorldDef::polygonSkin). The default is pgs with
+// (WorldDef::polygonSkin), "coupled" for the thesis solver's coupled impulse
+// (WorldDef::thesisCoupledImpulse). The default is pgs with
 // the uniform grid and the deterministic scheme, the combination the suite measured fastest
 // on the stress scenes (see README).
 //
@@ -45,6 +46,8 @@ class QuadrantAdapter final : public Adapter {
       } else if (token.size() > 3 && token.starts_with("pos") && ParseCount(token.substr(3), &positionIterations_)) {
       } else if (token == "b2rest") {
         restitution_ = RestitutionPolicy::kBox2d;
+      } else if (token == "coupled") {
+        thesisCoupled_ = true;
       } else if (token == "b2skin") {
         polygonSkin_ = Real(0.01);  // Box2D 2.4.1's b2_polygonRadius
       } else if (token == "quadtree") {
@@ -56,7 +59,7 @@ class QuadrantAdapter final : public Adapter {
       } else if (token == "quadrants") {
         scheme_ = ParallelScheme::kQuadrants;
       } else {
-        throw Error("unknown quadrant variant '" + std::string(token) + "' (known: thesis, pgs, soft_step, quadtree, grid, deterministic, quadrants, sub<N>, it<N>, pos<N>, b2rest, b2skin)");
+        throw Error("unknown quadrant variant '" + std::string(token) + "' (known: thesis, pgs, soft_step, quadtree, grid, deterministic, quadrants, sub<N>, it<N>, pos<N>, b2rest, b2skin, coupled)");
       }
       if (end == std::string_view::npos) break;
       start = end + 1;
@@ -104,6 +107,7 @@ class QuadrantAdapter final : public Adapter {
     def.restitutionThreshold = scene.restitutionThreshold;
     def.restitution = restitution_;
     def.polygonSkin = polygonSkin_;
+    def.thesisCoupledImpulse = thesisCoupled_;
     def.threadCount = threads;
     def.scheme = scheme_;
     def.effects.gravity = scene.effects.gravity;
@@ -229,6 +233,7 @@ class QuadrantAdapter final : public Adapter {
   SolverType solver_ = SolverType::kPgs;
   RestitutionPolicy restitution_ = RestitutionPolicy::kCollisions;
   Real polygonSkin_ = 0;
+  bool thesisCoupled_ = false;
   BroadPhaseType broadPhase_ = BroadPhaseType::kUniformGrid;
   ParallelScheme scheme_ = ParallelScheme::kDeterministic;
   int softSubSteps_ = 0;  // 0: the engine's default

@@ -200,7 +200,9 @@ std::string Markdown(const qs::Campaign& c, const std::vector<qs::CampaignRow>& 
        "each). Settings: `box2d_restitution` = `WorldDef::restitution = RestitutionPolicy::kBox2d` (Box2D 2.4.1's "
        "velocity bias inside the iterations instead of a frictionless pairwise collision before them); "
        "`box2d_skin` = `WorldDef::polygonSkin = 0.01` (Box2D's polygon radius: points within the skins are "
-       "touching rows); others are Quadrant adapter variants (`sub1`: soft_step with one sub-step).\n\n"
+       "touching rows); `sub1` = soft_step with one sub-step (`quadrant:soft_step+sub1`); `coupled` = "
+       "`WorldDef::thesisCoupledImpulse` (the thesis's one impulse with its normal and friction parts solved "
+       "together); others are Quadrant adapter variants given with `--runs`.\n\n"
     << "| class | engine | p90 at defaults | p90 with one choice switched |\n|---|---|---:|---|\n";
   for (const qs::CampaignRow& r : rows) {
     if (r.setting != "default" || r.cls == "all" || r.p90 <= 0.05) continue;

@@ -348,6 +348,8 @@ std::vector<CampaignRun> DefaultCampaignRuns() {
       {"quadrant:pgs", "box2d_restitution", "quadrant:pgs+b2rest"},
       {"quadrant:pgs", "box2d_skin", "quadrant:pgs+b2skin"},
       {"quadrant:pgs", "box2d_restitution+skin", "quadrant:pgs+b2rest+b2skin"},
+      {"quadrant:soft_step", "sub1", "quadrant:soft_step+sub1"},
+      {"quadrant:thesis", "coupled", "quadrant:thesis+coupled"},
   };
 }
 

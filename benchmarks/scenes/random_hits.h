@@ -119,8 +119,9 @@ struct Campaign {
 };
 
 /// The runs of the committed campaign: Box2D; Quadrant's pgs, soft_step and thesis at their
-/// defaults; pgs with Box2D-compatible restitution; and the single-choice switches that trace
-/// each difference (README "validation").
+/// defaults; and the single-choice switches that trace each difference (README "validation"):
+/// pgs with Box2D 2.4.1's restitution, with its polygon skin, and with both (the
+/// Box2D-compatible setting); soft_step with one sub-step; thesis with its impulse coupled.
 std::vector<CampaignRun> DefaultCampaignRuns();
 
 /// Runs hits 0..count-1 of the campaign seeded `seed` on every run. A hit is single-point, and

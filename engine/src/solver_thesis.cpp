@@ -49,6 +49,35 @@ class ThesisSolver final : public Solver {
     ctx.profile->solve += Ms(t1, t2);
   }
 
+  // WorldDef::thesisCoupledImpulse: the one impulse solved with its normal and tangential parts
+  // coupled, as an iterative solver converges to for one point. A tangential impulse at a lever
+  // arm also changes the normal velocity (and the normal one the tangential: the off-diagonal
+  // K_nt of the 2x2 effective mass), which the thesis's separate formulas ignore. Stick when the
+  // impulse that ends both the approach (at -e vn) and the slip lies in the Coulomb cone; else
+  // slide at the cone's edge, with the normal part solved for that friction.
+  template <bool kRotation>
+  static void CoupleImpulse(Vec2 rA, Vec2 rB, Vec2 n, Vec2 t, Real mSum, Real iA, Real iB, Real knn, Real ktt, Real vn,
+                            Real vt, Real e, Real mu, Real& jn, Real& jt) {
+    Real knt = 0;
+    if constexpr (kRotation) knt = iA * Cross(rA, n) * Cross(rA, t) + iB * Cross(rB, n) * Cross(rB, t);
+    (void)mSum;
+    const Real det = knn * ktt - knt * knt;
+    if (!(det > 0)) return;  // degenerate: keep the separate answer
+    // K [jn jt] = [-(1 + e) vn, -vt]
+    const Real bn = -(Real(1) + e) * vn, bt = -vt;
+    const Real sn = (ktt * bn - knt * bt) / det, st = (knn * bt - knt * bn) / det;
+    if (sn >= 0 && std::abs(st) <= mu * sn) {
+      jn = sn;
+      jt = st;
+      return;
+    }
+    const Real s = st > 0 ? Real(1) : Real(-1);  // slide: friction at the cone's edge, on the stick side
+    const Real k = knn + knt * s * mu;
+    if (!(k > 0)) return;
+    jn = bn / k;
+    jt = s * mu * jn;
+  }
+
   template <bool kRotation>
   static void Resolve(Bodies& bodies, const WorldDef& def, Contact& c) {
     const Manifold& m = c.manifold;
@@ -99,12 +128,13 @@ class ThesisSolver final : public Solver {
       const Real e = def.effects.restitution && vn < -def.restitutionThreshold ? c.restitution : Real(0);
       Real kn = mSum;
       if constexpr (kRotation) kn += iA * Cross(rA, n) * Cross(rA, n) + iB * Cross(rB, n) * Cross(rB, n);
-      const Real jn = -(Real(1) + e) * vn / kn;
+      Real jn = -(Real(1) + e) * vn / kn;
       Real jt = 0;
       if (def.effects.friction) {
         Real kt = mSum;
         if constexpr (kRotation) kt += iA * Cross(rA, t) * Cross(rA, t) + iB * Cross(rB, t) * Cross(rB, t);
         jt = std::clamp(-Dot(dv, t) / kt, -c.friction * jn, c.friction * jn);
+        if (def.thesisCoupledImpulse) CoupleImpulse<kRotation>(rA, rB, n, t, mSum, iA, iB, kn, kt, vn, Dot(dv, t), e, c.friction, jn, jt);
       }
       const Vec2 P = jn * n + jt * t;
       va.v -= mA * P;

@@ -162,6 +162,10 @@ struct WorldDef {
   /// RestitutionPolicy::kBox2d Quadrant reproduces Box2D's responses (README "validation").
   /// Deterministic scheme only (World refuses it with kQuadrants).
   Real polygonSkin = 0;
+  /// thesis solver: solve its one impulse per contact with the normal and friction parts coupled
+  /// (the 2x2 effective mass and the Coulomb cone) instead of by two separate formulas. Off (the
+  /// default): the thesis's method. README "validation" gives what it changes.
+  bool thesisCoupledImpulse = false;
   Real maxLinearSpeed = Real(400);      ///< m/s; a numerical guard, as Box2D 3's default
   /// Most a body turns in one step (rad), as Box2D 3's 0.25 pi: a numerical guard. Speculative
   /// contacts see where a corner is, not where a fast spin takes it within the step; without
