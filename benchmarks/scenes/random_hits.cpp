@@ -378,6 +378,19 @@ Campaign RunCampaign(uint64_t seed, int count, const std::vector<CampaignRun>& r
       row.push_back(cell);
     }
     c.analyticToBox2d.push_back(single ? VelocityDifference(hit, exact, results[0].final) : std::nan(""));
+    ImpactBody before[2];
+    for (int k = 0; k < 2; ++k) {
+      const BodyDesc& d = hit.scene.bodies[size_t(k)];
+      const MassProperties mp = ComputeMassProperties(d);
+      before[k].invMass = 1.0 / double(mp.mass);
+      before[k].invInertia = 1.0 / double(mp.inertia);
+      before[k].vx = d.velocity.x;
+      before[k].vy = d.velocity.y;
+      before[k].w = d.angularVelocity;
+    }
+    c.analyticEnergyRatio.push_back(single ? ImpactKineticEnergy(analytic.a, analytic.b) /
+                                                 ImpactKineticEnergy(before[0], before[1])
+                                           : std::nan(""));
     c.singlePoint.push_back(single);
     c.cells.push_back(std::move(row));
     c.hits.push_back(std::move(hit));

@@ -108,6 +108,7 @@ struct Campaign {
   std::vector<RandomHit> hits;
   std::vector<std::vector<Cell>> cells;   ///< [hit][run]
   std::vector<double> analyticToBox2d;    ///< per hit; NaN where the hit has no analytic answer
+  std::vector<double> analyticEnergyRatio;  ///< per hit: kinetic energy after / before the analytic impact; NaN as above
   std::vector<bool> singlePoint;          ///< the analytic answer applies (see RunCampaign)
 
   /// Per class (and "all") and run: the distribution of the difference to Box2D; plus rows of
