@@ -42,6 +42,8 @@ def main():
             keys.append(column[: -len(":to_box2d")])
 
     def label(key):
+        if key == "analytic":
+            return "analytic impact (single-point hits)"
         engine, _, setting = key.partition("/")
         return engine if setting in ("", "default") else engine + " / " + setting
 
@@ -67,7 +69,7 @@ def main():
     compared = [r for r in runs if r in to_box2d]
     colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     colour = {run: colours[k % len(colours)] for k, run in enumerate(runs)}
-    fig = plt.figure(figsize=(15, 10))
+    fig = plt.figure(figsize=(16, 10))
     top = fig.add_subplot(2, 1, 1)
     width = 0.8 / max(1, len(compared))
     for k, run in enumerate(compared):
@@ -91,7 +93,7 @@ def main():
     top.set_xticklabels(classes, rotation=15)
     top.set_ylabel("difference to Box2D 2.4.1 / impact speed")
     top.set_title(f"Random campaign, {hits} hits: p90 per class (bars), median (black dash), max (triangle)")
-    top.legend(fontsize=8, ncol=3, loc="upper left")
+    top.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.005, 1.0))
 
     for panel, (data, title) in enumerate(
         [
