@@ -401,20 +401,19 @@ Campaign RunCampaign(uint64_t seed, int count, const std::vector<CampaignRun>& r
 namespace {
 
 // The classes in report order: every pair and restitution, then "all".
-std::vector<std::string> ClassNames(const Campaign& c) {
+std::vector<std::string> ClassNames() {
   std::vector<std::string> names;
   for (const char* pair : {"polygon-polygon", "circle-polygon", "circle-circle"}) {
     for (const char* e : {"0", "0.5", "1"}) names.push_back(std::string(pair) + " e=" + e);
   }
   names.push_back("all");
-  (void)c;
   return names;
 }
 
 template <class Value>
 std::vector<CampaignRow> Rows(const Campaign& c, Value value, bool analyticRow) {
   std::vector<CampaignRow> rows;
-  for (const std::string& cls : ClassNames(c)) {
+  for (const std::string& cls : ClassNames()) {
     auto collect = [&](auto get) {
       std::vector<double> v;
       for (size_t i = 0; i < c.hits.size(); ++i) {
