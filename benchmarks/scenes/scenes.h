@@ -71,6 +71,16 @@ Scene MakePyramidField(int pyramids, int base, Mixing mixing = Mixing::kBox2d);
 /// on its apex. ratio 400: ground, two 1 m boxes (1 kg) at x = -9 and 9, then a 20 m x 1 m plank
 /// of 400 kg (density 20) on them. Friction 0.6. Throws quadrant::Error for other ratios.
 Scene MakeMassRatio(int ratio, Mixing mixing = Mixing::kBox2d);
+/// Issue #13's stability cases, at the default budget (8 velocity + 3 position iterations):
+/// ground (100 m wide), then `count` 1 m boxes bottom to top, exactly touching and exactly aligned
+/// (centres at x = 0, y = 0.5 + i; friction 0.6). The last body is the top box.
+Scene MakeTallStack(int count = 30, Mixing mixing = Mixing::kBox2d);
+/// Ground, then three 1 m boxes of 1 kg at x = -9, 0, 9, then a 20 m x 2 m box of 1000 kg
+/// (density 25) resting on them: 1000:1 on several supports. Friction 0.6.
+Scene MakeHeavyOnSupports(Mixing mixing = Mixing::kBox2d);
+/// Ground, then a 4 m x 0.2 m slab of 1 kg (density 1.25) on it, then a 2 m box of 1000 kg
+/// (density 250) on the slab: 1000:1 on a single light body. Friction 0.6.
+Scene MakeHeavyOnSlab(Mixing mixing = Mixing::kBox2d);
 /// Ground, then 17 voussoirs of a semicircular arch (inner radius 4 m, outer 5 m, centre on the
 /// ground at the origin, radial joints every pi/17), left to right; friction 0.6.
 Scene MakeArch(Mixing mixing = Mixing::kBox2d);
