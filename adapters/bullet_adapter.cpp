@@ -151,6 +151,11 @@ class BulletAdapter final : public Adapter {
   }
 
   void DoLoad(const Scene& scene, int /*threads: 1*/) override {
+    // Bullet moves a kinematic body by its motion state's transform, which the caller sets each
+    // step, not by a velocity; the scene API drives kinematic bodies by velocity (SetVelocity).
+    for (const BodyDesc& b : scene.bodies) {
+      if (b.kinematic) throw Unsupported("bullet: kinematic bodies move by transform in Bullet, not by velocity");
+    }
     // Built aside and swapped in at the end, so a throwing Load keeps the previous world.
     auto next = std::make_unique<BulletWorld>();
     BuildWorld(scene, *next);

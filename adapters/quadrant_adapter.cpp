@@ -42,7 +42,7 @@ class QuadrantAdapter final : public Adapter {
     ids.reserve(scene.bodies.size());
     for (const BodyDesc& b : scene.bodies) {
       BodyDef bd;
-      bd.type = b.dynamic ? BodyType::kDynamic : BodyType::kStatic;
+      bd.type = b.dynamic ? BodyType::kDynamic : b.kinematic ? BodyType::kKinematic : BodyType::kStatic;
       bd.position = b.position;
       bd.angle = b.angle;
       bd.linearVelocity = b.velocity;

@@ -1,9 +1,11 @@
 // Quadrant's variants and the scene -> WorldDef mapping.
 //
 // Variants ("quadrant:<tokens>", tokens joined by '+'): solver "thesis", "pgs" or "soft_step",
-// broad phase "quadtree" or "grid", parallel scheme "deterministic" or "quadrants". The default is
-// pgs with the uniform grid and the deterministic scheme, the combination the suite measured
-// fastest on the stress scenes (see README).
+// broad phase "quadtree" or "grid", parallel scheme "deterministic" or "quadrants", "b2rest" for
+// Box2D 2.4.1's restitution (RestitutionPolicy::kBox2d, pgs only), "b2skin" for its 0.01 m polygon
+// skin (WorldDef::polygonSkin), "coupled" for the thesis solver's coupled impulse
+// (WorldDef::thesisCoupledImpulse). The default is pgs with the uniform grid and the deterministic
+// scheme, the combination the suite measured fastest on the stress scenes (see README).
 //
 // Solver budget for soft_step: a scene states the budget a case needs as pgs velocity
 // iterations (Box2D 2.4's default 8; 16 or 32 in the hard cases that need more). Box2D 3 spends
@@ -55,6 +57,12 @@ QuadrantVariant QuadrantVariant::Parse(std::string_view variant) {
     } else if (token.size() > 3 && token.starts_with("sub") && ParseCount(token.substr(3), &v.softSubSteps)) {
     } else if (token.size() > 2 && token.starts_with("it") && ParseCount(token.substr(2), &v.iterations)) {
     } else if (token.size() > 3 && token.starts_with("pos") && ParseCount(token.substr(3), &v.positionIterations)) {
+    } else if (token == "b2rest") {
+      v.restitution = RestitutionPolicy::kBox2d;
+    } else if (token == "coupled") {
+      v.thesisCoupled = true;
+    } else if (token == "b2skin") {
+      v.polygonSkin = Real(0.01);  // Box2D 2.4.1's b2_polygonRadius
     } else if (token == "quadtree") {
       v.broadPhase = BroadPhaseType::kQuadTree;
     } else if (token == "grid") {
@@ -65,7 +73,8 @@ QuadrantVariant QuadrantVariant::Parse(std::string_view variant) {
       v.scheme = ParallelScheme::kQuadrants;
     } else {
       throw Error("unknown quadrant variant '" + std::string(token) +
-                  "' (known: thesis, pgs, soft_step, quadtree, grid, deterministic, quadrants, sub<N>, it<N>, pos<N>)");
+                  "' (known: thesis, pgs, soft_step, quadtree, grid, deterministic, quadrants, sub<N>, it<N>, pos<N>, "
+                  "b2rest, b2skin, coupled)");
     }
     if (end == std::string_view::npos) break;
     start = end + 1;
@@ -87,6 +96,9 @@ WorldDef QuadrantVariant::MakeWorldDef(const Scene& scene, int threads) const {
   }
   def.positionIterations = positionIterations > 0 ? positionIterations : scene.positionIterations;
   def.restitutionThreshold = scene.restitutionThreshold;
+  def.restitution = restitution;
+  def.polygonSkin = polygonSkin;
+  def.thesisCoupledImpulse = thesisCoupled;
   def.threadCount = threads;
   def.scheme = scheme;
   def.effects = scene.effects;  // one type (scene.h); sleep with Box2D 2.4's tolerances, WorldDef's defaults

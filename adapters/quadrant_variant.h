@@ -17,10 +17,13 @@ struct QuadrantVariant {
   int softSubSteps = 0;        ///< sub<N>; 0: derived from the budget (soft_step) or the engine's
   int iterations = 0;          ///< it<N>; 0: the scene's velocity iterations
   int positionIterations = 0;  ///< pos<N>; 0: the scene's
+  RestitutionPolicy restitution = RestitutionPolicy::kCollisions;  ///< b2rest: kBox2d (pgs only)
+  Real polygonSkin = 0;        ///< b2skin: Box2D 2.4.1's 0.01 m polygon radius
+  bool thesisCoupled = false;  ///< coupled: the thesis solver's coupled impulse
 
   /// Tokens joined by '+' ("" is the default): thesis, pgs, soft_step, quadtree, grid,
-  /// deterministic, quadrants, sub<N>, it<N>, pos<N> (N in [1, 1000]). Throws quadrant::Error
-  /// naming an unknown token and the known ones.
+  /// deterministic, quadrants, sub<N>, it<N>, pos<N> (N in [1, 1000]), b2rest, b2skin, coupled.
+  /// Throws quadrant::Error naming an unknown token and the known ones.
   static QuadrantVariant Parse(std::string_view variant);
 
   /// The world for `scene` on `threads` threads: the scene's settings and effects, this variant's

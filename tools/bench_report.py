@@ -29,7 +29,8 @@ import gbench_json  # the one reader of Google Benchmark names in tools/
 import plot_style  # one colour and label per engine in every figure
 
 LABEL_RE = re.compile(r"^[0-9a-f]{16}$")
-SCENE_NOUNS = {"circle_stress": "circles", "polygon_stress": "polygons"}
+SCENE_NOUNS = {"circle_stress": "circles", "polygon_stress": "polygons", "pyramid": "boxes",
+               "many_pyramids": "boxes", "tumbler": "boxes"}
 THESIS_FIGURES = {"circle_stress": "Figure 14", "polygon_stress": "Figure 15"}
 ENGINE_TITLES = {
     "quadrant": "Quadrant",
@@ -312,7 +313,8 @@ def markdown(results, source):
     for scene in results.scenes:
         noun = SCENE_NOUNS.get(scene, "bodies")
         fig = THESIS_FIGURES.get(scene)
-        out(f"## {scene}" + (f" (thesis {fig})" if fig else ""))
+        dense = ": dense; " in c.get(f"scene_{scene}", "")
+        out(f"## {scene}" + (f" (thesis {fig})" if fig else "") + (" (dense, solver-bound)" if dense else ""))
         out("")
         for n in results.counts(scene):
             out(f"### {scene}, N = {n} {noun}")
