@@ -69,7 +69,7 @@ TEST(RandomHits, EverySolverWithinItsBoundOfBox2d) {
   EXPECT_LT(Find(rows, "all", "quadrant:soft_step", "default").p90, 0.14);
   EXPECT_LT(Find(rows, "all", "quadrant:thesis", "default").p90, 0.26);
   // The thesis's difference is its separate normal and friction formulas: coupled, it is within
-  // 1.5 % of Box2D at p90 (2000 hits: 22.9 % -> 0.94 %).
+  // 1.5 % of Box2D at p90 (2000 hits: 22.3 % -> 0.89 %).
   EXPECT_LT(Find(rows, "all", "quadrant:thesis", "coupled").p90, 0.015);
   // Circle pairs are one point with no skin in either engine: pgs agrees with Box2D exactly
   // (within float rounding) whatever the restitution.
