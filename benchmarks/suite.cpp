@@ -95,7 +95,7 @@ void PrintUsage(std::FILE* out) {
       "  --scenes a,b       scenes (default circle_stress,polygon_stress,pyramid,many_pyramids,tumbler)\n"
       "  --engines a,b      engines (default: all adapters)\n"
       "  --counts 1000,...  body counts for every scene (default: each scene's own; stress scenes\n"
-      "                     1000,2000,4000,8000,16000, pyramid 1275,5050, many_pyramids 1375,5500,\n"
+      "                     1000,2000,4000,8000,16000, pyramid 1275,5050, many_pyramids 1375,2750,\n"
       "                     tumbler 1024,2025)\n"
       "  --threads 1,2,...  engine thread counts (default 1,2,3,4)\n"
       "  --steps S          timed steps per run (default 120)\n"
