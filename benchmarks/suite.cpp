@@ -18,13 +18,13 @@
 // ms_per_step, bodies, contacts (touching manifolds after the last step), engine_threads,
 // steps, warmup, memory_mb (peak RSS growth while making, loading and warming up the adapter)
 // heap_mb (malloc bytes still held after warm-up), others_cpu (cores' worth of CPU other
-// processes used during the benchmark, if it lasted 0.25 s or more) and load_avg (1-minute load average after them);
-// label = final state hash (16 hex digits).
+// processes used during the benchmark, if it lasted 0.25 s or more) and load_avg (1-minute
+// load average after it); label = final state hash (16 hex digits).
 //
 // Own flags (parsed and removed before Google Benchmark sees the command line):
-//   --scenes a,b      scenes to run            (default circle_stress,polygon_stress)
+//   --scenes a,b      scenes to run            (default: DefaultBenchScenes(), sparse and dense)
 //   --engines a,b     engines to run           (default: every adapter)
-//   --counts 1000,... body counts              (default 1000,2000,4000,8000,16000)
+//   --counts 1000,... body counts, every scene (default: each scene's DefaultBenchCounts)
 //   --threads 1,2,... engine thread counts     (default 1,2,3,4)
 //   --steps S         timed steps              (default 120)
 //   --warmup W        untimed steps before timing (default 30)
@@ -47,6 +47,7 @@
 #include <cstring>
 #include <exception>
 #include <fstream>
+#include <map>
 #include <memory>
 #include <optional>
 #include <stdexcept>
@@ -56,6 +57,7 @@
 #include <vector>
 
 #include "adapter.h"
+#include "progress_reporter.h"
 #include "quadrant/error.h"
 #include "scene.h"
 #include "scenes.h"
@@ -72,9 +74,9 @@ namespace {
 namespace qs = quadrant::scene;
 
 struct Options {
-  std::vector<std::string> scenes{"circle_stress", "polygon_stress"};
+  std::vector<std::string> scenes = qs::DefaultBenchScenes();
   std::vector<std::string> engines;  // empty: every adapter
-  std::vector<int> counts{1000, 2000, 4000, 8000, 16000};
+  std::vector<int> counts;           // empty: each scene's DefaultBenchCounts
   std::vector<int> threads{1, 2, 3, 4};
   int steps = 120;
   int warmup = 30;
@@ -93,15 +95,18 @@ void PrintUsage(std::FILE* out) {
       "Own flags (the rest goes to Google Benchmark, e.g. --benchmark_repetitions=3\n"
       "--benchmark_out=bench.json --benchmark_out_format=json\n"
       "--benchmark_enable_random_interleaving=true):\n"
-      "  --scenes a,b       scenes (default circle_stress,polygon_stress)\n"
+      "  --scenes a,b       scenes (default circle_stress,polygon_stress,pyramid,many_pyramids,tumbler)\n"
       "  --engines a,b      engines (default: all adapters)\n"
-      "  --counts 1000,...  body counts (default 1000,2000,4000,8000,16000)\n"
+      "  --counts 1000,...  body counts for every scene (default: each scene's own; stress scenes\n"
+      "                     1000,2000,4000,8000,16000, pyramid 1275,5050, many_pyramids 1375,2750,\n"
+      "                     tumbler 1024,2025)\n"
       "  --threads 1,2,...  engine thread counts (default 1,2,3,4)\n"
       "  --steps S          timed steps per run (default 120)\n"
       "  --warmup W         untimed steps before timing (default 30)\n"
       "  --seed X           scene seed (default 42)\n"
+      "  --list             print the engine and scene names and exit\n"
       "Benchmarks are named <scene>/<engine>/n:<N>/threads:<T>. Combinations an engine cannot\n"
-      "run are listed as 'unsupported: <name>: <reason>' on stderr and in the JSON context.\n",
+      "run are counted in one line on stderr and listed in the JSON context 'unsupported'.\n",
       out);
 }
 
@@ -128,10 +133,23 @@ long long ParseInteger(const std::string& flag, const std::string& text, long lo
   return value;
 }
 
+/// A flag's comma-separated list: no empty items ("1000,,2000", ",", "" are mistakes, not
+/// shorter lists); `accepted` says what the flag takes, for the one-line error.
+std::vector<std::string> ParseList(const std::string& flag, const std::string& text,
+                                   std::string_view accepted) {
+  std::vector<std::string> out = SplitList(text);
+  size_t commas = 0;
+  for (char c : text) commas += c == ',' ? 1 : 0;
+  if (out.empty() || out.size() != commas + 1)
+    throw UsageError(fmt::format("{}: '{}' has an empty item; give a comma-separated list of {}", flag,
+                                 text, accepted));
+  return out;
+}
+
 std::vector<int> ParseIntList(const std::string& flag, const std::string& text, int lo, int hi) {
   std::vector<int> out;
-  for (const std::string& item : SplitList(text)) out.push_back(int(ParseInteger(flag, item, lo, hi)));
-  if (out.empty()) throw UsageError(fmt::format("{}: empty list", flag));
+  for (const std::string& item : ParseList(flag, text, fmt::format("integers in [{}, {}]", lo, hi)))
+    out.push_back(int(ParseInteger(flag, item, lo, hi)));
   return out;
 }
 
@@ -175,15 +193,13 @@ Options ParseOwnFlags(int& argc, char** argv) {
       continue;
     }
     if (flag == "--scenes") {
-      opts.scenes = SplitList(value);
-      if (opts.scenes.empty()) throw UsageError("--scenes: empty list");
+      opts.scenes = ParseList(flag, value, "scene names (tools/quadrant help lists them)");
     } else if (flag == "--engines") {
-      opts.engines = SplitList(value);
-      if (opts.engines.empty()) throw UsageError("--engines: empty list");
+      opts.engines = ParseList(flag, value, "engine names (quadrant, quadrant:<variant>, box2d, bullet, chipmunk)");
     } else if (flag == "--counts") {
       opts.counts = ParseIntList(flag, value, 1, 10'000'000);
     } else if (flag == "--threads") {
-      opts.threads = ParseIntList(flag, value, 1, 1024);
+      opts.threads = ParseIntList(flag, value, 1, 64);  // 64: WorldDef.threadCount's limit, the most any engine runs
     } else if (flag == "--steps") {
       opts.steps = int(ParseInteger(flag, value, 1, 100'000'000));
     } else if (flag == "--warmup") {
@@ -195,6 +211,19 @@ Options ParseOwnFlags(int& argc, char** argv) {
   argc = write;
   argv[argc] = nullptr;
   return opts;
+}
+
+/// --list: the accepted engine and scene names, one "kind: name" per line (tools/quadrant help
+/// prints the same lists; tests/tools/cli_test.sh checks that they agree).
+bool ListRequested(int argc, char** argv) {
+  for (int i = 1; i < argc; ++i)
+    if (std::strcmp(argv[i], "--list") == 0) return true;
+  return false;
+}
+
+void PrintNames() {
+  for (const std::string& name : qs::AdapterNames()) std::printf("engine: %s\n", name.c_str());
+  for (const std::string& name : qs::SceneNames()) std::printf("scene: %s\n", name.c_str());
 }
 
 /// Value of a Google Benchmark flag still on the command line ("--name=value"), if given.
@@ -409,19 +438,9 @@ struct Job {
   std::string name;
 };
 
-std::atomic<int> g_started{0};
-int g_total = 0;  // registered benchmarks x repetitions; 0 when unknown (a filter is in use)
-
 void RunJob(benchmark::State& state, const Job& job) {
   LoadProbe load;  // over the whole benchmark (setup, warm-up, timed steps): long enough to count
   load.Begin();
-  const int k = ++g_started;
-  if (g_total > 0)
-    std::fprintf(stderr, "[%d/%d] %s\n", k, g_total, job.name.c_str());
-  else
-    std::fprintf(stderr, "[%d] %s\n", k, job.name.c_str());
-  std::fflush(stderr);
-
   // Setup, untimed, repeated for every repetition so that repetitions are independent.
   std::unique_ptr<qs::Adapter> adapter;
   MemoryProbe memory;
@@ -502,9 +521,13 @@ int main(int argc, char** argv) {
   try {
     opts = ParseOwnFlags(argc, argv);
   } catch (const UsageError& e) {
-    std::fprintf(stderr, "quadrant_bench: %s\n\n", e.what());
-    PrintUsage(stderr);
+    // One line naming the flag and what it accepts (issue 16); --help has the full usage.
+    std::fprintf(stderr, "quadrant_bench: %s\n", e.what());
     return 2;
+  }
+  if (ListRequested(argc, argv)) {
+    PrintNames();
+    return 0;
   }
   if (help) {
     PrintUsage(stdout);
@@ -522,6 +545,8 @@ int main(int argc, char** argv) {
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 2;
 
   std::vector<std::string> unsupported;
+  std::map<std::string, int> unsupportedReasons;  // reason -> combinations, for the summary line
+  std::string unsupportedSummary;
   std::vector<std::string> errors;
   int registered = 0;
   try {
@@ -536,18 +561,28 @@ int main(int argc, char** argv) {
     std::vector<qs::Capabilities> caps;
     for (const std::string& engine : opts.engines) caps.push_back(qs::MakeAdapter(engine)->Caps());
 
+    // Counts per scene: --counts for every scene, or each scene's own defaults.
+    std::vector<std::vector<int>> sceneCounts;
+    std::vector<std::string> countsText;
+    for (const std::string& sceneName : opts.scenes) {
+      sceneCounts.push_back(opts.counts.empty() ? qs::DefaultBenchCounts(sceneName) : opts.counts);
+      countsText.push_back(fmt::format("{}:{}", sceneName, JoinList(sceneCounts.back(), "+")));
+    }
+
     // Scene descriptions for the context, from the smallest count (the settings do not depend
     // on N; the body count and box size do).
-    const int smallest = *std::min_element(opts.counts.begin(), opts.counts.end());
-    for (const std::string& sceneName : opts.scenes) {
-      const qs::Scene scene = qs::MakeScene(sceneName, smallest, opts.seed);
-      benchmark::AddCustomContext(fmt::format("scene_{}", sceneName),
-                                  fmt::format("n={}: {}", smallest, DescribeScene(scene)));
+    for (size_t s = 0; s < opts.scenes.size(); ++s) {
+      const int smallest = *std::min_element(sceneCounts[s].begin(), sceneCounts[s].end());
+      const qs::Scene scene = qs::MakeScene(opts.scenes[s], smallest, opts.seed);
+      benchmark::AddCustomContext(fmt::format("scene_{}", opts.scenes[s]),
+                                  fmt::format("n={}: {}{}", smallest, qs::IsDenseScene(opts.scenes[s]) ? "dense; " : "",
+                                              DescribeScene(scene)));
     }
 
     // Registration order: for each scene, N and T, every engine in turn (interleaved).
-    for (const std::string& sceneName : opts.scenes) {
-      for (int count : opts.counts) {
+    for (size_t s = 0; s < opts.scenes.size(); ++s) {
+      const std::string& sceneName = opts.scenes[s];
+      for (int count : sceneCounts[s]) {
         const qs::Scene scene = qs::MakeScene(sceneName, count, opts.seed);
         for (int threads : opts.threads) {
           for (size_t e = 0; e < opts.engines.size(); ++e) {
@@ -571,8 +606,8 @@ int main(int argc, char** argv) {
               }
             }
             if (!reason.empty()) {
-              std::fprintf(stderr, "unsupported: %s: %s\n", job.name.c_str(), reason.c_str());
               unsupported.push_back(fmt::format("{}: {}", job.name, reason));
+              ++unsupportedReasons[reason];
               continue;
             }
             benchmark::RegisterBenchmark(
@@ -584,6 +619,16 @@ int main(int argc, char** argv) {
           }
         }
       }
+    }
+
+    // One line for the unsupported combinations, counted by reason (issue 16: it was one line
+    // per combination, 80 in the default run); the full list goes into the JSON context.
+    for (const auto& [reason, n] : unsupportedReasons)
+      unsupportedSummary += fmt::format("{}{} x {}", unsupportedSummary.empty() ? "" : "; ", n, reason);
+    if (!unsupported.empty() && registered > 0) {
+      const std::string& summary = unsupportedSummary;
+      std::fprintf(stderr, "quadrant_bench: %zu of %zu combinations skipped as unsupported (%s); the list is in the JSON context 'unsupported'\n",
+                   unsupported.size(), unsupported.size() + size_t(registered), summary.c_str());
     }
 
     // The record of the run.
@@ -604,7 +649,7 @@ int main(int argc, char** argv) {
     benchmark::AddCustomContext("hostname", HostName());
     benchmark::AddCustomContext("scenes", JoinList(opts.scenes));
     benchmark::AddCustomContext("engines", JoinList(opts.engines));
-    benchmark::AddCustomContext("counts", JoinList(opts.counts));
+    benchmark::AddCustomContext("counts", JoinList(countsText));
     benchmark::AddCustomContext("thread_counts", JoinList(opts.threads));
     benchmark::AddCustomContext("steps", fmt::format("{}", opts.steps));
     benchmark::AddCustomContext("warmup", fmt::format("{}", opts.warmup));
@@ -626,8 +671,17 @@ int main(int argc, char** argv) {
     return 2;
   }
 
-  g_total = filtered ? 0 : registered * repetitions;
-  benchmark::RunSpecifiedBenchmarks();
+  if (registered == 0 && errors.empty()) {
+    // Every combination unsupported (e.g. --engines box2d --threads 2): say so in one line
+    // instead of Google Benchmark's "Failed to match any benchmarks".
+    std::fprintf(stderr, "quadrant_bench: nothing to run: all %zu combinations are unsupported (%s)\n",
+                 unsupported.size(), unsupportedSummary.c_str());
+    return 2;
+  }
+  // Progress on stderr, one line per finished run with an ETA (progress_reporter.h); the JSON
+  // file reporter (--benchmark_out) is Google Benchmark's own.
+  quadrant::bench::ProgressReporter progress(filtered ? 0 : registered * repetitions, QUADRANT_BUILD_TYPE);
+  benchmark::RunSpecifiedBenchmarks(&progress);
   benchmark::Shutdown();
   return errors.empty() ? 0 : 1;
 }

@@ -174,7 +174,11 @@ class SoftStepSolver final : public ContactSolverBase {
         for (int k = 0; k < cc.pointCount; ++k) {
           PointConstraint& pc = cc.points[k];
           const Real vt = Dot(RelativeVelocity<kRotation>(va, vb, pc), t);
-          const Real maxFriction = cc.friction * pc.normalImpulse;
+          // Coulomb over the whole impact, as pgs: the step's collision impulse (ApplyCollisions)
+          // counts. Bounded by the sub-steps' normal impulse alone, a bouncing hit got almost no
+          // friction: the random campaign's p90 difference to Box2D was 49 %, now 9.5 %
+          // (2000 hits, seed 17; README "validation").
+          const Real maxFriction = cc.friction * (pc.normalImpulse + pc.collisionImpulse);
           const Real newImpulse = std::clamp(pc.tangentImpulse - pc.tangentMass * vt, -maxFriction, maxFriction);
           const Real lambda = newImpulse - pc.tangentImpulse;
           pc.tangentImpulse = newImpulse;
