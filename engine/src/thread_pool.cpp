@@ -32,8 +32,8 @@
 // - Waiting adapts to contention. A spinning thread reads the clock every few pause
 //   instructions; a jump of more than kPreemptedMicros between two reads means the scheduler
 //   took its core for something else, and a caller whose wait for the other blocks outlasts
-//   twice its own blocks plus kMaxSpinMicros means a worker holding one was not running. Either
-//   marks the pool contended for kContendedMillis: then no thread spins for long. The caller
+//   twice its own blocks plus kMaxSpinMicros means a worker holding one was not running. Two
+//   such signs within kSignWindowMillis mark the pool contended for kContendedMillis: then no thread spins for long. The caller
 //   spins at most as long as its own blocks took, then waits on a futex; a worker between jobs
 //   naps kPollMicros at a time and looks for a job (so starting a job costs the caller no
 //   system call), and after kPollMillis without one waits on a futex. No spinner takes the core
@@ -56,10 +56,10 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
-#include <cstdint>
-#include <exception>
 #include <climits>
 #include <cstdint>
+#include <exception>
+#include <limits>
 #include <mutex>
 #include <thread>
 #include <utility>
@@ -98,8 +98,9 @@ constexpr int kContendedSpinMicros = 5;
 // scheduler time slice is 0.75 ms or more, while interrupts and a VM's short steals are tens of
 // microseconds and must not count.
 constexpr int kPreemptedMicros = 200;
-// How long one sign of contention keeps the pool in futex-waiting mode.
+// How long contention (two signs within kSignWindowMillis) keeps the pool from spinning.
 constexpr int kContendedMillis = 200;
+constexpr int kSignWindowMillis = 50;
 // A contended worker between jobs sleeps this long at a time and then looks for a job (plus the
 // timer slack, 50 us by default), for up to kPollMillis before it waits on the futex; see Poll.
 constexpr int kPollMicros = 50;
@@ -180,7 +181,13 @@ class ThreadPool final : public TaskSystem {
   bool Contended(Clock::time_point now) const {
     return oversubscribed_ || now.time_since_epoch().count() < contendedUntil_.load(std::memory_order_relaxed);
   }
+  // One sign of contention (a descheduled spinner, an overlong wait). Two within
+  // kSignWindowMillis make the pool contended: a competing process preempts a spinner every
+  // time slice (a few ms), while a lone sign on a quiet machine (a kernel thread, a cron job)
+  // must not cost the next 200 ms of spinning.
   void MarkContended(Clock::time_point now) {
+    const Clock::rep previous = lastSign_.exchange(now.time_since_epoch().count(), std::memory_order_relaxed);
+    if (now.time_since_epoch().count() - previous > Clock::duration(std::chrono::milliseconds(kSignWindowMillis)).count()) return;
     const auto until = now + std::chrono::milliseconds(kContendedMillis);
     contendedUntil_.store(until.time_since_epoch().count(), std::memory_order_relaxed);
   }
@@ -311,6 +318,7 @@ class ThreadPool final : public TaskSystem {
   std::atomic<bool> callerSleeping_{false};
   std::atomic<bool> stop_{false};
   std::atomic<Clock::rep> contendedUntil_{0};
+  std::atomic<Clock::rep> lastSign_{std::numeric_limits<Clock::rep>::min() / 2};
 
   std::mutex errorMutex_;
   std::exception_ptr error_;             // the first exception of the current job
