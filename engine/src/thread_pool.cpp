@@ -110,7 +110,8 @@ constexpr int kPollMillis = 20;
 // call itself, because libstdc++'s std::atomic::wait first calls sched_yield four times, and a
 // yield hands the core to a competing process for its time slice (measured with the first
 // pool, which yielded while spinning: 16000 circles at 2 threads beside a nice -n 19 build took
-// 5.8 ms per step, 1.2 ms without yields). Elsewhere std::atomic::wait. Callers re-check the word after waking: wake-ups may be spurious.
+// 5.8 ms per step, 1.2 ms without yields). Elsewhere std::atomic::wait. Callers re-check the
+// word after waking: wake-ups may be spurious.
 void WaitWhileEqual(std::atomic<uint32_t>& word, uint32_t expected) {
 #if defined(__linux__)
   static_assert(sizeof(std::atomic<uint32_t>) == sizeof(uint32_t));
