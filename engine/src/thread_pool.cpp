@@ -33,12 +33,12 @@
 //   instructions; a jump of more than kPreemptedMicros between two reads means the scheduler
 //   took its core for something else, and a caller whose wait for the other blocks outlasts
 //   twice its own blocks plus kMaxSpinMicros means a worker holding one was not running. Two
-//   such signs within kSignWindowMillis mark the pool contended for kContendedMillis: then no thread spins for long. The caller
-//   spins at most as long as its own blocks took, then waits on a futex; a worker between jobs
-//   naps kPollMicros at a time and looks for a job (so starting a job costs the caller no
-//   system call), and after kPollMillis without one waits on a futex. No spinner takes the core
-//   from the thread it waits for, and a napping
-//   thread keeps its scheduler credit for the moment it has work. On a quiet machine nothing
+//   such signs within kSignWindowMillis mark the pool contended for kContendedMillis: then no
+//   thread spins for long. The caller spins at most as long as its own blocks took, then waits
+//   on a futex; a worker between jobs naps kPollMicros at a time and looks for a job (so
+//   starting a job costs the caller no system call), and after kPollMillis without one waits
+//   on a futex. No spinner takes the core from the thread it waits for, and a napping thread
+//   keeps its scheduler credit for the moment it has work. On a quiet machine nothing
 //   is ever preempted and waiting is what it was: up to kMaxSpinMicros of pause spinning,
 //   because a sleeping worker takes about 100 us to wake on these VMs and a step's serial gaps
 //   are of that order (2000 circles at 2 threads: 0.65 ms per step with a 100 us spin, 0.24 ms
