@@ -191,8 +191,9 @@ std::string Markdown(const qs::Campaign& c, const std::vector<qs::CampaignRow>& 
     << "The analytic answer (Coulomb friction, Newton restitution, stick / slide / slip reversal integrated over the "
        "normal impulse, as Stronge does) applies to hits whose impact is one instantaneous impact at one point: it "
        "does not jam, and the two bodies, moving on with the analytic velocities, do not meet again within the "
-    << qs::kRandomHitSteps << " steps (1.5 mm deeper than they start). Same cells, distance from the analytic "
-       "velocities.\n\n";
+    << qs::kRandomHitSteps << " steps (1.5 mm deeper than they start). Of the " << c.hits.size() << " hits, "
+    << c.analyticJams << " jam (the normal contact velocity would not rise with the normal impulse) and "
+    << c.analyticRecontacts << " meet again. Same cells, distance from the analytic velocities.\n\n";
   Table(o, analytic);
 
   o << "\n## Classes above 5 %, and the one choice that removes each\n\n"
