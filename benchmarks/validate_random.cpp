@@ -69,7 +69,9 @@ std::string Json(const qs::Campaign& c, const std::vector<qs::CampaignRow>& rows
        "\"restitution_threshold\": 1, \"steps\": "
     << qs::kRandomHitSteps << ", \"sleep\": false, \"continuous\": false, \"warm_starting\": true},\n"
     << " \"difference\": \"largest over both bodies of |v - v_box2d| and |w - w_box2d| x circumradius after the "
-       "steps, as a fraction of the mover's speed\",\n \"runs\": [";
+       "steps, as a fraction of the mover's speed\",\n \"analytic_single_point_hits\": "
+    << std::count(c.singlePoint.begin(), c.singlePoint.end(), true) << ", \"analytic_jams\": " << c.analyticJams
+    << ", \"analytic_recontacts\": " << c.analyticRecontacts << ",\n \"runs\": [";
   const std::vector<Balance> balance = Balances(c);
   for (size_t r = 0; r < c.runs.size(); ++r) {
     o << (r ? ",\n  " : "\n  ") << "{\"engine\": " << JsonString(c.runs[r].engine) << ", \"setting\": "
