@@ -10,16 +10,96 @@
 
 namespace quadrant::scene {
 
-std::vector<std::string> AdapterNames() { return {"quadrant", "box2d", "bullet", "chipmunk"}; }
+// Each peer's adapter is compiled only where its library was found at configure time
+// (QUADRANT_HAVE_<PEER>, adapters/CMakeLists.txt).
+#ifndef QUADRANT_HAVE_BOX2D
+#define QUADRANT_HAVE_BOX2D 0
+#endif
+#ifndef QUADRANT_HAVE_BULLET
+#define QUADRANT_HAVE_BULLET 0
+#endif
+#ifndef QUADRANT_HAVE_CHIPMUNK
+#define QUADRANT_HAVE_CHIPMUNK 0
+#endif
+
+std::vector<std::string> AdapterNames() {
+  std::vector<std::string> names = {"quadrant"};
+  if (QUADRANT_HAVE_BOX2D) names.push_back("box2d");
+  if (QUADRANT_HAVE_BULLET) names.push_back("bullet");
+  if (QUADRANT_HAVE_CHIPMUNK) names.push_back("chipmunk");
+  return names;
+}
+
+#if !QUADRANT_HAVE_BOX2D || !QUADRANT_HAVE_BULLET || !QUADRANT_HAVE_CHIPMUNK
+namespace {
+[[noreturn]] void NotBuilt(std::string_view name, std::string_view package) {
+  throw Error(std::string(name) + ": this build has no " + std::string(name) + " adapter (" + std::string(package) +
+              " was not found, or switched off, when it was configured)");
+}
+}  // namespace
+#endif
 
 std::unique_ptr<Adapter> MakeAdapter(std::string_view name) {
   if (name == "quadrant") return MakeQuadrantAdapter("");
   if (name.starts_with("quadrant:")) return MakeQuadrantAdapter(name.substr(9));
-  if (name == "box2d") return MakeBox2dAdapter();
-  if (name == "bullet") return MakeBulletAdapter();
-  if (name == "chipmunk") return MakeChipmunkAdapter();
+  if (name == "box2d") {
+#if QUADRANT_HAVE_BOX2D
+    return MakeBox2dAdapter();
+#else
+    NotBuilt(name, "libbox2d-dev");
+#endif
+  }
+  if (name == "bullet") {
+#if QUADRANT_HAVE_BULLET
+    return MakeBulletAdapter();
+#else
+    NotBuilt(name, "libbullet-dev");
+#endif
+  }
+  if (name == "chipmunk") {
+#if QUADRANT_HAVE_CHIPMUNK
+    return MakeChipmunkAdapter();
+#else
+    NotBuilt(name, "libchipmunk-dev");
+#endif
+  }
   throw Error("unknown engine '" + std::string(name) +
               "' (known: quadrant, quadrant:<variant>, box2d, bullet, chipmunk)");
+}
+
+void Adapter::Load(const Scene& scene, int threads) {
+  ValidateScene(scene);
+  // Fewer than one thread is bad input (an Error); more than the engine runs is a limit of the
+  // engine (Unsupported), which the suite reports and skips.
+  if (threads < 1) throw Error(Name() + ": threads must be >= 1, got " + std::to_string(threads));
+  const Capabilities caps = Caps();
+  if (threads > caps.maxThreads) {
+    throw Unsupported(Name() + " runs at most " + std::to_string(caps.maxThreads) + " thread(s), asked for " +
+                      std::to_string(threads) + (caps.threadLimit.empty() ? "" : ": " + caps.threadLimit));
+  }
+  DoLoad(scene, threads);  // throws before replacing the world: the old one stays loaded
+  loaded_ = true;
+  driver_ = scene.driver;
+  step_ = 0;
+}
+
+void Adapter::Step() {
+  if (!loaded_) throw Error(Name() + ": Step before Load");
+  if (driver_) driver_(step_, *this);
+  DoStep();
+  ++step_;
+}
+
+void Adapter::SetVelocity(int body, Vec2 velocity, Real angularVelocity) {
+  if (!loaded_ || body < 0 || body >= BodyCount()) {
+    throw Error(Name() + ": SetVelocity: body index " + std::to_string(body) + " is outside [0, " +
+                std::to_string(loaded_ ? BodyCount() : 0) + ")");
+  }
+  // Both checked before either is set, so a refused call changes nothing.
+  if (!IsFinite(velocity) || !IsFinite(angularVelocity)) {
+    throw Error(Name() + ": SetVelocity: velocity is not finite");
+  }
+  DoSetVelocity(body, velocity, angularVelocity);
 }
 
 uint64_t Adapter::StateHash() const {

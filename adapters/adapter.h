@@ -30,6 +30,7 @@ struct Capabilities {
   bool disableWarmStarting = false;
   bool damping = false;
   std::string notes;           ///< mixing rules, settings, limitations: printed with results
+  std::string threadLimit;     ///< why maxThreads is what it is (in the Unsupported message)
 };
 
 /// Per-body state as read back, in scene body order.
@@ -55,23 +56,31 @@ struct ContactReadback {
   Real tangentImpulses[2] = {0, 0};
 };
 
+/// The interface, and the protocol every engine shares, written once here: Load validates the
+/// scene and the thread count before the engine sees them, Step refuses to run before a Load and
+/// runs the scene's driver, SetVelocity checks the index and the values. Each engine implements
+/// DoLoad, DoStep and DoSetVelocity, which see only valid input.
 class Adapter {
  public:
   virtual ~Adapter() = default;
   virtual std::string Name() const = 0;
   virtual Capabilities Caps() const = 0;
-  /// Builds the engine's world for `scene` with `threads` threads. Throws Unsupported if the
-  /// engine cannot run the scene as described, quadrant::Error if the scene is invalid.
-  virtual void Load(const Scene& scene, int threads) = 0;
-  /// Exactly one fixed step of scene.timeStep (runs the scene's driver first, if any).
-  virtual void Step() = 0;
+  /// Builds the engine's world for `scene` with `threads` threads. Throws quadrant::Error for an
+  /// invalid scene (ValidateScene) or fewer than 1 thread, Unsupported for more threads than
+  /// Caps().maxThreads or anything else the engine cannot run as described. A Load that throws
+  /// keeps the previous world.
+  void Load(const Scene& scene, int threads);
+  /// Exactly one fixed step of scene.timeStep, after the scene's driver (if any). Throws
+  /// quadrant::Error before the first Load.
+  void Step();
   virtual int BodyCount() const = 0;
   /// Fills `out` with one entry per scene body, in scene order.
   virtual void ReadBodies(std::vector<BodyState>& out) const = 0;
   /// Touching contacts (manifolds with at least one point) after the last step.
   virtual int ContactCount() const = 0;
-  /// Sets a body's velocity (for drivers and validation cases).
-  virtual void SetVelocity(int body, Vec2 velocity, Real angularVelocity) = 0;
+  /// Sets a body's velocity (for drivers and validation cases). Throws quadrant::Error, changing
+  /// nothing, for an index outside [0, BodyCount()) or a non-finite value.
+  void SetVelocity(int body, Vec2 velocity, Real angularVelocity);
   /// 64-bit hash of the state; Quadrant returns World::StateHash, others hash ReadBodies.
   virtual uint64_t StateHash() const;
   /// Milliseconds per pipeline stage summed over the steps since Load, for engines that time
@@ -81,6 +90,20 @@ class Adapter {
   /// Contact manifolds after the last step, for engines that can report them (Quadrant, Box2D);
   /// empty for the others. Not for timed loops: it builds the list on every call.
   virtual std::vector<ContactReadback> Contacts() const { return {}; }
+
+ protected:
+  /// The engine's own part of Load: the scene is valid and threads in [1, Caps().maxThreads].
+  /// Throws Unsupported for what the engine cannot honour, before replacing its world.
+  virtual void DoLoad(const Scene& scene, int threads) = 0;
+  /// One step of the loaded world (the driver has run).
+  virtual void DoStep() = 0;
+  /// The body index is valid and the values finite.
+  virtual void DoSetVelocity(int body, Vec2 velocity, Real angularVelocity) = 0;
+
+ private:
+  bool loaded_ = false;
+  Driver driver_;
+  int step_ = 0;  ///< steps since Load: the driver's step index
 };
 
 /// Engine names: "quadrant", "box2d", "bullet", "chipmunk" (and solver/scheme variants of

@@ -46,6 +46,7 @@ class Box2dAdapter final : public Adapter {
   Capabilities Caps() const override {
     Capabilities caps;
     caps.maxThreads = 1;
+    caps.threadLimit = "Box2D 2.4.1 is single-threaded";
     caps.sleep = true;
     caps.continuous = true;
     caps.disableRotation = true;
@@ -65,15 +66,8 @@ class Box2dAdapter final : public Adapter {
     return caps;
   }
 
-  void Load(const Scene& scene, int threads) override {
-    ValidateScene(scene);
-    // Refuse before touching the current world, so a refused Load leaves it usable. Fewer than
-    // one thread is bad input (an Error); more than the engine runs is Unsupported.
-    if (threads < 1) throw Error("box2d: threads must be >= 1, got " + std::to_string(threads));
-    if (threads != 1) {
-      throw Unsupported("box2d: Box2D 2.4.1 is single-threaded; asked for " +
-                        std::to_string(threads) + " threads");
-    }
+  void DoLoad(const Scene& scene, int /*threads: 1*/) override {
+    // Refuse before touching the current world, so a refused Load leaves it usable.
     for (int i = 0; i < static_cast<int>(scene.bodies.size()); ++i) {
       if (scene.bodies[i].shape == ShapeKind::kPolygon) RequireWeldSafePolygon(scene.bodies[i], i);
     }
@@ -90,8 +84,6 @@ class Box2dAdapter final : public Adapter {
     timeStep_ = static_cast<float>(scene.timeStep);
     velocityIterations_ = scene.velocityIterations;
     positionIterations_ = scene.positionIterations;
-    driver_ = scene.driver;
-    stepIndex_ = 0;
     rotation_ = fx.rotation;
 
     bodies_.reserve(scene.bodies.size());
@@ -136,12 +128,7 @@ class Box2dAdapter final : public Adapter {
     }
   }
 
-  void Step() override {
-    if (!world_) throw Error("box2d: Step before Load");
-    if (driver_) driver_(stepIndex_, *this);
-    world_->Step(timeStep_, velocityIterations_, positionIterations_);
-    ++stepIndex_;
-  }
+  void DoStep() override { world_->Step(timeStep_, velocityIterations_, positionIterations_); }
 
   int BodyCount() const override { return static_cast<int>(bodies_.size()); }
 
@@ -192,14 +179,7 @@ class Box2dAdapter final : public Adapter {
     return out;
   }
 
-  void SetVelocity(int body, Vec2 velocity, Real angularVelocity) override {
-    if (body < 0 || body >= BodyCount()) {
-      throw Error("box2d: SetVelocity body index " + std::to_string(body) + " out of range [0, " +
-                  std::to_string(BodyCount()) + ")");
-    }
-    if (!IsFinite(velocity) || !IsFinite(angularVelocity)) {
-      throw Error("box2d: SetVelocity with a non-finite velocity");
-    }
+  void DoSetVelocity(int body, Vec2 velocity, Real angularVelocity) override {
     // Box2D ignores velocities of static bodies; so does every adapter.
     b2Body* b = bodies_[static_cast<size_t>(body)];
     b->SetLinearVelocity(ToB2(velocity));
@@ -214,8 +194,6 @@ class Box2dAdapter final : public Adapter {
   float timeStep_ = 1.0f / 60.0f;
   int velocityIterations_ = 8;
   int positionIterations_ = 3;
-  Driver driver_;
-  int stepIndex_ = 0;
   bool rotation_ = true;
 };
 

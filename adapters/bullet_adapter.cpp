@@ -45,10 +45,6 @@ constexpr Real kMinHullMargin = Real(0.001);
 
 constexpr int kMinPoolSize = 4096;
 
-Unsupported SerialOnly() {
-  return Unsupported("Debian's Bullet is built without BT_THREADSAFE: serial only");
-}
-
 // Moves every edge of a convex counter-clockwise polygon inward by `margin` (each vertex along
 // its bisector). Returns false if an edge would collapse or flip, i.e. the polygon is too small
 // for that margin.
@@ -116,7 +112,6 @@ struct BulletWorld {
   std::vector<bool> dynamic;
   bool rotation = true;
   btScalar timeStep = 0;
-  Driver driver;
 };
 
 class BulletAdapter final : public Adapter {
@@ -126,6 +121,7 @@ class BulletAdapter final : public Adapter {
   Capabilities Caps() const override {
     Capabilities caps;
     caps.maxThreads = 1;
+    caps.threadLimit = "Debian's Bullet is built without BT_THREADSAFE: serial only";
     caps.sleep = true;
     caps.continuous = true;
     caps.disableRotation = true;
@@ -154,11 +150,7 @@ class BulletAdapter final : public Adapter {
     return caps;
   }
 
-  void Load(const Scene& scene, int threads) override {
-    ValidateScene(scene);
-    // Fewer than one thread is bad input (an Error); more than Bullet runs is Unsupported.
-    if (threads < 1) throw Error("bullet: threads must be >= 1, got " + std::to_string(threads));
-    if (threads != 1) throw SerialOnly();
+  void DoLoad(const Scene& scene, int /*threads: 1*/) override {
     // Bullet moves a kinematic body by its motion state's transform, which the caller sets each
     // step, not by a velocity; the scene API drives kinematic bodies by velocity (SetVelocity).
     for (const BodyDesc& b : scene.bodies) {
@@ -169,15 +161,9 @@ class BulletAdapter final : public Adapter {
     BuildWorld(scene, *next);
     for (size_t i = 0; i < scene.bodies.size(); ++i) AddBody(scene, scene.bodies[i], *next);
     world_ = std::move(next);
-    stepIndex_ = 0;
   }
 
-  void Step() override {
-    if (!world_) throw Error("bullet: Step before Load");
-    if (world_->driver) world_->driver(stepIndex_, *this);
-    world_->world->stepSimulation(world_->timeStep, 0);
-    ++stepIndex_;
-  }
+  void DoStep() override { world_->world->stepSimulation(world_->timeStep, 0); }
 
   int BodyCount() const override {
     return world_ ? static_cast<int>(world_->bodies.size()) : 0;
@@ -222,13 +208,7 @@ class BulletAdapter final : public Adapter {
     return count;
   }
 
-  void SetVelocity(int body, Vec2 velocity, Real angularVelocity) override {
-    if (!world_ || body < 0 || body >= static_cast<int>(world_->bodies.size())) {
-      throw Error("bullet: SetVelocity: no body " + std::to_string(body));
-    }
-    if (!IsFinite(velocity) || !IsFinite(angularVelocity)) {
-      throw Error("bullet: SetVelocity: velocity is not finite");
-    }
+  void DoSetVelocity(int body, Vec2 velocity, Real angularVelocity) override {
     // A static body never moves (as in the other engines), and with rotation off the angular
     // velocity stays 0: Bullet would otherwise integrate it despite the zero angular factor.
     if (!world_->dynamic[body]) return;
@@ -292,7 +272,6 @@ class BulletAdapter final : public Adapter {
 
     w.rotation = fx.rotation;
     w.timeStep = scene.timeStep;
-    w.driver = scene.driver;
     w.bodies.reserve(scene.bodies.size());
     w.localCenters.reserve(scene.bodies.size());
     w.dynamic.reserve(scene.bodies.size());
@@ -382,7 +361,6 @@ class BulletAdapter final : public Adapter {
   }
 
   std::unique_ptr<BulletWorld> world_;
-  int stepIndex_ = 0;
 };
 
 }  // namespace

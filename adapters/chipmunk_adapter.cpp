@@ -90,6 +90,7 @@ class ChipmunkAdapter final : public Adapter {
   Capabilities Caps() const override {
     Capabilities caps;
     caps.maxThreads = kMaxThreads;
+    caps.threadLimit = "1 thread is a cpSpace, 2 a cpHastySpace (it threads only the impulse solver)";
     caps.sleep = true;
     caps.continuous = false;
     caps.disableRotation = true;
@@ -113,15 +114,8 @@ class ChipmunkAdapter final : public Adapter {
     return caps;
   }
 
-  void Load(const Scene& scene, int threads) override {
-    ValidateScene(scene);
-    // Refuse before touching the current space, so a refused Load leaves it usable. Fewer than
-    // one thread is bad input (an Error); other counts than 1 and 2 are Unsupported.
-    if (threads < 1) throw Error("chipmunk: threads must be >= 1, got " + std::to_string(threads));
-    if (threads != 1 && threads != kMaxThreads) {
-      throw Unsupported("chipmunk: runs 1 or 2 threads (cpHastySpace); asked for " +
-                        std::to_string(threads));
-    }
+  void DoLoad(const Scene& scene, int threads) override {
+    // Refuse before touching the current space, so a refused Load leaves it usable.
     const Effects& fx = scene.effects;
     if (fx.continuous) throw Unsupported("chipmunk: no continuous collision detection");
     if (!fx.warmStarting) throw Unsupported("chipmunk: warm starting cannot be switched off");
@@ -162,8 +156,6 @@ class ChipmunkAdapter final : public Adapter {
     if (fx.damping) cpSpaceSetDamping(space_, std::pow(1 + scene.timeStep * damping, -1 / double(scene.timeStep)));
 
     timeStep_ = cpFloat(scene.timeStep);
-    driver_ = scene.driver;
-    stepIndex_ = 0;
     rotation_ = fx.rotation;
 
     bodies_.reserve(scene.bodies.size());
@@ -209,15 +201,12 @@ class ChipmunkAdapter final : public Adapter {
     }
   }
 
-  void Step() override {
-    if (space_ == nullptr) throw Error("chipmunk: Step before Load");
-    if (driver_) driver_(stepIndex_, *this);
+  void DoStep() override {
     if (hasty_) {
       cpHastySpaceStep(space_, timeStep_);
     } else {
       cpSpaceStep(space_, timeStep_);
     }
-    ++stepIndex_;
   }
 
   int BodyCount() const override { return static_cast<int>(bodies_.size()); }
@@ -252,14 +241,7 @@ class ChipmunkAdapter final : public Adapter {
     return static_cast<int>(touching.size());
   }
 
-  void SetVelocity(int body, Vec2 velocity, Real angularVelocity) override {
-    if (body < 0 || body >= BodyCount()) {
-      throw Error("chipmunk: SetVelocity body index " + std::to_string(body) +
-                  " out of range [0, " + std::to_string(BodyCount()) + ")");
-    }
-    if (!IsFinite(velocity) || !IsFinite(angularVelocity)) {
-      throw Error("chipmunk: SetVelocity with a non-finite velocity");
-    }
+  void DoSetVelocity(int body, Vec2 velocity, Real angularVelocity) override {
     cpBody* b = bodies_[static_cast<size_t>(body)];
     // A static body with a velocity would act as a moving surface in Chipmunk's solver; Box2D
     // ignores velocities of static bodies, and so does every adapter.
@@ -299,8 +281,6 @@ class ChipmunkAdapter final : public Adapter {
   std::vector<cpBody*> bodies_;  // scene body index -> Chipmunk body (owned)
   std::vector<cpShape*> shapes_;  // owned
   cpFloat timeStep_ = 1.0 / 60.0;
-  Driver driver_;
-  int stepIndex_ = 0;
   bool rotation_ = true;
 };
 

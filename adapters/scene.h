@@ -11,23 +11,25 @@
 #include <vector>
 
 #include "quadrant/math.h"
+#include "quadrant/world.h"  // Effects
 
 namespace quadrant::scene {
 
 enum class ShapeKind : uint8_t { kCircle, kPolygon };
 
-/// Effects a scene calls for. An adapter whose engine cannot honour one that is on (or
-/// cannot switch one off) reports the scene as unsupported.
-struct Effects {
-  bool gravity = true;
-  bool friction = true;
-  bool restitution = true;
-  bool rotation = true;
-  bool warmStarting = true;
-  bool sleep = false;
-  bool continuous = false;
-  bool damping = false;
-};
+/// Effects a scene calls for: the engine's own type (quadrant/world.h), so the scene API and the
+/// engine cannot drift (scene.h had a copy). An adapter whose engine cannot honour one that is on
+/// (or cannot switch one off) reports the scene as unsupported. A scene's defaults differ from
+/// the engine's WorldDef in one field: continuous collision is off (SceneEffects), as in the
+/// stress scenes and most cases, and Chipmunk cannot run it; a scene that needs it says so.
+using Effects = quadrant::Effects;
+
+/// The effects of a scene that sets none: the engine's defaults with continuous collision off.
+inline Effects SceneEffects() {
+  Effects e;
+  e.continuous = false;
+  return e;
+}
 
 struct BodyDesc {
   bool dynamic = true;
@@ -67,7 +69,7 @@ struct Scene {
   int velocityIterations = 8;         ///< Box2D 2.4 and Quadrant pgs
   int positionIterations = 3;
   Real restitutionThreshold = Real(1);///< m/s; approach speeds below it do not bounce
-  Effects effects;
+  Effects effects = SceneEffects();
   AABB bounds;                        ///< region that holds every body (the box of stress scenes)
   std::vector<BodyDesc> bodies;
   Driver driver;                      ///< optional

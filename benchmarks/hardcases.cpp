@@ -9,6 +9,7 @@
 // every Quadrant case passes (heavy_on_slab, beyond every peer at the default budget, is reported
 // but not required: RequiredOfDefaultEngine), 1 when one fails (peers never change it), 2 on bad
 // arguments.
+#include <algorithm>
 #include <cerrno>
 #include <cstdio>
 #include <cstdlib>
@@ -28,9 +29,15 @@ namespace rp = quadrant::report;
 
 namespace {
 
+std::vector<std::string> PeerNames() {
+  std::vector<std::string> peers = qs::AdapterNames();
+  peers.erase(peers.begin());  // "quadrant"
+  return peers;
+}
+
 struct Args {
   std::string out = ".";
-  std::vector<std::string> peers = {"box2d", "bullet", "chipmunk"};
+  std::vector<std::string> peers = PeerNames();  // the peers this build has
   std::vector<std::string> cases = qs::HardCaseNames();
   int soakSteps = 100000;
 };
@@ -38,10 +45,38 @@ struct Args {
 using quadrant::report::SplitList;
 
 [[noreturn]] void Usage(const std::string& problem) {
-  std::cerr << "quadrant_hardcases: " << problem << "\n"
-            << "usage: quadrant_hardcases --out DIR [--peers box2d,bullet,chipmunk|none] [--cases a,b] "
-               "[--soak-steps N]\n";
+  // One line (issue 16): the problem and the usage, no more.
+  std::cerr << "quadrant_hardcases: " << problem
+            << " (usage: quadrant_hardcases --out DIR [--peers box2d,bullet,chipmunk|none] [--cases a,b] "
+               "[--soak-steps N])\n";
   std::exit(2);
+}
+
+/// A refused name: one line, exit 2.
+[[noreturn]] void Refuse(const std::string& problem) {
+  std::cerr << "quadrant_hardcases: " << problem << "\n";
+  std::exit(2);
+}
+
+/// Every peer and case name is checked before the first case runs: a mistyped name is one line
+/// and exit 2, not minutes of cases and then an error from inside a case.
+void CheckNames(const Args& a) {
+  for (const std::string& peer : a.peers) {
+    try {
+      qs::MakeAdapter(peer);
+    } catch (const quadrant::Error& e) {
+      Refuse(std::string("--peers: ") + e.what() + "; or none");
+    }
+  }
+  const std::vector<std::string> known = qs::HardCaseNames();
+  for (const std::string& name : a.cases) {
+    if (std::find(known.begin(), known.end(), name) == known.end()) {
+      std::string list;
+      for (const std::string& k : known) list += (list.empty() ? "" : ", ") + k;
+      Refuse("--cases: unknown case '" + name + "' (accepted: " + list + ")");
+    }
+  }
+  if (a.cases.empty()) Refuse("--cases: empty list (accepted: hard case names, tools/quadrant help)");
 }
 
 Args Parse(int argc, char** argv) {
@@ -189,11 +224,13 @@ void Write(const std::filesystem::path& path, const std::string& text) {
 
 int main(int argc, char** argv) {
   const Args args = Parse(argc, argv);
+  CheckNames(args);
   std::vector<Row> rows;
   bool allPass = true;
   try {
     qs::HardCaseOptions options;
     options.soakSteps = args.soakSteps;
+    options.progressSeconds = 10;  // a line at least every 10 s during the minutes-long soaks
     for (const std::string& name : args.cases) {
       Row row;
       row.quadrant = qs::RunHardCase(name, "quadrant", options);
@@ -217,7 +254,7 @@ int main(int argc, char** argv) {
   const std::string markdown = Markdown(rows, args);
   Write(dir / "hardcases.json", Json(rows, args));
   Write(dir / "hardcases.md", markdown);
-  std::cout << markdown;
+  std::cout << markdown << std::flush;  // before the closing line on stderr, so a 2>&1 pipe keeps them apart
   std::fprintf(stderr, "quadrant_hardcases: wrote %s and %s; Quadrant %s\n", (dir / "hardcases.json").c_str(),
                (dir / "hardcases.md").c_str(), allPass ? "passes every case" : "FAILS a case");
   return allPass ? 0 : 1;

@@ -44,6 +44,7 @@
 #include <cstring>
 #include <exception>
 #include <fstream>
+#include <map>
 #include <memory>
 #include <optional>
 #include <stdexcept>
@@ -53,6 +54,7 @@
 #include <vector>
 
 #include "adapter.h"
+#include "progress_reporter.h"
 #include "quadrant/error.h"
 #include "scene.h"
 #include "scenes.h"
@@ -93,14 +95,15 @@ void PrintUsage(std::FILE* out) {
       "  --scenes a,b       scenes (default circle_stress,polygon_stress,pyramid,many_pyramids,tumbler)\n"
       "  --engines a,b      engines (default: all adapters)\n"
       "  --counts 1000,...  body counts for every scene (default: each scene's own; stress scenes\n"
-      "                     1000,2000,4000,8000,16000, pyramid 1275,5050, many_pyramids 1375,5500,\n"
+      "                     1000,2000,4000,8000,16000, pyramid 1275,5050, many_pyramids 1375,2750,\n"
       "                     tumbler 1024,2025)\n"
       "  --threads 1,2,...  engine thread counts (default 1,2,3,4)\n"
       "  --steps S          timed steps per run (default 120)\n"
       "  --warmup W         untimed steps before timing (default 30)\n"
       "  --seed X           scene seed (default 42)\n"
+      "  --list             print the engine and scene names and exit\n"
       "Benchmarks are named <scene>/<engine>/n:<N>/threads:<T>. Combinations an engine cannot\n"
-      "run are listed as 'unsupported: <name>: <reason>' on stderr and in the JSON context.\n",
+      "run are counted in one line on stderr and listed in the JSON context 'unsupported'.\n",
       out);
 }
 
@@ -127,10 +130,23 @@ long long ParseInteger(const std::string& flag, const std::string& text, long lo
   return value;
 }
 
+/// A flag's comma-separated list: no empty items ("1000,,2000", ",", "" are mistakes, not
+/// shorter lists); `accepted` says what the flag takes, for the one-line error.
+std::vector<std::string> ParseList(const std::string& flag, const std::string& text,
+                                   std::string_view accepted) {
+  std::vector<std::string> out = SplitList(text);
+  size_t commas = 0;
+  for (char c : text) commas += c == ',' ? 1 : 0;
+  if (out.empty() || out.size() != commas + 1)
+    throw UsageError(fmt::format("{}: '{}' has an empty item; give a comma-separated list of {}", flag,
+                                 text, accepted));
+  return out;
+}
+
 std::vector<int> ParseIntList(const std::string& flag, const std::string& text, int lo, int hi) {
   std::vector<int> out;
-  for (const std::string& item : SplitList(text)) out.push_back(int(ParseInteger(flag, item, lo, hi)));
-  if (out.empty()) throw UsageError(fmt::format("{}: empty list", flag));
+  for (const std::string& item : ParseList(flag, text, fmt::format("integers in [{}, {}]", lo, hi)))
+    out.push_back(int(ParseInteger(flag, item, lo, hi)));
   return out;
 }
 
@@ -174,15 +190,13 @@ Options ParseOwnFlags(int& argc, char** argv) {
       continue;
     }
     if (flag == "--scenes") {
-      opts.scenes = SplitList(value);
-      if (opts.scenes.empty()) throw UsageError("--scenes: empty list");
+      opts.scenes = ParseList(flag, value, "scene names (tools/quadrant help lists them)");
     } else if (flag == "--engines") {
-      opts.engines = SplitList(value);
-      if (opts.engines.empty()) throw UsageError("--engines: empty list");
+      opts.engines = ParseList(flag, value, "engine names (quadrant, quadrant:<variant>, box2d, bullet, chipmunk)");
     } else if (flag == "--counts") {
       opts.counts = ParseIntList(flag, value, 1, 10'000'000);
     } else if (flag == "--threads") {
-      opts.threads = ParseIntList(flag, value, 1, 1024);
+      opts.threads = ParseIntList(flag, value, 1, 64);  // 64: WorldDef.threadCount's limit, the most any engine runs
     } else if (flag == "--steps") {
       opts.steps = int(ParseInteger(flag, value, 1, 100'000'000));
     } else if (flag == "--warmup") {
@@ -194,6 +208,19 @@ Options ParseOwnFlags(int& argc, char** argv) {
   argc = write;
   argv[argc] = nullptr;
   return opts;
+}
+
+/// --list: the accepted engine and scene names, one "kind: name" per line (tools/quadrant help
+/// prints the same lists; tests/tools/cli_test.sh checks that they agree).
+bool ListRequested(int argc, char** argv) {
+  for (int i = 1; i < argc; ++i)
+    if (std::strcmp(argv[i], "--list") == 0) return true;
+  return false;
+}
+
+void PrintNames() {
+  for (const std::string& name : qs::AdapterNames()) std::printf("engine: %s\n", name.c_str());
+  for (const std::string& name : qs::SceneNames()) std::printf("scene: %s\n", name.c_str());
 }
 
 /// Value of a Google Benchmark flag still on the command line ("--name=value"), if given.
@@ -356,17 +383,7 @@ struct Job {
   std::string name;
 };
 
-std::atomic<int> g_started{0};
-int g_total = 0;  // registered benchmarks x repetitions; 0 when unknown (a filter is in use)
-
 void RunJob(benchmark::State& state, const Job& job) {
-  const int k = ++g_started;
-  if (g_total > 0)
-    std::fprintf(stderr, "[%d/%d] %s\n", k, g_total, job.name.c_str());
-  else
-    std::fprintf(stderr, "[%d] %s\n", k, job.name.c_str());
-  std::fflush(stderr);
-
   // Setup, untimed, repeated for every repetition so that repetitions are independent.
   std::unique_ptr<qs::Adapter> adapter;
   MemoryProbe memory;
@@ -442,9 +459,13 @@ int main(int argc, char** argv) {
   try {
     opts = ParseOwnFlags(argc, argv);
   } catch (const UsageError& e) {
-    std::fprintf(stderr, "quadrant_bench: %s\n\n", e.what());
-    PrintUsage(stderr);
+    // One line naming the flag and what it accepts (issue 16); --help has the full usage.
+    std::fprintf(stderr, "quadrant_bench: %s\n", e.what());
     return 2;
+  }
+  if (ListRequested(argc, argv)) {
+    PrintNames();
+    return 0;
   }
   if (help) {
     PrintUsage(stdout);
@@ -462,6 +483,8 @@ int main(int argc, char** argv) {
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 2;
 
   std::vector<std::string> unsupported;
+  std::map<std::string, int> unsupportedReasons;  // reason -> combinations, for the summary line
+  std::string unsupportedSummary;
   std::vector<std::string> errors;
   int registered = 0;
   try {
@@ -521,8 +544,8 @@ int main(int argc, char** argv) {
               }
             }
             if (!reason.empty()) {
-              std::fprintf(stderr, "unsupported: %s: %s\n", job.name.c_str(), reason.c_str());
               unsupported.push_back(fmt::format("{}: {}", job.name, reason));
+              ++unsupportedReasons[reason];
               continue;
             }
             benchmark::RegisterBenchmark(
@@ -534,6 +557,16 @@ int main(int argc, char** argv) {
           }
         }
       }
+    }
+
+    // One line for the unsupported combinations, counted by reason (issue 16: it was one line
+    // per combination, 80 in the default run); the full list goes into the JSON context.
+    for (const auto& [reason, n] : unsupportedReasons)
+      unsupportedSummary += fmt::format("{}{} x {}", unsupportedSummary.empty() ? "" : "; ", n, reason);
+    if (!unsupported.empty() && registered > 0) {
+      const std::string& summary = unsupportedSummary;
+      std::fprintf(stderr, "quadrant_bench: %zu of %zu combinations skipped as unsupported (%s); the list is in the JSON context 'unsupported'\n",
+                   unsupported.size(), unsupported.size() + size_t(registered), summary.c_str());
     }
 
     // The record of the run.
@@ -572,8 +605,17 @@ int main(int argc, char** argv) {
     return 2;
   }
 
-  g_total = filtered ? 0 : registered * repetitions;
-  benchmark::RunSpecifiedBenchmarks();
+  if (registered == 0 && errors.empty()) {
+    // Every combination unsupported (e.g. --engines box2d --threads 2): say so in one line
+    // instead of Google Benchmark's "Failed to match any benchmarks".
+    std::fprintf(stderr, "quadrant_bench: nothing to run: all %zu combinations are unsupported (%s)\n",
+                 unsupported.size(), unsupportedSummary.c_str());
+    return 2;
+  }
+  // Progress on stderr, one line per finished run with an ETA (progress_reporter.h); the JSON
+  // file reporter (--benchmark_out) is Google Benchmark's own.
+  quadrant::bench::ProgressReporter progress(filtered ? 0 : registered * repetitions, QUADRANT_BUILD_TYPE);
+  benchmark::RunSpecifiedBenchmarks(&progress);
   benchmark::Shutdown();
   return errors.empty() ? 0 : 1;
 }

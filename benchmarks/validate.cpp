@@ -15,6 +15,7 @@
 // The cases, their tolerances and the reasons for them live in
 // benchmarks/scenes/validation_cases.cpp, shared with tests/adapters/validation_test.cpp. Exit
 // status: 0 when every case passes, 1 when one fails, 2 on bad arguments.
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -146,6 +147,16 @@ int main(int argc, char** argv) {
       return quadrant::report::RunRandomCampaign(args.out, args.random, args.seed, args.extraRuns);
     } catch (const quadrant::Error& e) {
       Usage(e.what());
+    }
+  }
+  // Case names before the first case runs (issue 16): a typo is one line and exit 2.
+  for (const std::string& name : args.cases) {
+    const std::vector<std::string> known = qs::ValidationCaseNames();
+    if (std::find(known.begin(), known.end(), name) == known.end()) {
+      std::string list;
+      for (const std::string& k : known) list += (list.empty() ? "" : ", ") + k;
+      std::cerr << "quadrant_validate: --cases: unknown case '" << name << "' (accepted: " << list << ")\n";
+      return 2;
     }
   }
   std::vector<qs::ValidationResult> results;

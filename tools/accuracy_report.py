@@ -17,6 +17,8 @@ import math
 import os
 import sys
 
+import plot_style  # one colour per engine in every figure
+
 PILES = ["vertical_stack", "pyramid", "mass_ratio_100", "mass_ratio_400", "tall_stack", "heavy_on_supports",
          "heavy_on_slab"]
 STRESS = ["circle_stress", "polygon_stress"]
@@ -347,7 +349,32 @@ def report_markdown(data, out, note=""):
         f.write("\n".join(lines))
 
 
-COLOURS = {"quadrant": "tab:blue", "box2d": "tab:orange", "bullet": "tab:green", "chipmunk": "tab:red"}
+# The engines' colours of every figure (plot_style.py): Box2D is green here as in the FPS plots.
+COLOURS = {e: plot_style.style(e)[0] for e in ("quadrant", "box2d", "bullet", "chipmunk")}
+
+
+def place_labels(ax, points, fontsize=6.5):
+    """Labels the points (x, y, text, priority) without overlaps: each label tries four spots
+    around its point, in priority order (the Pareto front first), and is left out when all four
+    would overlap a label or point already there; accuracy.md lists every setting."""
+    fig = ax.figure
+    taken = [ax.transData.transform((x, y)) for x, y, _, _ in points]
+    taken = [(px - 3, py - 3, px + 3, py + 3) for px, py in taken]  # the markers themselves
+    char_w, h = 0.62 * fontsize * fig.dpi / 72, 1.1 * fontsize * fig.dpi / 72
+    omitted = 0
+    for x, y, text, _ in sorted(points, key=lambda p: p[3]):
+        px, py = ax.transData.transform((x, y))
+        w = char_w * len(text)
+        for dx, dy in ((4, 3), (4, -3 - h), (-4 - w, 3), (-4 - w, -3 - h)):
+            box = (px + dx, py + dy, px + dx + w, py + dy + h)
+            if all(box[2] < b[0] or box[0] > b[2] or box[3] < b[1] or box[1] > b[3] for b in taken):
+                taken.append(box)
+                ax.annotate(text, (x, y), fontsize=fontsize, xytext=(dx * 72 / fig.dpi, dy * 72 / fig.dpi),
+                            textcoords="offset points")
+                break
+        else:
+            omitted += 1
+    return omitted
 
 
 def report_plot(data, out):
@@ -358,7 +385,10 @@ def report_plot(data, out):
     scenes = [s for s in PILES + STRESS if any(r["scene"] == s for r in data["runs"])]
     cols = min(3, len(scenes))
     nrows = (len(scenes) + cols - 1) // cols
+    from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
+
     fig, axes = plt.subplots(nrows, cols, figsize=(5.2 * cols, 4.3 * nrows), squeeze=False)
+    labels = []  # (axes, points to label), placed once the layout is final
     for n, scene in enumerate(scenes):
         ax = axes[n // cols][n % cols]
         runs = [r for r in scene_runs(data, scene) if r.get("ms_per_step") is not None and primary_error(r) is not None]
@@ -369,7 +399,7 @@ def report_plot(data, out):
             marker = "D" if r.get("precision", "float") != "float" else ("s" if r["engine"] != "quadrant" else "o")
             ax.scatter([c], [e], color=colour, marker=marker, s=40 if i in front else 20,
                        edgecolors="black" if i in front else "none", zorder=3)
-            ax.annotate(short(r), (c, e), fontsize=6.5, xytext=(3, 3), textcoords="offset points")
+        labels.append((ax, [(c, e, short(r), 0 if i in front else 1) for i, (c, e, r) in enumerate(pts)]))
         fpts = sorted((pts[i][0], pts[i][1]) for i in front)
         if fpts:
             # The front as a staircase: for any time budget, the best error reachable.
@@ -386,6 +416,13 @@ def report_plot(data, out):
         ax.set_xlabel("ms per step (1 thread, median)", fontsize=8)
         ax.set_ylabel(PRIMARY[kind(scene)][1], fontsize=8)
         ax.tick_params(labelsize=7)
+        # Labels at 1, 2 and 5 per decade where an axis spans at most 3 decades (most panels'
+        # time axes span less than one, which had a single label), else one per decade.
+        for axis, (lo, hi) in ((ax.xaxis, ax.get_xlim()), (ax.yaxis, ax.get_ylim())):
+            wide = lo > 0 and hi / lo > 1e3
+            axis.set_major_locator(LogLocator(base=10, subs=(1.0,) if wide else (1.0, 2.0, 5.0)))
+            axis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+            axis.set_minor_formatter(NullFormatter())
     for n in range(len(scenes), nrows * cols):
         axes[n // cols][n % cols].axis("off")
     handles = [plt.Line2D([], [], color=c, marker="o" if e == "quadrant" else "s", linestyle="", label=e)
@@ -397,7 +434,13 @@ def report_plot(data, out):
                  "errors below {:g} drawn at {:g})\n{}, commit {}, {}".format(
                      FLOOR, FLOOR, data["context"].get("machine"), data["context"].get("commit"),
                      data["context"].get("date")), fontsize=9)
+    fig.set_dpi(110)
     fig.tight_layout(rect=(0, 0.04, 1, 0.95))
+    fig.canvas.draw()  # final axes limits and positions, so labels can avoid each other
+    omitted = sum(place_labels(ax, pts) for ax, pts in labels)
+    if omitted:
+        fig.text(0.99, 0.935, f"{omitted} labels left out where they would overlap (accuracy.md lists every setting)",
+                 fontsize=7, ha="right", va="top")
     fig.savefig(os.path.join(out, "accuracy.png"), dpi=110)
     plt.close(fig)
 

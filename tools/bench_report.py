@@ -25,13 +25,9 @@ import re
 import statistics
 import sys
 
-# <scene>/<engine>/n:<N>/threads:<T>, then what Google Benchmark appends: /iterations:<k>,
-# /real_time or /manual_time, and _<aggregate> on aggregate rows. Engine names may hold
-# variants ("quadrant:pgs").
-NAME_RE = re.compile(
-    r"^(?P<scene>[A-Za-z0-9_.\-]+)/(?P<engine>[A-Za-z0-9_.:\-]+)/n:(?P<n>\d+)/threads:(?P<threads>\d+)"
-    r"(?:/iterations:\d+)?(?:/(?:real_time|manual_time))?(?:_(?P<aggregate>[A-Za-z0-9]+))?$"
-)
+import gbench_json  # the one reader of Google Benchmark names in tools/
+import plot_style  # one colour and label per engine in every figure
+
 LABEL_RE = re.compile(r"^[0-9a-f]{16}$")
 SCENE_NOUNS = {"circle_stress": "circles", "polygon_stress": "polygons", "pyramid": "boxes",
                "many_pyramids": "boxes", "tumbler": "boxes"}
@@ -59,10 +55,13 @@ def load_json(path):
 
 
 def parse_name(name):
-    m = NAME_RE.match(name or "")
-    if not m:
+    """(scene, engine, n, threads, aggregate or None) of a row's name, by the one rule of
+    gbench_json (which also accepts variant names with '+', e.g. quadrant:pgs+it8)."""
+    parsed = gbench_json.parse_quadrant_name(name)
+    if not parsed:
         return None
-    return m.group("scene"), m.group("engine"), int(m.group("n")), int(m.group("threads")), m.group("aggregate")
+    m = gbench_json.AGGREGATE_RE.search(name)
+    return parsed + (m.group("aggregate") if m else None,)
 
 
 def is_aggregate(row):
@@ -449,8 +448,20 @@ def markdown(results, source):
 
 # ---- Plots -----------------------------------------------------------------------------------
 
-MARKERS = ["o", "s", "^", "D", "v", "P", "X", "*"]
-STYLES = {1: "-", 2: "--", 3: "-.", 4: ":"}
+def plot_footer(results, engines):
+    """What the figure shows and where it comes from; notes only for the engines drawn."""
+    notes = []
+    if any(plot_style.canonical(e) == "bullet" for e in engines):
+        notes.append("Bullet serial (Debian builds it without BT_THREADSAFE)")
+    if any(plot_style.canonical(e) == "box2d" for e in engines):
+        notes.append("Box2D 2.4.1 single-threaded")
+    reps = sorted({st["reps"] for st in results.stats.values()})
+    return (f"Median steps per second over {'/'.join(map(str, reps)) or '?'} repetitions per point, band: min-max; "
+            f"engines: {', '.join(engines)}. "
+            f"Machine {ctx(results, 'machine', ctx(results, 'host_name'))} ({ctx(results, 'cpu_model')}, "
+            f"{results.cores or '?'} cores); commit {ctx(results, 'commit')}; {ctx(results, 'steps')} steps "
+            f"after {ctx(results, 'warmup')} warm-up; {ctx(results, 'date')}."
+            + (" " + "; ".join(notes) + "." if notes else ""))
 
 
 def plot_scene(results, scene, path):
@@ -459,22 +470,28 @@ def plot_scene(results, scene, path):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(figsize=(9, 6), dpi=110)
-    colours = plt.rcParams["axes.prop_cycle"].by_key().get("color", ["C0", "C1", "C2", "C3"])
-    drawn = 0
-    for i, e in enumerate(results.engines):
+    fig, ax = plt.subplots(figsize=(9, 6.2), dpi=110)
+    drawn_engines, drawn_threads = [], []
+    for e in results.engines:
+        colour, marker, _ = plot_style.style(e)
         for t in results.threads:
-            pts = [(n, results.get(scene, e, n, t)) for n in results.counts(scene)]
-            pts = [(n, s["sps"]) for n, s in pts if s]
-            if not pts:
+            stats = [(n, results.get(scene, e, n, t)) for n in results.counts(scene)]
+            stats = [(n, st) for n, st in stats if st]
+            if not stats:
                 continue
-            xs, ys = zip(*pts)
+            xs = [n for n, _ in stats]
             over = results.cores is not None and t > results.cores
-            label = f"{engine_title(e)}, {t} thread{'s' if t > 1 else ''}" + (" (oversubscribed)" if over else "")
-            ax.plot(xs, ys, marker=MARKERS[i % len(MARKERS)], linestyle=STYLES.get(t, (0, (1, 1 + t))),
-                    color=colours[i % len(colours)], label=label, markersize=5, linewidth=1.4,
-                    alpha=0.6 if over else 1.0)
-            drawn += 1
+            alpha = 0.55 if over else 1.0
+            ax.plot(xs, [st["sps"] for _, st in stats], marker=marker, linestyle=plot_style.thread_style(t),
+                    color=colour, markersize=4.5, linewidth=1.4, alpha=alpha)
+            # The spread over repetitions: min to max steps per second.
+            if any(st["reps"] > 1 for _, st in stats):
+                ax.fill_between(xs, [st["min"] for _, st in stats], [st["max"] for _, st in stats],
+                                color=colour, alpha=0.12 * alpha, linewidth=0)
+            if e not in drawn_engines:
+                drawn_engines.append(e)
+            if t not in drawn_threads:
+                drawn_threads.append(t)
     ax.set_xscale("log")
     ax.set_yscale("log")
     noun = SCENE_NOUNS.get(scene, "bodies")
@@ -482,26 +499,40 @@ def plot_scene(results, scene, path):
     fig_ref = THESIS_FIGURES.get(scene)
     ax.set_title(title + (f" ({scene}; cf. thesis {fig_ref})" if fig_ref else f" ({scene})"))
     ax.set_xlabel(f"number of {noun} (N)")
-    ax.set_ylabel("steps per second (median over repetitions)")
+    ax.set_ylabel("steps per second (median over repetitions, band: min-max)")
     ax.grid(True, which="major", linestyle="-", alpha=0.4)
     ax.grid(True, which="minor", linestyle=":", alpha=0.25)
+    from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
+
+    # Labels at 1, 2 and 5 per decade: a plot spanning less than a decade still gets several.
+    ax.yaxis.set_major_locator(LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
+    ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+    ax.yaxis.set_minor_formatter(NullFormatter())
     counts = results.counts(scene)
     if counts:
-        from matplotlib.ticker import FixedLocator, FuncFormatter, NullFormatter
+        from matplotlib.ticker import FixedLocator
 
         ax.xaxis.set_major_locator(FixedLocator(counts))
         ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
         ax.xaxis.set_minor_formatter(NullFormatter())
-    if drawn:
-        ax.legend(fontsize=7, loc="best", ncol=2 if drawn > 8 else 1)
+    if drawn_engines:
+        # Two small legends instead of one entry per line: colour = engine, line style = threads.
+        engine_handles = [plt.Line2D([], [], color=plot_style.style(e)[0], marker=plot_style.style(e)[1],
+                                     linestyle="-", label=plot_style.style(e)[2]) for e in drawn_engines]
+        thread_handles = []
+        for t in sorted(drawn_threads):
+            over = results.cores is not None and t > results.cores
+            thread_handles.append(plt.Line2D([], [], color="black", linestyle=plot_style.thread_style(t),
+                                             alpha=0.55 if over else 1.0,
+                                             label=f"{t} thread{'s' if t > 1 else ''}"
+                                                   + (" (oversubscribed)" if over else "")))
+        first = ax.legend(handles=engine_handles, fontsize=8, loc="lower left", title="engine", title_fontsize=8)
+        ax.add_artist(first)
+        ax.legend(handles=thread_handles, fontsize=8, loc="upper right", title="engine threads", title_fontsize=8)
     else:
         ax.text(0.5, 0.5, "no data", transform=ax.transAxes, ha="center")
-    footer = (f"machine {ctx(results, 'machine', ctx(results, 'host_name'))} ({ctx(results, 'cpu_model')}, "
-              f"{results.cores or '?'} cores); commit {ctx(results, 'commit')}; {ctx(results, 'steps')} steps "
-              f"after {ctx(results, 'warmup')} warm-up; {ctx(results, 'date')}. Bullet serial (no BT_THREADSAFE), "
-              f"Box2D 2.4.1 single-threaded.")
-    fig.text(0.01, 0.01, footer, fontsize=6.5, ha="left", va="bottom", wrap=True)
-    fig.tight_layout(rect=(0, 0.04, 1, 1))
+    fig.text(0.01, 0.01, plot_footer(results, drawn_engines), fontsize=6.5, ha="left", va="bottom", wrap=True)
+    fig.tight_layout(rect=(0, 0.05, 1, 1))
     fig.savefig(path)
     plt.close(fig)
 

@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Compare two Google Benchmark runs benchmark by benchmark: is NEW faster, slower or unchanged?
 
-Usage (Debian's interpreter; only the standard library is needed):
+Usage (Debian's interpreter, which sees python3-scipy):
 
     /usr/bin/python3 tools/compare.py BASE NEW [--alpha 0.05] [--threshold 5]
                                                [--min-repetitions 9]
@@ -19,42 +19,36 @@ per-repetition rows):
   - a two-sided Mann-Whitney U test over the repetitions (p value);
   - a verdict: "slower" or "faster" when p < alpha AND the medians differ by more than the
     threshold (a significant 2 % change under a 5 % threshold is "unchanged": it is real but
-    too small to act on); "unchanged" otherwise; "unchanged (too few repetitions)" when either
+    too small to act on); "unchanged" otherwise; "inconclusive (too few repetitions)" when either
     side has fewer than --min-repetitions repetitions (with fewer, the test cannot reach
-    significance reliably, and one noisy run would decide).
+    significance reliably, and one noisy run would decide): not tested, so nothing is claimed.
 
 Prints a Markdown table, then names every slower benchmark and lists the benchmarks found on
-one side only. Exit status: 1 if any benchmark is slower, 0 otherwise, 2 on bad input (a
-missing or unreadable file, a file that is not Google Benchmark JSON, no benchmark in common).
+one side only. Exit status: 1 if any benchmark is slower; else 3 if any benchmark could not be
+tested (inconclusive: too few repetitions); 0 if every benchmark was tested and none is slower;
+2 on bad input (a missing or unreadable file, a file that is not Google Benchmark JSON, no
+benchmark in common).
 
 Why Mann-Whitney U: benchmark times are not normal (a long right tail from preemption and
 cache misses), so a t-test's assumptions do not hold; the rank test needs none (Google
 Benchmark's own tools/compare.py uses it too).
 
-Why it is implemented here rather than taken from scipy: it is 60 lines, it keeps this tool
-free of a 60 MB dependency, and it lets us use the EXACT null distribution for the usual sample
-sizes (9..50 repetitions without ties), where scipy 1.10 (Debian bookworm) switches to the
-normal approximation as soon as a sample exceeds 8 values. The normal approximation (with tie
-and continuity correction, as scipy's) is used when there are ties or the samples are large.
-tests/tools/compare_test.py checks both against values computed once with scipy.
+The test is scipy.stats.mannwhitneyu; which of its methods is used is chosen here (see
+mann_whitney_u). tests/tools/compare_test.py checks the p values against values computed once.
 """
 
 import argparse
 import glob
-import json
 import math
 import os
-import re
 import statistics
 import sys
 
-# Google Benchmark appends these to a benchmark's name; they are not part of its identity
-# (a run with a different iteration count or time mode is still the same benchmark).
-SUFFIX_RE = re.compile(
-    r"/(?:iterations:\d+|repeats:\d+|min_time:[0-9.]+s?|min_warmup_time:[0-9.]+s?"
-    r"|real_time|manual_time|process_time)$"
-)
-AGGREGATE_RE = re.compile(r"_(?:mean|median|stddev|cv)$")
+import scipy.stats  # Debian python3-scipy (tools/quadrant setup installs it)
+
+import gbench_json
+from gbench_json import base_name  # noqa: F401  (compare.base_name: the pairing rule, tested)
+
 TIME_UNITS_MS = {"ns": 1e-6, "us": 1e-3, "ms": 1.0, "s": 1e3}
 
 # Context keys whose difference makes a comparison questionable: warned about on stderr.
@@ -62,7 +56,7 @@ CONTEXT_KEYS = ("machine", "cpu_model", "compiler", "cxx_flags", "build_type", "
                 "steps", "warmup", "seed")
 
 # Exact p values are computed when there are no ties and m * n is at most this (m = n = 50:
-# the polynomial has 2501 coefficients, m passes over it: well under a second).
+# well under a second in scipy).
 EXACT_MAX_PRODUCT = 2500
 
 
@@ -73,98 +67,35 @@ class InputError(Exception):
 # ---- Mann-Whitney U ---------------------------------------------------------------------------
 
 
-def rank(values):
-    """Ranks 1..n, ties getting the average of the ranks they span. Returns (ranks, tie sizes)."""
-    order = sorted(range(len(values)), key=lambda i: values[i])
-    ranks = [0.0] * len(values)
-    ties = []
-    i = 0
-    while i < len(order):
-        j = i
-        while j + 1 < len(order) and values[order[j + 1]] == values[order[i]]:
-            j += 1
-        avg = (i + j) / 2 + 1
-        for k in range(i, j + 1):
-            ranks[order[k]] = avg
-        if j > i:
-            ties.append(j - i + 1)
-        i = j + 1
-    return ranks, ties
-
-
-def u_distribution(m, n):
-    """Number of arrangements of m x's and n y's giving U = 0..m*n (no ties).
-
-    The counts are the coefficients of the Gaussian binomial [m+n choose m](q) =
-    prod_{i=1..m} (1 - q^(n+i)) / (1 - q^i); each factor is one multiplication by (1 - q^(n+i))
-    and one division by (1 - q^i) (a running sum with stride i), in exact integers.
-    """
-    size = m * n + 1
-    c = [0] * size
-    c[0] = 1
-    for i in range(1, m + 1):
-        shift = n + i
-        for k in range(size - 1, shift - 1, -1):  # multiply by (1 - q^shift)
-            c[k] -= c[k - shift]
-        for k in range(i, size):  # divide by (1 - q^i)
-            c[k] += c[k - i]
-    return c
-
-
-def normal_sf(z):
-    return 0.5 * math.erfc(z / math.sqrt(2))
-
-
 def mann_whitney_u(x, y, method="auto"):
-    """Two-sided Mann-Whitney U test. Returns (U of x, p value, method used).
+    """Two-sided Mann-Whitney U test (scipy.stats.mannwhitneyu). Returns (U of x, p, method used).
 
     method: "exact" (no ties allowed), "asymptotic" (normal approximation with tie and continuity
-    correction) or "auto" (exact when there are no ties and len(x) * len(y) <= EXACT_MAX_PRODUCT).
-    The statistic and the p values follow scipy.stats.mannwhitneyu's definitions: U1 = R1 -
-    m(m+1)/2, two-sided p = 2 P(U >= max(U1, U2)), clipped to 1.
+    correction) or "auto": exact when there are no ties and len(x) * len(y) <= EXACT_MAX_PRODUCT.
+    The choice is made here, not by scipy's own "auto", because scipy 1.10 (Debian bookworm)
+    switches to the normal approximation as soon as a sample exceeds 8 values, and the usual
+    sizes here are 9..50 repetitions, where the exact null distribution is cheap and right.
+    scipy's exact test ignores ties, so with ties the normal approximation is used (as scipy's
+    own "auto" does).
     """
     m, n = len(x), len(y)
     if m == 0 or n == 0:
         raise ValueError("mann_whitney_u: both samples need at least one value")
-    ranks, ties = rank(list(x) + list(y))
-    u1 = sum(ranks[:m]) - m * (m + 1) / 2
-    u2 = m * n - u1
-    u = max(u1, u2)
+    values = list(x) + list(y)
+    ties = len(set(values)) < len(values)
     if method == "auto":
         method = "exact" if not ties and m * n <= EXACT_MAX_PRODUCT else "asymptotic"
-    if method == "exact":
-        if ties:
-            raise ValueError("mann_whitney_u: the exact test needs samples without ties")
-        counts = u_distribution(m, n)
-        total = math.comb(m + n, m)
-        p = 2 * sum(counts[int(round(u)):]) / total
-    elif method == "asymptotic":
-        big_n = m + n
-        tie_term = sum(t ** 3 - t for t in ties)
-        variance = m * n / 12 * ((big_n + 1) - tie_term / (big_n * (big_n - 1)))
-        if variance <= 0:  # every value equal: no evidence of any difference
-            return u1, 1.0, method
-        z = (u - m * n / 2 - 0.5) / math.sqrt(variance)
-        p = 2 * normal_sf(z)
-    else:
+    if method not in ("exact", "asymptotic"):
         raise ValueError(f"mann_whitney_u: unknown method {method!r}")
-    return u1, min(1.0, max(0.0, p)), method
+    if method == "exact" and ties:
+        raise ValueError("mann_whitney_u: the exact test needs samples without ties")
+    if len(set(values)) == 1:  # every value equal: no evidence of any difference (scipy: nan)
+        return m * n / 2, 1.0, method
+    result = scipy.stats.mannwhitneyu(x, y, alternative="two-sided", method=method)
+    return float(result.statistic), min(1.0, max(0.0, float(result.pvalue))), method
 
 
 # ---- Reading Google Benchmark JSON ------------------------------------------------------------
-
-
-def base_name(name):
-    """The benchmark's identity: its name without Google Benchmark's run suffixes."""
-    prev = None
-    while prev != name:
-        prev, name = name, SUFFIX_RE.sub("", name)
-    return name
-
-
-def is_aggregate(row):
-    return (row.get("run_type") == "aggregate" or bool(row.get("aggregate_name"))
-            or bool(AGGREGATE_RE.search(row.get("name", ""))))
 
 
 class Side:
@@ -196,30 +127,16 @@ class Side:
 
     def _read(self, path):
         try:
-            with open(path, encoding="utf-8") as f:
-                data = json.load(f)
-        except OSError as e:
-            raise InputError(f"{path}: cannot read: {e.strerror or e}")
-        except (json.JSONDecodeError, UnicodeDecodeError) as e:
-            raise InputError(f"{path}: not valid JSON ({e})")
-        if not isinstance(data, dict) or not isinstance(data.get("benchmarks"), list):
-            raise InputError(f'{path}: not Google Benchmark JSON (no "benchmarks" array; '
-                             "write it with --benchmark_out=FILE --benchmark_out_format=json)")
+            data = gbench_json.load(path)
+            rows = gbench_json.Rows(data, path, strict=True)
+        except gbench_json.GBenchError as e:
+            raise InputError(str(e))
         if isinstance(data.get("context"), dict):
             self.contexts.append(data["context"])
-        for i, row in enumerate(data["benchmarks"]):
-            if not isinstance(row, dict) or not isinstance(row.get("name"), str):
-                raise InputError(f"{path}: benchmarks[{i}] is not a benchmark row (no name)")
-            if row.get("error_occurred"):
-                name = base_name(row.get("run_name") or row["name"])
-                self.failed[name] = row.get("error_message", "no message")
-                continue
-            if is_aggregate(row):
-                if (row.get("aggregate_name") or "") == "median" or row["name"].endswith("_median"):
-                    name = base_name(row.get("run_name") or AGGREGATE_RE.sub("", row["name"]))
-                    self.medians[name] = row
-                continue
-            self.reps.setdefault(base_name(row["name"]), []).append(row)
+        self.failed.update(rows.failed)
+        self.medians.update(rows.medians)
+        for name, reps in rows.reps.items():
+            self.reps.setdefault(name, []).extend(reps)
 
     def names(self):
         return set(self.reps) | set(self.medians)
@@ -275,7 +192,7 @@ def compare_one(name, base, new, alpha, threshold, min_reps):
                   else row_ms(new.medians[name], metric, new.path))
     p = None
     if len(base_values) < min_reps or len(new_values) < min_reps:
-        verdict = "unchanged (too few repetitions)"
+        verdict = "inconclusive (too few repetitions)"
     else:
         _, p, _ = mann_whitney_u(new_values, base_values)
         ratio = new_median / base_median if base_median > 0 else math.inf
@@ -318,6 +235,8 @@ def render(base, new, results, only_base, only_new, alpha, threshold, min_reps):
         lines.append(f"SLOWER ({len(slower)}):")
         for c in slower:
             lines.append(f"  - {c.name} ({(c.ratio - 1) * 100:+.1f} %, p = {c.p:.3g})")
+    elif any(c.p is None for c in results):
+        lines.append("No tested benchmark is slower; INCONCLUSIVE: some were not tested (below).")
     else:
         lines.append("No benchmark is slower.")
     if faster:
@@ -395,7 +314,10 @@ def main(argv=None):
     warn_context(base, new)
     print(render(base, new, results, base.names() - new.names(), new.names() - base.names(),
                  args.alpha, args.threshold, args.min_repetitions))
-    return 1 if any(c.verdict == "slower" for c in results) else 0
+    if any(c.verdict == "slower" for c in results):
+        return 1
+    # Too few repetitions to test is not "nothing found": its own status.
+    return 3 if any(c.p is None for c in results) else 0
 
 
 if __name__ == "__main__":

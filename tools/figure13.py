@@ -28,7 +28,9 @@ def read(path):
         for row in csv.DictReader(f):
             if int(row["dynamic"]):
                 bodies.append((float(row["x"]), float(row["y"]), float(row["radius"]), int(row["owner"])))
-    return region, bodies
+    # "# region x0 y0 x1 y1, 5000 bodies after 120 steps, ...": the part after the region.
+    header = first.lstrip("# ").split(",", 1)[1].strip() if "," in first else ""
+    return region, bodies, header
 
 
 def quad_tree_nodes(x0, y0, size, bodies, depth, out):
@@ -50,7 +52,7 @@ def main(argv):
     if len(argv) != 3:
         print(__doc__, file=sys.stderr)
         return 2
-    (x0, y0, x1, y1), bodies = read(argv[1])
+    (x0, y0, x1, y1), bodies, header = read(argv[1])
     size = max(x1 - x0, y1 - y0)
     fig, ax = plt.subplots(figsize=(9, 9), dpi=110)
     nodes = []
@@ -68,10 +70,16 @@ def main(argv):
     ax.set_xlim(x0, x0 + size)
     ax.set_ylim(y0, y0 + size)
     ax.set_aspect("equal")
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
     ax.set_title(f"{len(bodies)}-circle stress test with the quad-tree drawn; colour = owning thread\n"
                  "(the thesis's Figure 13, Quadrant's quadrants scheme, 4 threads)")
-    ax.legend(loc="upper right", fontsize=8, framealpha=0.9)
-    fig.tight_layout()
+    # Below the square, not over it: the legend covered bodies in the upper-right quadrant.
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.07), ncol=3, fontsize=8, frameon=False)
+    fig.text(0.01, 0.005, f"{header}. Split square {size:.1f} m x {size:.1f} m (black lines: the four "
+             f"threads' quadrants); grey squares: quad-tree nodes holding bodies, to depth {MAX_DEPTH}.",
+             fontsize=6.5, ha="left", va="bottom", wrap=True)
+    fig.tight_layout(rect=(0, 0.02, 1, 1))
     fig.savefig(argv[2])
     print(f"figure13: wrote {argv[2]}")
     return 0

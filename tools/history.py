@@ -20,16 +20,16 @@ per step (log scale when the lines span more than a factor 10, as 1000 and 16000
 import argparse
 import csv
 import datetime
-import json
 import os
 import re
 import statistics
 import sys
 
+import gbench_json
+import plot_style
+
 FIELDS = ["record", "date", "commit", "machine", "benchmark", "steps_per_second", "ms_per_step",
           "repetitions"]
-SUFFIX_RE = re.compile(r"(?:/iterations:\d+|/repeats:\d+|/real_time|/manual_time|/process_time)+$")
-TIME_UNITS_S = {"ns": 1e-9, "us": 1e-6, "ms": 1e-3, "s": 1.0}
 
 
 class HistoryError(Exception):
@@ -43,15 +43,9 @@ def natural_key(text):
 
 def load_run(path):
     try:
-        with open(path, encoding="utf-8") as f:
-            data = json.load(f)
-    except OSError as e:
-        raise HistoryError(f"{path}: cannot read: {e.strerror or e}")
-    except json.JSONDecodeError as e:
-        raise HistoryError(f"{path}: not valid JSON ({e})")
-    if not isinstance(data, dict) or not isinstance(data.get("benchmarks"), list):
-        raise HistoryError(f'{path}: not Google Benchmark JSON (no "benchmarks" array)')
-    return data
+        return gbench_json.load(path)
+    except gbench_json.GBenchError as e:
+        raise HistoryError(str(e))
 
 
 def run_date_utc(context):
@@ -69,23 +63,15 @@ def run_date_utc(context):
 def medians(data):
     """{benchmark: (steps_per_second, ms_per_step, repetitions)} from the per-repetition rows."""
     per = {}
-    for row in data["benchmarks"]:
-        if not isinstance(row, dict) or row.get("error_occurred"):
-            continue
-        if row.get("run_type") == "aggregate" or row.get("aggregate_name"):
-            continue
-        name = SUFFIX_RE.sub("", row.get("name", ""))
-        ms = row.get("ms_per_step")
-        if not isinstance(ms, (int, float)):
-            unit = TIME_UNITS_S.get(row.get("time_unit", "ns"), 1e-9)
-            real, steps = row.get("real_time"), row.get("steps", 1)
-            if not isinstance(real, (int, float)):
+    for name, rows in gbench_json.Rows(data).reps.items():
+        for row in rows:
+            ms = gbench_json.ms_per_step(row)
+            if ms is None:
                 continue
-            ms = real * unit * 1e3 / (steps or 1)
-        sps = row.get("steps_per_second")
-        if not isinstance(sps, (int, float)):
-            sps = 1e3 / ms if ms > 0 else float("nan")
-        per.setdefault(name, []).append((float(sps), float(ms)))
+            sps = row.get("steps_per_second")
+            if not isinstance(sps, (int, float)):
+                sps = 1e3 / ms if ms > 0 else float("nan")
+            per.setdefault(name, []).append((float(sps), float(ms)))
     return {name: (statistics.median(v[0] for v in values), statistics.median(v[1] for v in values),
                    len(values))
             for name, values in per.items()}
@@ -143,9 +129,25 @@ def plot(csv_path, png_path):
         lines.setdefault(key, []).append((int(r["record"]), float(r["ms_per_step"])))
         commits[int(r["record"])] = r["commit"][:12]
     fig, ax = plt.subplots(figsize=(10, 6))
+    # The engine's colour of every figure (plot_style.py); scenes by line style, sizes by marker.
+    scenes, counts = [], []
+    for key in lines:
+        parsed = gbench_json.parse_quadrant_name(key.split(": ")[-1])
+        if parsed and parsed[0] not in scenes:
+            scenes.append(parsed[0])
+        if parsed and parsed[2] not in counts:
+            counts.append(parsed[2])
+    counts.sort()
     for key in sorted(lines, key=natural_key):
         pts = sorted(lines[key])
-        ax.plot([p[0] for p in pts], [p[1] for p in pts], marker="o", label=key)
+        parsed = gbench_json.parse_quadrant_name(key.split(": ")[-1])
+        colour, marker, linestyle = None, "o", "-"
+        if parsed:
+            colour = plot_style.style(parsed[1])[0]
+            marker = "osD^vP"[counts.index(parsed[2]) % 6]
+            linestyle = ["-", "--", "-.", ":"][scenes.index(parsed[0]) % 4]
+        ax.plot([p[0] for p in pts], [p[1] for p in pts], marker=marker, linestyle=linestyle, color=colour,
+                label=key)
     records = sorted(commits)
     ax.set_xticks(records)
     ax.set_xticklabels([f"{i}\n{commits[i]}" for i in records], fontsize=8,
@@ -162,7 +164,18 @@ def plot(csv_path, png_path):
     ax.set_ylabel("ms per step (median over repetitions)")
     ax.set_title("Quadrant benchmark history" + (f" ({machines[0]})" if len(machines) == 1 else ""))
     ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=7, loc="best")
+    if len(lines) <= 16:
+        ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    else:
+        # A full sweep has 100+ benchmarks: what the colours, line styles and markers mean instead.
+        engines = sorted({p[1] for p in (gbench_json.parse_quadrant_name(k.split(": ")[-1]) for k in lines) if p})
+        handles = [plt.Line2D([], [], color=plot_style.style(e)[0], label=plot_style.style(e)[2]) for e in engines]
+        handles += [plt.Line2D([], [], color="black", linestyle=["-", "--", "-.", ":"][i % 4], label=sc)
+                    for i, sc in enumerate(scenes)]
+        handles += [plt.Line2D([], [], color="black", linestyle="", marker="osD^vP"[i % 6], label=f"N = {n}")
+                    for i, n in enumerate(counts)]
+        ax.legend(handles=handles, fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0),
+                  title=f"{len(lines)} benchmarks (thread counts share a style)", title_fontsize=7)
     fig.tight_layout()
     os.makedirs(os.path.dirname(os.path.abspath(png_path)), exist_ok=True)
     fig.savefig(png_path, dpi=110)

@@ -589,8 +589,22 @@ void Soak(std::string_view engine, const HardCaseOptions& o, HardCaseResult& r) 
   double deepest = 0, farthest = 0;
   int firstOutside = -1;
   std::vector<bool> everOutside(scene.bodies.size(), false);
+  const auto start = std::chrono::steady_clock::now();
+  auto lastReport = start;
   while (sim.steps() < o.soakSteps && sim.finite()) {
     sim.StepOnce();
+    if (o.progressSeconds > 0 && sim.steps() % 100 == 0) {  // the clock read every 100 steps only
+      const auto now = std::chrono::steady_clock::now();
+      if (std::chrono::duration<double>(now - lastReport).count() >= o.progressSeconds) {
+        lastReport = now;
+        const double elapsed = std::chrono::duration<double>(now - start).count();
+        const double eta = elapsed / sim.steps() * (o.soakSteps - sim.steps());
+        std::fprintf(stderr, "  soak %s: step %d/%d (%.0f %%), %.0f steps/s, %.0f s elapsed, ETA %.0f s\n",
+                     std::string(engine).c_str(), sim.steps(), o.soakSteps, 100.0 * sim.steps() / o.soakSteps,
+                     sim.steps() / elapsed, elapsed, eta);
+        std::fflush(stderr);
+      }
+    }
     for (size_t i = 0; i < scene.bodies.size(); ++i) {
       if (!scene.bodies[i].dynamic) continue;
       const Vec2 p = sim.states()[i].position;

@@ -39,6 +39,9 @@ struct HardCaseResult {
 
 struct HardCaseOptions {
   int soakSteps = 100000;  ///< steps of the polygon_stress soak (N = 1000)
+  /// Seconds between progress lines on stderr during a soak (steps done, rate, ETA); 0 for none
+  /// (the tests). The soaks take minutes (Bullet's 100000 steps: 16 min on the 2-core VM).
+  double progressSeconds = 0;
 };
 
 /// vertical_stack, pyramid, mass_ratio_100, mass_ratio_400, arch, card_house, friction_ramp,

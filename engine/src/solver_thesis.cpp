@@ -26,8 +26,9 @@
 // - A contact counts as touching up to linearSlop (5 mm) of separation: a pair the push left
 //   exactly touching still gets its impulse next step.
 // - Contacts with static and kinematic bodies are pushed out once more after the pass, unlimited.
-// Measured on that box (2000 steps): no body leaves, kinetic energy at most about 900 J (of
-// 330 kJ potential energy above the floor) with no upward trend, fastest body about 4 m/s.
+// Measured on that box (2000 steps, sampled every 10): no body leaves, kinetic energy at most
+// 1045 J (of about 330 kJ potential energy above the floor) with no upward trend (589 J at the
+// end), fastest body 6.8 m/s.
 #include <algorithm>
 #include <chrono>
 #include <cstdint>

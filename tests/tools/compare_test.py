@@ -23,7 +23,7 @@ import compare  # noqa: E402  (the path is only known at run time)
 
 # Reference values computed once with scipy 1.10.1 (Debian bookworm's python3-scipy):
 #   scipy.stats.mannwhitneyu(x, y, alternative="two-sided", method=M) -> (statistic, pvalue)
-# so that this test does not need scipy.
+# (compare.py now calls scipy; these pin the values and the method it chooses).
 MWU_REFERENCE = [
     # (x, y, method, U of x, p)
     ([1.83, 0.50, 1.62, 2.48, 1.68, 1.88, 1.55, 3.06, 1.30],
@@ -64,13 +64,14 @@ class MannWhitneyTest(unittest.TestCase):
                 self.assertAlmostEqual(got_p, p, delta=1e-12 + 1e-9 * p)
 
     def test_textbook_exact_distribution(self):
-        # m = n = 3: the 20 arrangements give U = 0..9 with counts 1,1,2,3,3,3,3,2,1,1.
-        self.assertEqual(compare.u_distribution(3, 3), [1, 1, 2, 3, 3, 3, 3, 2, 1, 1])
-        # Complete separation of 3 and 3: p = 2 / 20.
+        # Complete separation of 3 and 3: 2 of the 20 arrangements are as extreme, p = 2 / 20.
         _, p, _ = compare.mann_whitney_u([1, 2, 3], [4, 5, 6], "exact")
         self.assertAlmostEqual(p, 0.1)
-        for m, n in ((1, 7), (9, 9), (12, 15)):
-            self.assertEqual(sum(compare.u_distribution(m, n)), math.comb(m + n, m))
+        # m = n = 3: the 20 arrangements give U = 0..9 with counts 1,1,2,3,3,3,3,2,1,1. Here
+        # U of x = 2 (2.5 and 3 above 2), so p = 2 P(U <= 2) = 2 (1 + 1 + 2) / 20.
+        u, p, _ = compare.mann_whitney_u([1, 2.5, 3], [2, 4, 5], "exact")
+        self.assertEqual(u, 2.0)
+        self.assertAlmostEqual(p, 2 * 4 / 20)
 
     def test_auto_method_and_degenerate_input(self):
         self.assertEqual(compare.mann_whitney_u([1, 2, 3], [4, 5, 6])[2], "exact")
@@ -240,8 +241,9 @@ class CompareCommandTest(unittest.TestCase):
         b = self.write("base.json", gbench(bench_rows(name, noisy(rng, 2.0, 6, 0.01))))
         n = self.write("new.json", gbench(bench_rows(name, noisy(rng, 3.0, 6, 0.01))))
         code, out, err = self.run_compare(b, n)
-        self.assertEqual(code, 0, out + err)
-        self.assertEqual(self.verdict(out, name), "unchanged (too few repetitions)", out)
+        self.assertEqual(code, 3, out + err)  # inconclusive: its own status, not "unchanged"
+        self.assertEqual(self.verdict(out, name), "inconclusive (too few repetitions)", out)
+        self.assertIn("INCONCLUSIVE", out)
         code, out, err = self.run_compare(b, n, "--min-repetitions", "6")
         self.assertEqual(code, 1, out + err)
         self.assertEqual(self.verdict(out, name), "slower", out)

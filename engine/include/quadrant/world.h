@@ -235,6 +235,26 @@ struct ContactInfo {
   Real tangentImpulses[2] = {0, 0};
 };
 
+namespace detail {
+/// The world's state behind a pointer that refuses to be followed once moved from: a moved-from
+/// World has no state, and every call on it throws quadrant::Error (it used to dereference null
+/// and abort). Assigning a World to it makes it usable again; destroying it is always fine.
+template <class T>
+class LiveImpl {
+ public:
+  explicit LiveImpl(std::unique_ptr<T> p) noexcept : p_(std::move(p)) {}
+  T* operator->() const { return &Get(); }
+  T& operator*() const { return Get(); }
+
+ private:
+  T& Get() const {
+    if (!p_) throw Error("World: this World was moved from; assign a World to it before using it");
+    return *p_;
+  }
+  std::unique_ptr<T> p_;
+};
+}  // namespace detail
+
 class World {
  public:
   /// Throws quadrant::Error if `def` is invalid (non-finite gravity, iterations < 1, ...).
@@ -242,6 +262,8 @@ class World {
   ~World();
   World(const World&) = delete;
   World& operator=(const World&) = delete;
+  /// Moving leaves the source empty: every call on it then throws quadrant::Error until a World
+  /// is assigned to it.
   World(World&&) noexcept;
   World& operator=(World&&) noexcept;
 
@@ -309,7 +331,7 @@ class World {
   struct Impl;
 
  private:
-  std::unique_ptr<Impl> impl_;
+  detail::LiveImpl<Impl> impl_;
 };
 
 }  // namespace quadrant

@@ -1,0 +1,37 @@
+// What "quadrant:<variant>" selects, and how a scene under a variant becomes a WorldDef: the
+// policy the Quadrant adapter used to hold (issue 16). The adapter only translates.
+#pragma once
+
+#include <string>
+#include <string_view>
+
+#include "quadrant/world.h"
+#include "scene.h"
+
+namespace quadrant::scene {
+
+struct QuadrantVariant {
+  SolverType solver = SolverType::kPgs;
+  BroadPhaseType broadPhase = BroadPhaseType::kUniformGrid;
+  ParallelScheme scheme = ParallelScheme::kDeterministic;
+  int softSubSteps = 0;        ///< sub<N>; 0: derived from the budget (soft_step) or the engine's
+  int iterations = 0;          ///< it<N>; 0: the scene's velocity iterations
+  int positionIterations = 0;  ///< pos<N>; 0: the scene's
+  RestitutionPolicy restitution = RestitutionPolicy::kCollisions;  ///< b2rest: kBox2d (pgs only)
+  Real polygonSkin = 0;        ///< b2skin: Box2D 2.4.1's 0.01 m polygon radius
+  bool thesisCoupled = false;  ///< coupled: the thesis solver's coupled impulse
+
+  /// Tokens joined by '+' ("" is the default): thesis, pgs, soft_step, quadtree, grid,
+  /// deterministic, quadrants, sub<N>, it<N>, pos<N> (N in [1, 1000]), b2rest, b2skin, coupled.
+  /// Throws quadrant::Error naming an unknown token and the known ones.
+  static QuadrantVariant Parse(std::string_view variant);
+
+  /// The world for `scene` on `threads` threads: the scene's settings and effects, this variant's
+  /// solver, broad phase and scheme, and the soft_step budget mapping (quadrant_variant.cpp).
+  WorldDef MakeWorldDef(const Scene& scene, int threads) const;
+
+  /// "solver pgs, broad phase uniform grid", for the adapter's notes.
+  std::string Describe() const;
+};
+
+}  // namespace quadrant::scene

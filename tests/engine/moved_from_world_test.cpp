@@ -1,0 +1,88 @@
+// A moved-from World (issue 16): every public call throws quadrant::Error instead of following a
+// null pointer and aborting the process; the World it was moved into carries the state on, and
+// assigning a World to the moved-from one makes it usable again.
+#include <gtest/gtest.h>
+
+#include <functional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "quadrant/error.h"
+#include "quadrant/world.h"
+#include "test_helpers.h"
+
+namespace quadrant {
+namespace {
+
+using namespace test;  // the small-world builders of test_helpers.h
+
+constexpr const char* kMoved = "was moved from";
+
+TEST(MovedFromWorldTest, EveryCallThrowsError) {
+  World source;
+  AddGround(source);
+  const BodyId id = AddCircle(source, {0, 2});
+  StepN(source, 5);
+  const uint64_t hash = source.StateHash();
+  World target(std::move(source));
+  EXPECT_EQ(target.StateHash(), hash);  // the state moved with it
+
+  BodyDef def;
+  def.type = BodyType::kDynamic;
+  def.shape = ShapeDef::MakeCircle(Real(0.5));
+  // Every public member function but the special members, each with valid arguments.
+  const std::vector<std::pair<std::string, std::function<void()>>> calls = {
+      {"CreateBody", [&] { source.CreateBody(def); }},
+      {"DestroyBody", [&] { source.DestroyBody(id); }},
+      {"IsValid", [&] { (void)source.IsValid(id); }},
+      {"Step", [&] { source.Step(kDt); }},
+      {"GetPosition", [&] { (void)source.GetPosition(id); }},
+      {"GetAngle", [&] { (void)source.GetAngle(id); }},
+      {"GetRotation", [&] { (void)source.GetRotation(id); }},
+      {"GetLinearVelocity", [&] { (void)source.GetLinearVelocity(id); }},
+      {"GetAngularVelocity", [&] { (void)source.GetAngularVelocity(id); }},
+      {"GetWorldCenter", [&] { (void)source.GetWorldCenter(id); }},
+      {"GetMass", [&] { (void)source.GetMass(id); }},
+      {"GetRotationalInertia", [&] { (void)source.GetRotationalInertia(id); }},
+      {"GetType", [&] { (void)source.GetType(id); }},
+      {"GetAABB", [&] { (void)source.GetAABB(id); }},
+      {"GetShape", [&] { (void)source.GetShape(id); }},
+      {"SetLinearVelocity", [&] { source.SetLinearVelocity(id, {1, 0}); }},
+      {"SetAngularVelocity", [&] { source.SetAngularVelocity(id, 1); }},
+      {"SetTransform", [&] { source.SetTransform(id, {0, 3}, 0); }},
+      {"ApplyLinearImpulse", [&] { source.ApplyLinearImpulse(id, {1, 0}, {0, 2}); }},
+      {"IsAwake", [&] { (void)source.IsAwake(id); }},
+      {"SetAwake", [&] { source.SetAwake(id, true); }},
+      {"GetBodyCount", [&] { (void)source.GetBodyCount(); }},
+      {"GetBodyIds", [&] { (void)source.GetBodyIds(); }},
+      {"GetDef", [&] { (void)source.GetDef(); }},
+      {"GetProfile", [&] { (void)source.GetProfile(); }},
+      {"GetCounters", [&] { (void)source.GetCounters(); }},
+      {"GetContacts", [&] { (void)source.GetContacts(); }},
+      {"GetOwners", [&] { (void)source.GetOwners(); }},
+      {"GetPartitionRegion", [&] { (void)source.GetPartitionRegion(); }},
+      {"StateHash", [&] { (void)source.StateHash(); }},
+  };
+  for (const auto& [name, call] : calls) ExpectError(call, kMoved, name);
+  // The refusals left the moved-to world alone.
+  EXPECT_EQ(target.StateHash(), hash);
+  EXPECT_EQ(target.GetBodyCount(), 2);
+}
+
+TEST(MovedFromWorldTest, MoveAssignmentEmptiesTheSourceAndAssigningRevivesIt) {
+  World a;
+  AddCircle(a, {0, 0});
+  World b;
+  b = std::move(a);
+  EXPECT_EQ(b.GetBodyCount(), 1);
+  ExpectError([&] { (void)a.GetBodyCount(); }, kMoved, "after move assignment");
+  a = World();  // usable again
+  EXPECT_EQ(a.GetBodyCount(), 0);
+  AddCircle(a, {0, 0});
+  a.Step(kDt);
+  EXPECT_EQ(a.GetBodyCount(), 1);
+}
+
+}  // namespace
+}  // namespace quadrant

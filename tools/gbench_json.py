@@ -1,0 +1,105 @@
+"""The one reader of Google Benchmark JSON in tools/ (bench_report.py, compare.py, history.py).
+
+A quadrant_bench row is named <scene>/<engine>/n:<N>/threads:<T>, and Google Benchmark appends
+what is not part of a benchmark's identity: /iterations:<k>, /repeats:<k>, /min_time:<t>,
+/real_time, /manual_time or /process_time, and on aggregate rows _mean, _median, _stddev or _cv.
+base_name() removes all of them, so every tool pairs and groups rows by the same name (the three
+tools had three rules: bench_report accepted only /iterations and /real_time, history.py no
+min_time, compare.py all of them).
+"""
+
+import json
+import re
+
+SUFFIX_RE = re.compile(
+    r"/(?:iterations:\d+|repeats:\d+|min_time:[0-9.]+s?|min_warmup_time:[0-9.]+s?"
+    r"|real_time|manual_time|process_time)$"
+)
+AGGREGATE_RE = re.compile(r"_(?P<aggregate>mean|median|stddev|cv)$")
+QUADRANT_NAME_RE = re.compile(
+    r"^(?P<scene>[A-Za-z0-9_.\-]+)/(?P<engine>[A-Za-z0-9_.:+\-]+)/n:(?P<n>\d+)/threads:(?P<threads>\d+)$")
+TIME_UNITS_S = {"ns": 1e-9, "us": 1e-6, "ms": 1e-3, "s": 1.0}
+
+
+class GBenchError(Exception):
+    """A file that cannot be read as Google Benchmark JSON; the message names the file."""
+
+
+def load(path):
+    """The parsed JSON of a Google Benchmark output file (a dict with a "benchmarks" list)."""
+    try:
+        with open(path, encoding="utf-8") as f:
+            data = json.load(f)
+    except OSError as e:
+        raise GBenchError(f"{path}: cannot read: {e.strerror or e}")
+    except (json.JSONDecodeError, UnicodeDecodeError) as e:
+        raise GBenchError(f"{path}: not valid JSON ({e})")
+    if not isinstance(data, dict) or not isinstance(data.get("benchmarks"), list):
+        raise GBenchError(f'{path}: not Google Benchmark JSON (no "benchmarks" array; '
+                          "write it with --benchmark_out=FILE --benchmark_out_format=json)")
+    return data
+
+
+def aggregate_of(row):
+    """The aggregate's name ("median", ...) for an aggregate row, else None. A row is an
+    aggregate by its run_type or aggregate_name, or (older files) by its name's suffix."""
+    if row.get("aggregate_name"):
+        return row["aggregate_name"]
+    m = AGGREGATE_RE.search(row.get("name", ""))
+    if m:
+        return m.group("aggregate")
+    return "aggregate" if row.get("run_type") == "aggregate" else None
+
+
+def base_name(name):
+    """The benchmark's identity: the name without Google Benchmark's suffixes."""
+    name = AGGREGATE_RE.sub("", name)
+    while True:
+        stripped = SUFFIX_RE.sub("", name)
+        if stripped == name:
+            return name
+        name = stripped
+
+
+def parse_quadrant_name(name):
+    """(scene, engine, n, threads) of a quadrant_bench row's name, or None."""
+    m = QUADRANT_NAME_RE.match(base_name(name or ""))
+    if not m:
+        return None
+    return m.group("scene"), m.group("engine"), int(m.group("n")), int(m.group("threads"))
+
+
+class Rows:
+    """A file's rows by base name: per-repetition rows, _median aggregates, failures."""
+
+    def __init__(self, data, where="", strict=False):
+        self.reps = {}      # name -> [rows], in file order
+        self.medians = {}   # name -> the _median aggregate row
+        self.failed = {}    # name -> error message
+        for i, row in enumerate(data.get("benchmarks", [])):
+            if not isinstance(row, dict) or not isinstance(row.get("name"), str):
+                if strict:
+                    raise GBenchError(f"{where}: benchmarks[{i}] is not a benchmark row (no name)")
+                continue
+            name = base_name(row.get("run_name") or row["name"])
+            if row.get("error_occurred"):
+                self.failed[name] = row.get("error_message", "no message")
+                continue
+            aggregate = aggregate_of(row)
+            if aggregate:
+                if aggregate == "median":
+                    self.medians[name] = row
+                continue
+            self.reps.setdefault(name, []).append(row)
+
+
+def ms_per_step(row):
+    """The row's milliseconds per step: the ms_per_step counter, else real_time / steps; or None."""
+    ms = row.get("ms_per_step")
+    if isinstance(ms, (int, float)):
+        return float(ms)
+    unit = TIME_UNITS_S.get(row.get("time_unit", "ns"))
+    real, steps = row.get("real_time"), row.get("steps", 1)
+    if unit is None or not isinstance(real, (int, float)) or not isinstance(steps, (int, float)) or steps <= 0:
+        return None
+    return real * unit * 1e3 / steps
