@@ -93,19 +93,27 @@ class SoftStepSolver final : public ContactSolverBase {
       const Vec2 stepGravity = def.effects.gravity ? ctx.dt * def.gravity : Vec2{};
       ApplyCollisionPasses<kRotation>(run, bodies, def, Real(1) / ctx.dt, stepGravity);
     }
+    // The sub-steps run on the compact solver state (velocity and motion since the step began,
+    // 32 bytes a body), not on the body arrays: a row reads two states and nothing else.
+    auto ti = Clock::now();
+    LoadStates(run, bodies);
+    integrateMs += Ms(ti, Clock::now());
     for (int sub = 0; sub < n; ++sub) {
-      auto ti = Clock::now();
-      IntegrateVelocities(bodies, def, h, run);
+      ti = Clock::now();
+      IntegrateStateVelocities(run, bodies, def, h);
       integrateMs += Ms(ti, Clock::now());
-      if (def.effects.warmStarting) ForEachColor(run, [&](int b, int e) { WarmStart<kRotation>(bodies, b, e); });
-      ForEachColor(run, [&](int b, int e) { Solve<kRotation, kFriction, true>(bodies, def, soft, staticSoft, invH, b, e); });
+      if (def.effects.warmStarting) ForEachColor(run, [&](int b, int e) { WarmStartStates<kRotation>(b, e); });
+      ForEachColor(run, [&](int b, int e) { Solve<kRotation, kFriction, true>(def, soft, staticSoft, invH, b, e); });
       ti = Clock::now();
       // The rotation guard is per world step: per sub-step it allowed n times the turn (188 rad/s
       // instead of 47 at 4 sub-steps), and spinning triangles of the soak left the box.
-      IntegratePositions(bodies, def, h, ctx.dt, run);
+      IntegrateStatePositions(run, bodies, def, h, ctx.dt);
       integrateMs += Ms(ti, Clock::now());
-      ForEachColor(run, [&](int b, int e) { Solve<kRotation, kFriction, false>(bodies, def, soft, staticSoft, invH, b, e); });
+      ForEachColor(run, [&](int b, int e) { Solve<kRotation, kFriction, false>(def, soft, staticSoft, invH, b, e); });
     }
+    ti = Clock::now();
+    StoreStates(run, bodies, def);
+    integrateMs += Ms(ti, Clock::now());
     if (def.effects.restitution && m > 0) ForEachColor(run, [&](int b, int e) { ApplyBounceShifts(bodies, b, e); });
     // Overlap deeper than the soft contacts push out (contactPushMaxDepth) is moved out here, by pgs's
     // position pass: positions change, velocities do not, so deep overlap cannot fling bodies.
@@ -128,26 +136,37 @@ class SoftStepSolver final : public ContactSolverBase {
   // slowly toppled (worse at 8 and 16 sub-steps, with less numerical damping: 0.14-0.17 m); with
   // friction in the relax pass only it moves 0.0003 m.
   template <bool kRotation, bool kFriction, bool kBias>
-  void Solve(Bodies& bodies, const WorldDef& def, const Softness& soft, const Softness& staticSoft, Real invH,
-             int begin, int end) {
+  void Solve(const WorldDef& def, const Softness& soft, const Softness& staticSoft, Real invH, int begin, int end) {
     for (int c = begin; c < end; ++c) {
       ContactConstraint& cc = constraints_[c];
       const Vec2 n = cc.normal;
-      BodyVelocity va = bodies.vel[cc.a];
-      BodyVelocity vb = bodies.vel[cc.b];
+      SolverBody& sa = states_[cc.a];
+      SolverBody& sb = states_[cc.b];
+      Vec2 vA = sa.v, vB = sb.v;
+      Real wA = sa.w, wB = sb.w;
+      // Motion since the step began: the separation of a point is its prepared one plus the
+      // normal part of how far its two anchors moved apart.
+      const Vec2 dp = sb.dp - sa.dp;
+      const Rot qA = sa.dq, qB = sb.dq;
       const Softness& s = (cc.invMassA == 0 || cc.invMassB == 0) ? staticSoft : soft;
       auto apply = [&](const PointConstraint& pc, Vec2 P) {
-        va.v -= cc.invMassA * P;
-        vb.v += cc.invMassB * P;
+        vA -= cc.invMassA * P;
+        vB += cc.invMassB * P;
         if constexpr (kRotation) {
-          va.w -= cc.invIA * Cross(pc.rA, P);
-          vb.w += cc.invIB * Cross(pc.rB, P);
+          wA -= cc.invIA * Cross(pc.rA, P);
+          wB += cc.invIB * Cross(pc.rB, P);
         }
+      };
+      auto relative = [&](const PointConstraint& pc) {
+        Vec2 dv = vB - vA;
+        if constexpr (kRotation) dv += Cross(wB, pc.rB) - Cross(wA, pc.rA);
+        return dv;
       };
       for (int k = 0; k < cc.pointCount; ++k) {
         PointConstraint& pc = cc.points[k];
-        Vec2 rA, rB;
-        const Real sep = CurrentSeparation<kRotation>(bodies, cc, pc, rA, rB);
+        Vec2 d = dp;
+        if constexpr (kRotation) d += (Rotate(qB, pc.rB) - pc.rB) - (Rotate(qA, pc.rA) - pc.rA);
+        const Real sep = pc.separation + Dot(n, d);
         Real bias = 0, massScale = 1, impulseScale = 0;
         if (sep > 0) {
           bias = sep * invH;
@@ -162,7 +181,7 @@ class SoftStepSolver final : public ContactSolverBase {
             bias = std::max(-s.biasRate * def.contactPushMaxDepth, -def.contactPushMaxVelocity);
           }
         }
-        const Real vn = Dot(RelativeVelocity<kRotation>(va, vb, pc), n);
+        const Real vn = Dot(relative(pc), n);
         const Real impulse = -pc.normalMass * massScale * (vn + bias) - impulseScale * pc.normalImpulse;
         const Real newImpulse = std::max(pc.normalImpulse + impulse, Real(0));
         const Real lambda = newImpulse - pc.normalImpulse;
@@ -173,7 +192,7 @@ class SoftStepSolver final : public ContactSolverBase {
         const Vec2 t = RightPerp(n);
         for (int k = 0; k < cc.pointCount; ++k) {
           PointConstraint& pc = cc.points[k];
-          const Real vt = Dot(RelativeVelocity<kRotation>(va, vb, pc), t);
+          const Real vt = Dot(relative(pc), t);
           const Real maxFriction = cc.friction * pc.normalImpulse;
           const Real newImpulse = std::clamp(pc.tangentImpulse - pc.tangentMass * vt, -maxFriction, maxFriction);
           const Real lambda = newImpulse - pc.tangentImpulse;
@@ -181,10 +200,107 @@ class SoftStepSolver final : public ContactSolverBase {
           apply(pc, lambda * t);
         }
       }
-      if (cc.invMassA > 0) bodies.vel[cc.a] = va;
-      if (cc.invMassB > 0) bodies.vel[cc.b] = vb;
+      // Static and kinematic bodies (inverse mass 0) are never written: other threads may be
+      // reading them for constraints of the same colour.
+      if (cc.invMassA > 0) {
+        sa.v = vA;
+        sa.w = wA;
+      }
+      if (cc.invMassB > 0) {
+        sb.v = vB;
+        sb.w = wB;
+      }
     }
   }
+
+  template <bool kRotation>
+  void WarmStartStates(int begin, int end) {
+    for (int c = begin; c < end; ++c) {
+      const ContactConstraint& cc = constraints_[c];
+      const Vec2 t = RightPerp(cc.normal);
+      SolverBody& sa = states_[cc.a];
+      SolverBody& sb = states_[cc.b];
+      for (int k = 0; k < cc.pointCount; ++k) {
+        const PointConstraint& pc = cc.points[k];
+        const Vec2 P = pc.normalImpulse * cc.normal + pc.tangentImpulse * t;
+        if (cc.invMassA > 0) {
+          sa.v -= cc.invMassA * P;
+          if constexpr (kRotation) sa.w -= cc.invIA * Cross(pc.rA, P);
+        }
+        if (cc.invMassB > 0) {
+          sb.v += cc.invMassB * P;
+          if constexpr (kRotation) sb.w += cc.invIB * Cross(pc.rB, P);
+        }
+      }
+    }
+  }
+
+  // The solver state of every body: its velocity (after the restitution passes), no motion yet.
+  void LoadStates(StageRunner& run, const Bodies& bodies) {
+    states_.resize(bodies.Count());
+    run.For(Stage::kIntegrate, bodies.Count(), run.MinItems(), [&](int b, int e, int) {
+      for (int i = b; i < e; ++i) states_[i] = SolverBody{bodies.vel[i].v, bodies.vel[i].w, 0, Vec2{}, Rot{}};
+    });
+  }
+
+  // Gravity and damping over a sub-step, as IntegrateVelocities does on the bodies: for bodies
+  // with an inverse mass (dynamic and awake; a sleeping body has inverse mass 0).
+  void IntegrateStateVelocities(StageRunner& run, const Bodies& bodies, const WorldDef& def, Real h) {
+    const Effects& fx = def.effects;
+    if (!fx.gravity && !fx.damping) return;
+    const Vec2 dv = fx.gravity ? h * def.gravity : Vec2{};
+    run.For(Stage::kIntegrate, bodies.Count(), run.MinItems(), [&](int b, int e, int) {
+      for (int i = b; i < e; ++i) {
+        if (bodies.inv[i].invMass == 0) continue;
+        SolverBody& st = states_[i];
+        st.v += dv;
+        if (fx.damping) {
+          st.v = (Real(1) / (Real(1) + h * bodies.linearDamping[i])) * st.v;
+          st.w *= Real(1) / (Real(1) + h * bodies.angularDamping[i]);
+        }
+      }
+    });
+  }
+
+  // Motion over a sub-step, with integrate.cpp's guards (speed limit; the turn limit per world
+  // step stepDt). Every moving body (dynamic awake or kinematic) moves; static ones stay.
+  void IntegrateStatePositions(StageRunner& run, const Bodies& bodies, const WorldDef& def, Real h, Real stepDt) {
+    const Real maxSpeed2 = def.maxLinearSpeed * def.maxLinearSpeed;
+    const Real maxAngularSpeed = def.maxRotation / stepDt;
+    const bool rotation = def.effects.rotation, sleep = def.effects.sleep;
+    run.For(Stage::kIntegrate, bodies.Count(), run.MinItems(), [&](int b, int e, int) {
+      for (int i = b; i < e; ++i) {
+        if (sleep ? bodies.awake[i] == 0 : bodies.type[i] == BodyType::kStatic) continue;
+        SolverBody& st = states_[i];
+        const Real speed2 = LengthSquared(st.v);
+        if (speed2 > maxSpeed2) st.v = (def.maxLinearSpeed / std::sqrt(speed2)) * st.v;
+        st.w = std::clamp(st.w, -maxAngularSpeed, maxAngularSpeed);
+        st.dp += h * st.v;
+        if (rotation && st.w != 0) st.dq = IntegrateRot(st.dq, h * st.w);
+      }
+    });
+  }
+
+  // Back to the bodies: velocity, centre (where the step began plus the motion) and rotation.
+  void StoreStates(StageRunner& run, Bodies& bodies, const WorldDef& def) {
+    const bool sleep = def.effects.sleep;
+    run.For(Stage::kIntegrate, bodies.Count(), run.MinItems(), [&](int b, int e, int) {
+      for (int i = b; i < e; ++i) {
+        if (sleep ? bodies.awake[i] == 0 : bodies.type[i] == BodyType::kStatic) continue;
+        const SolverBody& st = states_[i];
+        bodies.vel[i] = BodyVelocity{st.v, st.w};
+        bodies.center[i] = center0_[i] + st.dp;
+        if (st.dq.s != 0 || st.dq.c != 1) {
+          const Rot q = Mul(rot0_[i], st.dq);
+          const Real inv = Real(1) / std::sqrt(q.c * q.c + q.s * q.s);
+          bodies.xf[i].q = {q.c * inv, q.s * inv};
+        }
+        SyncTransform(bodies, i);
+      }
+    });
+  }
+
+  std::vector<SolverBody> states_;
 };
 
 }  // namespace
