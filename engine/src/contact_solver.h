@@ -26,17 +26,6 @@ inline double Ms(SolverClock::time_point a, SolverClock::time_point b) {
   return std::chrono::duration<double, std::milli>(b - a).count();
 }
 
-// The part of a body the sub-stepping solver reads and writes (32 bytes in float): velocity,
-// and how far the body has moved (dp) and turned (dq) since the step began. Kept apart from the
-// body arrays so a constraint row touches two of these and nothing else of its bodies.
-struct SolverBody {
-  Vec2 v;
-  Real w = 0;
-  Real pad = 0;
-  Vec2 dp;
-  Rot dq;
-};
-
 struct PointConstraint {
   Vec2 rA, rB;
   Real normalMass, tangentMass;

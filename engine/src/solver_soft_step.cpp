@@ -32,6 +32,7 @@
 #include <numbers>
 
 #include "contact_solver.h"
+#include "soft_rows.h"
 
 namespace quadrant {
 namespace {
@@ -94,26 +95,39 @@ class SoftStepSolver final : public ContactSolverBase {
       ApplyCollisionPasses<kRotation>(run, bodies, def, Real(1) / ctx.dt, stepGravity);
     }
     // The sub-steps run on the compact solver state (velocity and motion since the step began,
-    // 32 bytes a body), not on the body arrays: a row reads two states and nothing else.
+    // 32 bytes a body) and on the rows in groups of four (soft_rows.h), not on the body arrays
+    // and the constraints.
+    BuildRows(run, soft, staticSoft);
     auto ti = Clock::now();
     LoadStates(run, bodies);
     integrateMs += Ms(ti, Clock::now());
+    const SoftSolveParams prm{invH, def.contactPushMaxDepth, def.contactPushMaxVelocity};
+    const bool simd = def.softSimd;
     for (int sub = 0; sub < n; ++sub) {
       ti = Clock::now();
       IntegrateStateVelocities(run, bodies, def, h);
       integrateMs += Ms(ti, Clock::now());
-      if (def.effects.warmStarting) ForEachColor(run, [&](int b, int e) { WarmStartStates<kRotation>(b, e); });
-      ForEachColor(run, [&](int b, int e) { Solve<kRotation, kFriction, true>(def, soft, staticSoft, invH, b, e); });
+      if (def.effects.warmStarting) {
+        ForEachGroup(run, simd, [&](auto lanes, SoftRowGroup& g, int lane) {
+          WarmStartRows<decltype(lanes), kRotation>(states_.data(), g, lane);
+        });
+      }
+      ForEachGroup(run, simd, [&](auto lanes, SoftRowGroup& g, int lane) {
+        SolveRows<decltype(lanes), kRotation, kFriction, true>(states_.data(), g, lane, prm);
+      });
       ti = Clock::now();
       // The rotation guard is per world step: per sub-step it allowed n times the turn (188 rad/s
       // instead of 47 at 4 sub-steps), and spinning triangles of the soak left the box.
       IntegrateStatePositions(run, bodies, def, h, ctx.dt);
       integrateMs += Ms(ti, Clock::now());
-      ForEachColor(run, [&](int b, int e) { Solve<kRotation, kFriction, false>(def, soft, staticSoft, invH, b, e); });
+      ForEachGroup(run, simd, [&](auto lanes, SoftRowGroup& g, int lane) {
+        SolveRows<decltype(lanes), kRotation, kFriction, false>(states_.data(), g, lane, prm);
+      });
     }
     ti = Clock::now();
     StoreStates(run, bodies, def);
     integrateMs += Ms(ti, Clock::now());
+    StoreRowImpulses(run);
     if (def.effects.restitution && m > 0) ForEachColor(run, [&](int b, int e) { ApplyBounceShifts(bodies, b, e); });
     // Overlap deeper than the soft contacts push out (contactPushMaxDepth) is moved out here, by pgs's
     // position pass: positions change, velocities do not, so deep overlap cannot fling bodies.
@@ -124,115 +138,144 @@ class SoftStepSolver final : public ContactSolverBase {
     ctx.profile->solve += total - integrateMs;
   }
 
-  // One pass over the rows: with kBias the soft solve (push-out toward zero separation at a
-  // bounded speed), without it the relax pass (rigid rows, no bias). Speculative points (still
-  // apart) may close their gap within the sub-step, no more, in both passes.
-  //
-  // Friction is solved in the relax pass only (as Box2D 3 does since it split its push stage):
-  // during the soft solve the velocities still carry the push-out the relax pass removes and the
-  // normal impulse its soft bias, so a friction row there resists a sliding that is not real
-  // and is bounded by a load that is not real, and the warm start carries its impulse into the
-  // next sub-step. With friction in both passes the 15-box stack's top crept 0.014 m in 9 s and
-  // slowly toppled (worse at 8 and 16 sub-steps, with less numerical damping: 0.14-0.17 m); with
-  // friction in the relax pass only it moves 0.0003 m.
-  template <bool kRotation, bool kFriction, bool kBias>
-  void Solve(const WorldDef& def, const Softness& soft, const Softness& staticSoft, Real invH, int begin, int end) {
-    for (int c = begin; c < end; ++c) {
-      ContactConstraint& cc = constraints_[c];
-      const Vec2 n = cc.normal;
-      SolverBody& sa = states_[cc.a];
-      SolverBody& sb = states_[cc.b];
-      Vec2 vA = sa.v, vB = sb.v;
-      Real wA = sa.w, wB = sb.w;
-      // Motion since the step began: the separation of a point is its prepared one plus the
-      // normal part of how far its two anchors moved apart.
-      const Vec2 dp = sb.dp - sa.dp;
-      const Rot qA = sa.dq, qB = sb.dq;
-      const Softness& s = (cc.invMassA == 0 || cc.invMassB == 0) ? staticSoft : soft;
-      auto apply = [&](const PointConstraint& pc, Vec2 P) {
-        vA -= cc.invMassA * P;
-        vB += cc.invMassB * P;
-        if constexpr (kRotation) {
-          wA -= cc.invIA * Cross(pc.rA, P);
-          wB += cc.invIB * Cross(pc.rB, P);
-        }
-      };
-      auto relative = [&](const PointConstraint& pc) {
-        Vec2 dv = vB - vA;
-        if constexpr (kRotation) dv += Cross(wB, pc.rB) - Cross(wA, pc.rA);
-        return dv;
-      };
-      for (int k = 0; k < cc.pointCount; ++k) {
-        PointConstraint& pc = cc.points[k];
-        Vec2 d = dp;
-        if constexpr (kRotation) d += (Rotate(qB, pc.rB) - pc.rB) - (Rotate(qA, pc.rA) - pc.rA);
-        const Real sep = pc.separation + Dot(n, d);
-        Real bias = 0, massScale = 1, impulseScale = 0;
-        if (sep > 0) {
-          bias = sep * invH;
-        } else if constexpr (kBias) {
-          if (sep >= -def.contactPushMaxDepth) {
-            bias = std::max(s.biasRate * sep, -def.contactPushMaxVelocity);
-            massScale = s.massScale;
-            impulseScale = s.impulseScale;
-          } else {
-            // Deeper than the cap: a rigid row (holds any load) pushing apart at the cap's rate;
-            // the rest of the overlap is left to the position pass after the sub-steps.
-            bias = std::max(-s.biasRate * def.contactPushMaxDepth, -def.contactPushMaxVelocity);
+  // The rows in groups of four, colour by colour (a colour's last group padded), from the
+  // prepared constraints. Friction is solved in the relax pass only (as Box2D 3 does since it
+  // split its push stage): during the soft solve the velocities still carry the push-out the
+  // relax pass removes and the normal impulse its soft bias, so a friction row there resists a
+  // sliding that is not real and is bounded by a load that is not real, and the warm start
+  // carries its impulse into the next sub-step. With friction in both passes the 15-box stack's
+  // top crept 0.014 m in 9 s and slowly toppled (worse at 8 and 16 sub-steps, with less
+  // numerical damping: 0.14-0.17 m); with friction in the relax pass only it moves 0.0003 m.
+  void BuildRows(StageRunner& run, const Softness& soft, const Softness& staticSoft) {
+    groupStart_.assign(kColors + 2, 0);
+    for (int k = 0; k <= kColors; ++k) {
+      const int count = colorStart_[k + 1] - colorStart_[k];
+      groupStart_[k + 1] = groupStart_[k] + (count + kLanes - 1) / kLanes;
+    }
+    groups_.resize(groupStart_[kColors + 1]);
+    for (int k = 0; k <= kColors; ++k) {
+      const int begin = groupStart_[k], count = groupStart_[k + 1] - begin;
+      if (count == 0) continue;
+      run.For(Stage::kSolve, count, std::max(1, MinColorItems(run) / kLanes), [&](int gb, int ge, int) {
+        for (int gi = begin + gb; gi < begin + ge; ++gi) {
+          SoftRowGroup& g = groups_[gi];
+          for (int lane = 0; lane < kLanes; ++lane) {
+            const int c = colorStart_[k] + (gi - begin) * kLanes + lane;
+            if (c >= colorStart_[k + 1]) {
+              PadLane(g, lane);
+              continue;
+            }
+            const ContactConstraint& cc = constraints_[c];
+            g.a[lane] = cc.a;
+            g.b[lane] = cc.b;
+            g.constraint[lane] = c;
+            g.nx[lane] = cc.normal.x;
+            g.ny[lane] = cc.normal.y;
+            g.friction[lane] = cc.friction;
+            g.invMassA[lane] = cc.invMassA;
+            g.invIA[lane] = cc.invIA;
+            g.invMassB[lane] = cc.invMassB;
+            g.invIB[lane] = cc.invIB;
+            const Softness& s = (cc.invMassA == 0 || cc.invMassB == 0) ? staticSoft : soft;
+            g.biasRate[lane] = s.biasRate;
+            g.massScale[lane] = s.massScale;
+            g.impulseScale[lane] = s.impulseScale;
+            for (int pt = 0; pt < 2; ++pt) {
+              SoftPointRows& p = g.p[pt];
+              if (pt >= cc.pointCount) {
+                PadPoint(p, lane);
+                continue;
+              }
+              const PointConstraint& pc = cc.points[pt];
+              p.rAx[lane] = pc.rA.x;
+              p.rAy[lane] = pc.rA.y;
+              p.rBx[lane] = pc.rB.x;
+              p.rBy[lane] = pc.rB.y;
+              p.separation[lane] = pc.separation;
+              p.normalMass[lane] = pc.normalMass;
+              p.tangentMass[lane] = pc.tangentMass;
+              p.normalImpulse[lane] = pc.normalImpulse;
+              p.tangentImpulse[lane] = pc.tangentImpulse;
+            }
           }
         }
-        const Real vn = Dot(relative(pc), n);
-        const Real impulse = -pc.normalMass * massScale * (vn + bias) - impulseScale * pc.normalImpulse;
-        const Real newImpulse = std::max(pc.normalImpulse + impulse, Real(0));
-        const Real lambda = newImpulse - pc.normalImpulse;
-        pc.normalImpulse = newImpulse;
-        apply(pc, lambda * n);
-      }
-      if constexpr (kFriction && !kBias) {
-        const Vec2 t = RightPerp(n);
-        for (int k = 0; k < cc.pointCount; ++k) {
-          PointConstraint& pc = cc.points[k];
-          const Real vt = Dot(relative(pc), t);
-          const Real maxFriction = cc.friction * pc.normalImpulse;
-          const Real newImpulse = std::clamp(pc.tangentImpulse - pc.tangentMass * vt, -maxFriction, maxFriction);
-          const Real lambda = newImpulse - pc.tangentImpulse;
-          pc.tangentImpulse = newImpulse;
-          apply(pc, lambda * t);
-        }
-      }
-      // Static and kinematic bodies (inverse mass 0) are never written: other threads may be
-      // reading them for constraints of the same colour.
-      if (cc.invMassA > 0) {
-        sa.v = vA;
-        sa.w = wA;
-      }
-      if (cc.invMassB > 0) {
-        sb.v = vB;
-        sb.w = wB;
-      }
+      });
     }
   }
 
-  template <bool kRotation>
-  void WarmStartStates(int begin, int end) {
-    for (int c = begin; c < end; ++c) {
-      const ContactConstraint& cc = constraints_[c];
-      const Vec2 t = RightPerp(cc.normal);
-      SolverBody& sa = states_[cc.a];
-      SolverBody& sb = states_[cc.b];
-      for (int k = 0; k < cc.pointCount; ++k) {
-        const PointConstraint& pc = cc.points[k];
-        const Vec2 P = pc.normalImpulse * cc.normal + pc.tangentImpulse * t;
-        if (cc.invMassA > 0) {
-          sa.v -= cc.invMassA * P;
-          if constexpr (kRotation) sa.w -= cc.invIA * Cross(pc.rA, P);
+  static void PadPoint(SoftPointRows& p, int lane) {
+    p.rAx[lane] = p.rAy[lane] = p.rBx[lane] = p.rBy[lane] = 0;
+    p.separation[lane] = kPadSeparation;
+    p.normalMass[lane] = p.tangentMass[lane] = 0;
+    p.normalImpulse[lane] = p.tangentImpulse[lane] = 0;
+  }
+
+  // A row that touches nothing: body 0 with inverse masses 0 (read, never written).
+  static void PadLane(SoftRowGroup& g, int lane) {
+    g.a[lane] = g.b[lane] = 0;
+    g.constraint[lane] = -1;
+    g.nx[lane] = 0;
+    g.ny[lane] = 1;
+    g.friction[lane] = 0;
+    g.invMassA[lane] = g.invIA[lane] = g.invMassB[lane] = g.invIB[lane] = 0;
+    g.biasRate[lane] = 0;
+    g.massScale[lane] = 1;
+    g.impulseScale[lane] = 0;
+    PadPoint(g.p[0], lane);
+    PadPoint(g.p[1], lane);
+  }
+
+  // fn(lanes, group, lane): lanes is a Real (one row: the given lane) or an F4 (the four rows
+  // from lane 0). The overflow colour's rows may share bodies: one at a time, in order, on one
+  // thread.
+  template <class Fn>
+  void ForEachGroup(StageRunner& run, bool simd, Fn&& fn) {
+    auto rows = [&](int gb, int ge) {
+#if QUADRANT_SOFT_SIMD
+      if (simd) {
+        for (int gi = gb; gi < ge; ++gi) fn(F4{}, groups_[gi], 0);
+        return;
+      }
+#else
+      (void)simd;
+#endif
+      for (int gi = gb; gi < ge; ++gi) {
+        for (int lane = 0; lane < kLanes; ++lane) fn(Real{}, groups_[gi], lane);
+      }
+    };
+    const int minGroups = std::max(1, MinColorItems(run) / kLanes);
+    for (int color = 0; color < kColors; ++color) {
+      const int begin = groupStart_[color], count = groupStart_[color + 1] - begin;
+      if (count == 0) continue;
+      run.For(Stage::kSolve, count, minGroups, [&](int b, int e, int) { rows(begin + b, begin + e); });
+    }
+    const int begin = groupStart_[kColors], end = groupStart_[kColors + 1];
+    if (begin < end) {
+      run.Serial(Stage::kSolve, [&] {
+        for (int gi = begin; gi < end; ++gi) {
+          for (int lane = 0; lane < kLanes; ++lane) fn(Real{}, groups_[gi], lane);
         }
-        if (cc.invMassB > 0) {
-          sb.v += cc.invMassB * P;
-          if constexpr (kRotation) sb.w += cc.invIB * Cross(pc.rB, P);
+      });
+    }
+  }
+
+  // The accumulated impulses back into the constraints (StoreImpulses keeps them for the next
+  // step's warm start).
+  void StoreRowImpulses(StageRunner& run) {
+    const int count = static_cast<int>(groups_.size());
+    run.For(Stage::kSolve, count, std::max(1, run.MinHeavyItems() / kLanes), [&](int gb, int ge, int) {
+      for (int gi = gb; gi < ge; ++gi) {
+        const SoftRowGroup& g = groups_[gi];
+        for (int lane = 0; lane < kLanes; ++lane) {
+          if (g.constraint[lane] < 0) continue;
+          ContactConstraint& cc = constraints_[g.constraint[lane]];
+          for (int pt = 0; pt < cc.pointCount; ++pt) {
+            cc.points[pt].normalImpulse = g.p[pt].normalImpulse[lane];
+            cc.points[pt].tangentImpulse = g.p[pt].tangentImpulse[lane];
+          }
         }
       }
-    }
+    });
   }
 
   // The solver state of every body: its velocity (after the restitution passes), no motion yet.
@@ -301,6 +344,8 @@ class SoftStepSolver final : public ContactSolverBase {
   }
 
   std::vector<SolverBody> states_;
+  std::vector<SoftRowGroup> groups_;
+  std::vector<int> groupStart_;
 };
 
 }  // namespace

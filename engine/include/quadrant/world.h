@@ -135,6 +135,10 @@ struct WorldDef {
   /// rigid rows pushing out at the rate they have at this depth, and the rest of the overlap is
   /// moved out by a position pass (positionIterations) that adds no velocity.
   Real contactPushMaxDepth = Real(0.01);
+  /// soft_step: solve four contact rows at a time (SSE2, in float builds on x86-64) instead of one.
+  /// The state is the same bit for bit either way (a test checks it); false exists for that test
+  /// and to measure what the four-wide path gains.
+  bool softSimd = true;
   Real linearSlop = Real(0.005);        ///< allowed penetration (m), as Box2D
   Real baumgarte = Real(0.2);           ///< fraction of penetration removed per position iteration
   Real maxLinearCorrection = Real(0.2); ///< most a position iteration moves a contact (m)
