@@ -21,6 +21,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <type_traits>
 #include <vector>
 
 #include "quadrant/math.h"
@@ -80,6 +81,11 @@ inline Real Neg(Real a) { return -a; }
 inline Real Select(bool mask, Real a, Real b) { return mask ? a : b; }
 inline bool Greater(Real a, Real b) { return a > b; }
 inline bool GreaterEqual(Real a, Real b) { return a >= b; }
+inline bool Less(Real a, Real b) { return a < b; }
+inline bool And(bool a, bool b) { return a && b; }
+inline bool Any(bool m) { return m; }
+inline Real Div(Real a, Real b) { return a / b; }
+inline Real Sqrt(Real a) { return std::sqrt(a); }
 
 #if QUADRANT_SOFT_SIMD
 struct F4 {
@@ -102,6 +108,11 @@ inline F4 Neg(F4 a) { return {_mm_xor_ps(a.v, _mm_set1_ps(-0.0f))}; }
 inline F4 Select(M4 mask, F4 a, F4 b) { return {_mm_or_ps(_mm_and_ps(mask.v, a.v), _mm_andnot_ps(mask.v, b.v))}; }
 inline M4 Greater(F4 a, F4 b) { return {_mm_cmpgt_ps(a.v, b.v)}; }
 inline M4 GreaterEqual(F4 a, F4 b) { return {_mm_cmpge_ps(a.v, b.v)}; }
+inline M4 Less(F4 a, F4 b) { return {_mm_cmplt_ps(a.v, b.v)}; }
+inline M4 And(M4 a, M4 b) { return {_mm_and_ps(a.v, b.v)}; }
+inline bool Any(M4 m) { return _mm_movemask_ps(m.v) != 0; }
+inline F4 Div(F4 a, F4 b) { return {_mm_div_ps(a.v, b.v)}; }
+inline F4 Sqrt(F4 a) { return {_mm_sqrt_ps(a.v)}; }
 #endif
 
 // The bodies of a row (lanes [lane, lane + width)), gathered from the solver states.
@@ -129,6 +140,19 @@ template <>
   SolverBody& s = states[index[lane]];
   s.v = {in.vx, in.vy};
   s.w = in.w;
+}
+
+// The motion half of a state (dp, dq), for the position pass.
+template <class V>
+inline void ScatterMotion(SolverBody* states, const int32_t* index, const Real* invMass, int lane,
+                          const RowBodies<V>& in);
+template <>
+[[gnu::always_inline]] inline void ScatterMotion<Real>(SolverBody* states, const int32_t* index, const Real* invMass,
+                                                       int lane, const RowBodies<Real>& in) {
+  if (invMass[lane] == 0) return;
+  SolverBody& s = states[index[lane]];
+  s.dp = {in.dpx, in.dpy};
+  s.dq = {in.qc, in.qs};
 }
 
 #if QUADRANT_SOFT_SIMD
@@ -160,6 +184,16 @@ template <>
   if (invMass[1] != 0) _mm_storeu_ps(&states[index[1]].v.x, r1);
   if (invMass[2] != 0) _mm_storeu_ps(&states[index[2]].v.x, r2);
   if (invMass[3] != 0) _mm_storeu_ps(&states[index[3]].v.x, r3);
+}
+template <>
+[[gnu::always_inline]] inline void ScatterMotion<F4>(SolverBody* states, const int32_t* index, const Real* invMass,
+                                                     int, const RowBodies<F4>& in) {
+  __m128 r0 = in.dpx.v, r1 = in.dpy.v, r2 = in.qc.v, r3 = in.qs.v;
+  _MM_TRANSPOSE4_PS(r0, r1, r2, r3);
+  if (invMass[0] != 0) _mm_storeu_ps(&states[index[0]].dp.x, r0);
+  if (invMass[1] != 0) _mm_storeu_ps(&states[index[1]].dp.x, r1);
+  if (invMass[2] != 0) _mm_storeu_ps(&states[index[2]].dp.x, r2);
+  if (invMass[3] != 0) _mm_storeu_ps(&states[index[3]].dp.x, r3);
 }
 #endif
 
@@ -291,6 +325,114 @@ inline void SolveRows(SolverBody* states, SoftRowGroup& g, int lane, const SoftS
   }
   Scatter<V>(states, g.a, g.invMassA, lane, A);
   Scatter<V>(states, g.b, g.invMassB, lane, B);
+}
+
+// Turns a rotation by the angle a, as IntegrateRot (math.h) does for |a| < 0.5: the same
+// polynomials and renormalisation, operation for operation. Larger angles need sin and cos,
+// which have no four-wide form here: `small` says whether every lane is below 0.5.
+template <class V>
+[[gnu::always_inline]] inline void TurnBy(V& c, V& s, V a) {
+  const V one = Splat(Real(1), V{});
+  const V x2 = a * a;
+  const V dc = one - x2 * (Splat(Real(0.5), V{}) - x2 * Splat(Real(1) / Real(24), V{}));
+  const V ds = a * (one - x2 * (Splat(Real(1) / Real(6), V{}) - x2 * Splat(Real(1) / Real(120), V{})));
+  const V nc = c * dc - s * ds;
+  const V ns = s * dc + c * ds;
+  const V inv = Div(one, Sqrt(nc * nc + ns * ns));
+  c = nc * inv;
+  s = ns * inv;
+}
+
+struct SoftPositionParams {
+  Real allowed = 0;        // penetration left alone (WorldDef::contactPushMaxDepth)
+  Real baumgarte = 0;
+  Real maxCorrection = 0;  // WorldDef::maxLinearCorrection
+};
+
+// One non-linear Gauss-Seidel pass of the position correction (the same as pgs's
+// SolvePositions in contact_solver.h, on the solver states): the penetration beyond `allowed`
+// is reduced by the Baumgarte fraction, at most maxCorrection at a time, moving and turning the
+// bodies without giving them velocity. Lever arms are the anchors turned by the bodies' turn
+// since the step began. Returns false, having written nothing, when the four-wide path would
+// need a turn of 0.5 rad or more (the caller then solves the group one row at a time, where
+// IntegrateRot takes sin and cos); sets `moved` when a row moved something.
+template <class V, bool kRotation>
+inline bool SolvePositionRows(SolverBody* states, const SoftRowGroup& g, int lane, const SoftPositionParams& prm,
+                              bool& moved) {
+  RowBodies<V> A, B;
+  Gather<V>(states, g.a, lane, A);
+  Gather<V>(states, g.b, lane, B);
+  const V zero = Splat(Real(0), V{});
+  const V nx = Load(g.nx, lane, V{}), ny = Load(g.ny, lane, V{});
+  const V mA = Load(g.invMassA, lane, V{}), iA = Load(g.invIA, lane, V{});
+  const V mB = Load(g.invMassB, lane, V{}), iB = Load(g.invIB, lane, V{});
+  const V allowed = Splat(prm.allowed, V{}), baumgarte = Splat(prm.baumgarte, V{});
+  const V maxCorrection = Neg(Splat(prm.maxCorrection, V{}));
+  for (int k = 0; k < 2; ++k) {
+    const SoftPointRows& p = g.p[k];
+    const V pAx = Load(p.rAx, lane, V{}), pAy = Load(p.rAy, lane, V{});
+    const V pBx = Load(p.rBx, lane, V{}), pBy = Load(p.rBy, lane, V{});
+    V rAx = pAx, rAy = pAy, rBx = pBx, rBy = pBy;
+    if constexpr (kRotation) {
+      rAx = A.qc * pAx - A.qs * pAy;
+      rAy = A.qs * pAx + A.qc * pAy;
+      rBx = B.qc * pBx - B.qs * pBy;
+      rBy = B.qs * pBx + B.qc * pBy;
+    }
+    const V dx = ((B.dpx - A.dpx) + (rBx - pBx)) - (rAx - pAx);
+    const V dy = ((B.dpy - A.dpy) + (rBy - pBy)) - (rAy - pAy);
+    const V sep = Load(p.separation, lane, V{}) + (nx * dx + ny * dy);
+    const V C = Min(Max(baumgarte * (sep + allowed), maxCorrection), zero);
+    V K = mA + mB;
+    V rnA = zero, rnB = zero;
+    if constexpr (kRotation) {
+      rnA = rAx * ny - rAy * nx;
+      rnB = rBx * ny - rBy * nx;
+      K = K + (iA * rnA * rnA + iB * rnB * rnB);
+    }
+    const auto active = And(Less(C, zero), Greater(K, zero));
+    if (!Any(active)) continue;
+    const V impulse = Select(active, Div(Neg(C), K), zero);
+    const V Px = impulse * nx, Py = impulse * ny;
+    V turnA = zero, turnB = zero;
+    if constexpr (kRotation) {
+      turnA = Neg(iA) * (rAx * Py - rAy * Px);
+      turnB = iB * (rBx * Py - rBy * Px);
+      if constexpr (!std::is_same_v<V, Real>) {
+        const V half = Splat(Real(0.5), V{});
+        if (Any(GreaterEqual(Max(turnA, Neg(turnA)), half)) || Any(GreaterEqual(Max(turnB, Neg(turnB)), half))) {
+          return false;
+        }
+      }
+    }
+    moved = true;
+    A.dpx = Select(active, A.dpx - mA * Px, A.dpx);
+    A.dpy = Select(active, A.dpy - mA * Py, A.dpy);
+    B.dpx = Select(active, B.dpx + mB * Px, B.dpx);
+    B.dpy = Select(active, B.dpy + mB * Py, B.dpy);
+    if constexpr (kRotation) {
+      if constexpr (std::is_same_v<V, Real>) {
+        if (active) {
+          const Rot qa = IntegrateRot(Rot{A.qc, A.qs}, turnA), qb = IntegrateRot(Rot{B.qc, B.qs}, turnB);
+          A.qc = qa.c;
+          A.qs = qa.s;
+          B.qc = qb.c;
+          B.qs = qb.s;
+        }
+      } else {
+        V ac = A.qc, as = A.qs, bc = B.qc, bs = B.qs;
+        TurnBy(ac, as, turnA);
+        TurnBy(bc, bs, turnB);
+        A.qc = Select(active, ac, A.qc);
+        A.qs = Select(active, as, A.qs);
+        B.qc = Select(active, bc, B.qc);
+        B.qs = Select(active, bs, B.qs);
+      }
+    }
+  }
+  ScatterMotion<V>(states, g.a, g.invMassA, lane, A);
+  ScatterMotion<V>(states, g.b, g.invMassB, lane, B);
+  return true;
 }
 
 }  // namespace quadrant

@@ -124,14 +124,15 @@ class SoftStepSolver final : public ContactSolverBase {
         SolveRows<decltype(lanes), kRotation, kFriction, false>(states_.data(), g, lane, prm);
       });
     }
+    if (def.effects.restitution && m > 0) ForEachColor(run, [&](int b, int e) { ApplyStateBounceShifts(b, e); });
+    // Overlap deeper than the soft contacts push out (contactPushMaxDepth) is moved out here, by pgs's
+    // position pass (on the solver states): positions change, velocities do not, so deep overlap
+    // cannot fling bodies.
+    if (m > 0) CorrectStatePositions<kRotation>(run, def, simd);
     ti = Clock::now();
     StoreStates(run, bodies, def);
     integrateMs += Ms(ti, Clock::now());
     StoreRowImpulses(run);
-    if (def.effects.restitution && m > 0) ForEachColor(run, [&](int b, int e) { ApplyBounceShifts(bodies, b, e); });
-    // Overlap deeper than the soft contacts push out (contactPushMaxDepth) is moved out here, by pgs's
-    // position pass: positions change, velocities do not, so deep overlap cannot fling bodies.
-    if (m > 0) CorrectPositions<kRotation>(run, bodies, def, def.contactPushMaxDepth, def.positionIterations);
     run.For(Stage::kSolve, m, run.MinHeavyItems(), [&](int b, int e, int) { StoreImpulses(ctx.contacts, b, e); });
     const double total = Ms(t0, Clock::now());
     ctx.profile->integrate += integrateMs;
@@ -256,6 +257,41 @@ class SoftStepSolver final : public ContactSolverBase {
           for (int lane = 0; lane < kLanes; ++lane) fn(Real{}, groups_[gi], lane);
         }
       });
+    }
+  }
+
+  // ApplyBounceShifts (contact_solver.h) on the solver states.
+  void ApplyStateBounceShifts(int begin, int end) {
+    for (int c = begin; c < end; ++c) {
+      const ContactConstraint& cc = constraints_[c];
+      Real shift = 0;
+      for (int k = 0; k < cc.pointCount; ++k) shift = std::max(shift, cc.points[k].bounceShift);
+      const Real sum = cc.invMassA + cc.invMassB;
+      if (shift == 0 || sum == 0) continue;
+      const Vec2 d = (shift / sum) * cc.normal;
+      if (cc.invMassA > 0) states_[cc.a].dp += cc.invMassA * d;
+      if (cc.invMassB > 0) states_[cc.b].dp -= cc.invMassB * d;
+    }
+  }
+
+  // Up to positionIterations passes of SolvePositionRows (soft_rows.h), colour by colour; a pass
+  // that moves nothing leaves every later one nothing to do, so the loop stops there.
+  template <bool kRotation>
+  void CorrectStatePositions(StageRunner& run, const WorldDef& def, bool simd) {
+    const SoftPositionParams prm{def.contactPushMaxDepth, def.baumgarte, def.maxLinearCorrection};
+    SolverBody* states = states_.data();
+    for (int it = 0; it < def.positionIterations; ++it) {
+      std::atomic<bool> anyMoved{false};
+      ForEachGroup(run, simd, [&](auto lanes, SoftRowGroup& g, int lane) {
+        bool moved = false;
+        if constexpr (std::is_same_v<decltype(lanes), Real>) {
+          SolvePositionRows<Real, kRotation>(states, g, lane, prm, moved);
+        } else if (!SolvePositionRows<decltype(lanes), kRotation>(states, g, lane, prm, moved)) {
+          for (int l = 0; l < kLanes; ++l) SolvePositionRows<Real, kRotation>(states, g, l, prm, moved);
+        }
+        if (moved) anyMoved.store(true, std::memory_order_relaxed);
+      });
+      if (!anyMoved.load(std::memory_order_relaxed)) break;  // read after the last colour's join
     }
   }
 
