@@ -178,7 +178,9 @@ template <>
 template <>
 [[gnu::always_inline]] inline void Scatter<F4>(SolverBody* states, const int32_t* index, const Real* invMass, int,
                         const RowBodies<F4>& in) {
-  __m128 r0 = in.vx.v, r1 = in.vy.v, r2 = in.w.v, r3 = in.pad.v;
+  // The pad word is written as zero (it is zero in every state), so the gathered one need not
+  // be kept in a register through the row.
+  __m128 r0 = in.vx.v, r1 = in.vy.v, r2 = in.w.v, r3 = _mm_setzero_ps();
   _MM_TRANSPOSE4_PS(r0, r1, r2, r3);
   if (invMass[0] != 0) _mm_storeu_ps(&states[index[0]].v.x, r0);
   if (invMass[1] != 0) _mm_storeu_ps(&states[index[1]].v.x, r1);
