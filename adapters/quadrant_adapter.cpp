@@ -41,6 +41,8 @@ class QuadrantAdapter final : public Adapter {
       } else if (token.size() > 3 && token.starts_with("sub") && ParseCount(token.substr(3), &softSubSteps_)) {
       } else if (token.size() > 2 && token.starts_with("it") && ParseCount(token.substr(2), &iterations_)) {
       } else if (token.size() > 3 && token.starts_with("pos") && ParseCount(token.substr(3), &positionIterations_)) {
+      } else if (token.size() > 5 && token.starts_with("ratio") && ParseCount(token.substr(5), &massRatioLimit_)) {
+        // soft_step's WorldDef::softMassRatioLimit (issue #13 item 3: a heavy body on a light one).
       } else if (token == "quadtree") {
         broadPhase_ = BroadPhaseType::kQuadTree;
       } else if (token == "grid") {
@@ -50,7 +52,7 @@ class QuadrantAdapter final : public Adapter {
       } else if (token == "quadrants") {
         scheme_ = ParallelScheme::kQuadrants;
       } else {
-        throw Error("unknown quadrant variant '" + std::string(token) + "' (known: thesis, pgs, soft_step, quadtree, grid, deterministic, quadrants, sub<N>, it<N>, pos<N>)");
+        throw Error("unknown quadrant variant '" + std::string(token) + "' (known: thesis, pgs, soft_step, quadtree, grid, deterministic, quadrants, sub<N>, it<N>, pos<N>, ratio<N>)");
       }
       if (end == std::string_view::npos) break;
       start = end + 1;
@@ -95,6 +97,7 @@ class QuadrantAdapter final : public Adapter {
       def.contactHertz = WorldDef{}.contactHertz * Real(def.softSubSteps) / Real(WorldDef{}.softSubSteps);
     }
     def.positionIterations = positionIterations_ > 0 ? positionIterations_ : scene.positionIterations;
+    def.softMassRatioLimit = Real(massRatioLimit_);
     def.restitutionThreshold = scene.restitutionThreshold;
     def.threadCount = threads;
     def.scheme = scheme_;
@@ -222,6 +225,7 @@ class QuadrantAdapter final : public Adapter {
   BroadPhaseType broadPhase_ = BroadPhaseType::kUniformGrid;
   ParallelScheme scheme_ = ParallelScheme::kDeterministic;
   int softSubSteps_ = 0;  // 0: the engine's default
+  int massRatioLimit_ = 0;  // 0: off (WorldDef::softMassRatioLimit)
   int iterations_ = 0;    // 0: the scene's
   int positionIterations_ = 0;  // 0: the scene's
   static constexpr int kMaxThreads = 64;

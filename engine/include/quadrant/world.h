@@ -139,6 +139,13 @@ struct WorldDef {
   /// The state is the same bit for bit either way (a test checks it); false exists for that test
   /// and to measure what the four-wide path gains.
   bool softSimd = true;
+  /// soft_step: 0 (off) or the largest mass ratio a contact between two dynamic bodies sees, >= 1.
+  /// Where two bodies' masses differ by more, the lighter one takes part in their contact as if it
+  /// were only this many times lighter (inverse mass and inertia scaled alike): a heavy body then
+  /// rests on a light one (a 1000 kg box on a 1 kg slab holds at 4 sub-steps with 10) at the price
+  /// of momentum in those contacts (a light body striking a heavy one pushes it harder than it
+  /// should; bounces, solved apart, are not affected). Off by default.
+  Real softMassRatioLimit = 0;
   Real linearSlop = Real(0.005);        ///< allowed penetration (m), as Box2D
   Real baumgarte = Real(0.2);           ///< fraction of penetration removed per position iteration
   Real maxLinearCorrection = Real(0.2); ///< most a position iteration moves a contact (m)
