@@ -48,7 +48,7 @@
 namespace quadrant {
 namespace {
 
-using Clock = SolverClock;
+using Clock = StageClock;
 
 // Soft constraint coefficients for a spring of `hertz` and damping ratio `zeta` over step h:
 // the bias velocity is biasRate * C, and massScale / impulseScale soften the impulse.
