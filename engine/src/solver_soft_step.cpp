@@ -252,9 +252,13 @@ class SoftStepSolver final : public ContactSolverBase {
     p.normalImpulse[lane] = p.tangentImpulse[lane] = 0;
   }
 
-  // A row that touches nothing: body 0 with inverse masses 0 (read, never written).
+  // A row that touches nothing: inverse masses 0, so it writes no body. It reads the bodies of
+  // the group's first row (always a real one), which only this thread writes in this colour:
+  // any other body could be written by another thread meanwhile (a race, though its values
+  // would be discarded).
   static void PadLane(SoftRowGroup& g, int lane) {
-    g.a[lane] = g.b[lane] = 0;
+    g.a[lane] = g.a[0];
+    g.b[lane] = g.b[0];
     g.constraint[lane] = -1;
     g.nx[lane] = 0;
     g.ny[lane] = 1;
