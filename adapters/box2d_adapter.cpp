@@ -97,7 +97,7 @@ class Box2dAdapter final : public Adapter {
     bodies_.reserve(scene.bodies.size());
     for (const BodyDesc& desc : scene.bodies) {
       b2BodyDef def;
-      def.type = desc.dynamic ? b2_dynamicBody : b2_staticBody;
+      def.type = desc.dynamic ? b2_dynamicBody : desc.kinematic ? b2_kinematicBody : b2_staticBody;
       def.position = ToB2(desc.position);
       def.angle = static_cast<float>(desc.angle);
       def.allowSleep = fx.sleep;
@@ -128,7 +128,7 @@ class Box2dAdapter final : public Adapter {
 
       // Set after the fixture: b2BodyDef's velocity would be taken as the origin's and shifted
       // when the centre of mass moves, while the scene gives the centre of mass's.
-      if (desc.dynamic) {
+      if (desc.dynamic || desc.kinematic) {
         body->SetLinearVelocity(ToB2(desc.velocity));
         body->SetAngularVelocity(fx.rotation ? static_cast<float>(desc.angularVelocity) : 0.0f);
       }

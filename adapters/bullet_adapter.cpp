@@ -159,6 +159,11 @@ class BulletAdapter final : public Adapter {
     // Fewer than one thread is bad input (an Error); more than Bullet runs is Unsupported.
     if (threads < 1) throw Error("bullet: threads must be >= 1, got " + std::to_string(threads));
     if (threads != 1) throw SerialOnly();
+    // Bullet moves a kinematic body by its motion state's transform, which the caller sets each
+    // step, not by a velocity; the scene API drives kinematic bodies by velocity (SetVelocity).
+    for (const BodyDesc& b : scene.bodies) {
+      if (b.kinematic) throw Unsupported("bullet: kinematic bodies move by transform in Bullet, not by velocity");
+    }
     // Built aside and swapped in at the end, so a throwing Load keeps the previous world.
     auto next = std::make_unique<BulletWorld>();
     BuildWorld(scene, *next);

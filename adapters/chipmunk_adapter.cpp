@@ -176,13 +176,15 @@ class ChipmunkAdapter final : public Adapter {
         // Chipmunk keeps the centre of gravity's world position fixed when the angle or the
         // centre changes, so the centre goes first, then the angle, then the origin position.
         cpBodySetCenterOfGravity(body, ToCp(mp.localCenter));
+      } else if (desc.kinematic) {
+        body = cpBodyNewKinematic();  // rotates about its origin: kinematic scene bodies are centred
       } else {
         body = cpBodyNewStatic();
       }
       bodies_.push_back(body);  // owned from here on, even if a later call throws
       cpBodySetAngle(body, cpFloat(desc.angle));
       cpBodySetPosition(body, ToCp(desc.position));
-      if (desc.dynamic) {
+      if (desc.dynamic || desc.kinematic) {
         cpBodySetVelocity(body, ToCp(desc.velocity));
         cpBodySetAngularVelocity(body, fx.rotation ? cpFloat(desc.angularVelocity) : 0.0);
       }
@@ -261,7 +263,7 @@ class ChipmunkAdapter final : public Adapter {
     cpBody* b = bodies_[static_cast<size_t>(body)];
     // A static body with a velocity would act as a moving surface in Chipmunk's solver; Box2D
     // ignores velocities of static bodies, and so does every adapter.
-    if (cpBodyGetType(b) != CP_BODY_TYPE_DYNAMIC) return;
+    if (cpBodyGetType(b) == CP_BODY_TYPE_STATIC) return;
     cpBodySetVelocity(b, ToCp(velocity));  // also wakes a sleeping body
     // With rotation off the moment is infinite: a set spin would never stop, while every
     // engine keeps angular velocity at zero then (Quadrant's definition).

@@ -1,7 +1,10 @@
 // The Quadrant adapter: a scene becomes a World once, at load time.
 //
 // Variants ("quadrant:<tokens>", tokens joined by '+'): solver "thesis" or "pgs", broad phase
-// "quadtree" or "grid", parallel scheme "deterministic" or "quadrants". The default is pgs with
+// "quadtree" or "grid", parallel scheme "deterministic" or "quadrants", "b2rest" for Box2D 2.4.1's
+// restitution (RestitutionPolicy::kBox2d, pgs only), "b2skin" for its 0.01 m polygon skin
+// (WorldDef::polygonSkin), "coupled" for the thesis solver's coupled impulse
+// (WorldDef::thesisCoupledImpulse). The default is pgs with
 // the uniform grid and the deterministic scheme, the combination the suite measured fastest
 // on the stress scenes (see README).
 //
@@ -43,6 +46,12 @@ class QuadrantAdapter final : public Adapter {
       } else if (token.size() > 3 && token.starts_with("pos") && ParseCount(token.substr(3), &positionIterations_)) {
       } else if (token.size() > 5 && token.starts_with("ratio") && ParseCount(token.substr(5), &massRatioLimit_)) {
         // soft_step's WorldDef::softMassRatioLimit (issue #13 item 3: a heavy body on a light one).
+      } else if (token == "b2rest") {
+        restitution_ = RestitutionPolicy::kBox2d;
+      } else if (token == "coupled") {
+        thesisCoupled_ = true;
+      } else if (token == "b2skin") {
+        polygonSkin_ = Real(0.01);  // Box2D 2.4.1's b2_polygonRadius
       } else if (token == "quadtree") {
         broadPhase_ = BroadPhaseType::kQuadTree;
       } else if (token == "grid") {
@@ -52,7 +61,7 @@ class QuadrantAdapter final : public Adapter {
       } else if (token == "quadrants") {
         scheme_ = ParallelScheme::kQuadrants;
       } else {
-        throw Error("unknown quadrant variant '" + std::string(token) + "' (known: thesis, pgs, soft_step, quadtree, grid, deterministic, quadrants, sub<N>, it<N>, pos<N>, ratio<N>)");
+        throw Error("unknown quadrant variant '" + std::string(token) + "' (known: thesis, pgs, soft_step, quadtree, grid, deterministic, quadrants, sub<N>, it<N>, pos<N>, ratio<N>, b2rest, b2skin, coupled)");
       }
       if (end == std::string_view::npos) break;
       start = end + 1;
@@ -99,6 +108,9 @@ class QuadrantAdapter final : public Adapter {
     def.positionIterations = positionIterations_ > 0 ? positionIterations_ : scene.positionIterations;
     def.softMassRatioLimit = Real(massRatioLimit_);
     def.restitutionThreshold = scene.restitutionThreshold;
+    def.restitution = restitution_;
+    def.polygonSkin = polygonSkin_;
+    def.thesisCoupledImpulse = thesisCoupled_;
     def.threadCount = threads;
     def.scheme = scheme_;
     def.effects.gravity = scene.effects.gravity;
@@ -114,7 +126,7 @@ class QuadrantAdapter final : public Adapter {
     ids.reserve(scene.bodies.size());
     for (const BodyDesc& b : scene.bodies) {
       BodyDef bd;
-      bd.type = b.dynamic ? BodyType::kDynamic : BodyType::kStatic;
+      bd.type = b.dynamic ? BodyType::kDynamic : b.kinematic ? BodyType::kKinematic : BodyType::kStatic;
       bd.position = b.position;
       bd.angle = b.angle;
       bd.linearVelocity = b.velocity;
@@ -222,6 +234,9 @@ class QuadrantAdapter final : public Adapter {
  private:
   std::string variant_;
   SolverType solver_ = SolverType::kPgs;
+  RestitutionPolicy restitution_ = RestitutionPolicy::kCollisions;
+  Real polygonSkin_ = 0;
+  bool thesisCoupled_ = false;
   BroadPhaseType broadPhase_ = BroadPhaseType::kUniformGrid;
   ParallelScheme scheme_ = ParallelScheme::kDeterministic;
   int softSubSteps_ = 0;  // 0: the engine's default

@@ -91,6 +91,7 @@ void ValidateScene(const Scene& scene) {
       Fail(i, "position is beyond the coordinate limit of 1e6 m");
     }
     if (!IsFinite(b.density) || (b.dynamic && b.density <= 0)) Fail(i, "density must be > 0");
+    if (b.dynamic && b.kinematic) Fail(i, "a body is either dynamic or kinematic, not both");
     if (!IsFinite(b.friction) || b.friction < 0) Fail(i, "friction must be >= 0");
     if (!IsFinite(b.linearDamping) || b.linearDamping < 0 || !IsFinite(b.angularDamping) || b.angularDamping < 0) {
       Fail(i, "damping must be finite and >= 0");

@@ -31,6 +31,11 @@ struct Effects {
 
 struct BodyDesc {
   bool dynamic = true;
+  /// With dynamic = false: a kinematic body, moved by its velocity (set at load and by drivers
+  /// through Adapter::SetVelocity), not by contacts or gravity; infinite mass. Its origin should
+  /// be its centroid (engines differ in which point of a kinematic body the velocity is of).
+  /// Adapters of engines without kinematic bodies report the scene as unsupported.
+  bool kinematic = false;
   ShapeKind shape = ShapeKind::kCircle;
   Real radius = Real(0.5);          ///< circles (m), centred on the body origin
   std::vector<Vec2> vertices;       ///< polygons: convex, counter-clockwise, body coordinates

@@ -1,7 +1,8 @@
 // quadrant_accuracy: what accuracy costs in time (issue 6). Sweeps solver settings of Quadrant
 // (thesis; pgs with 1..32 velocity iterations; soft_step with 1..8 sub-steps), Box2D 2.4 with
 // 1..32 velocity iterations, and Bullet and Chipmunk at their 8-iteration defaults over piles
-// (vertical stack, base-20 pyramid, mass ratios 100 and 400) and the thesis's stress scenes
+// (vertical stack, base-20 pyramid, mass ratios 100 and 400, and issue #13's 30-box stack and
+// 1000:1 boxes on small supports and on one slab) and the thesis's stress scenes
 // (circles and polygons, N = 1000), and writes each setting's time per step next to error
 // measures taken from the scene API's read-back only. Then it runs the hard cases of those piles
 // on every Quadrant setting, so the report can name the cheapest setting that passes each.
@@ -102,9 +103,12 @@ Kind KindOf(const std::string& scene) {
   return scene == "circle_stress" || scene == "polygon_stress" ? Kind::kStress : Kind::kPile;
 }
 
-const std::vector<std::string> kAllScenes = {"vertical_stack", "pyramid", "mass_ratio_100", "mass_ratio_400",
-                                             "circle_stress", "polygon_stress"};
-const std::vector<std::string> kHardCases = {"vertical_stack", "pyramid", "mass_ratio_100", "mass_ratio_400"};
+// Issue #13's cases (tall_stack, heavy_on_supports, heavy_on_slab) are piles at the default budget.
+const std::vector<std::string> kAllScenes = {"vertical_stack", "pyramid",           "mass_ratio_100",
+                                             "mass_ratio_400", "tall_stack",        "heavy_on_supports",
+                                             "heavy_on_slab",  "circle_stress",     "polygon_stress"};
+const std::vector<std::string> kHardCases = {"vertical_stack", "pyramid",           "mass_ratio_100", "mass_ratio_400",
+                                             "tall_stack",     "heavy_on_supports", "heavy_on_slab"};
 
 // Piles are built with the engine's material mixing, as the hard cases are, so every engine
 // simulates the same mixed friction; the stress scenes mix to friction 0 and restitution 1 under
@@ -120,6 +124,12 @@ qs::Scene BuildScene(const std::string& name, const Setting& setting, int stress
     scene = qs::MakeMassRatio(100, mixing);
   } else if (name == "mass_ratio_400") {
     scene = qs::MakeMassRatio(400, mixing);
+  } else if (name == "tall_stack") {
+    scene = qs::MakeTallStack(30, mixing);
+  } else if (name == "heavy_on_supports") {
+    scene = qs::MakeHeavyOnSupports(mixing);
+  } else if (name == "heavy_on_slab") {
+    scene = qs::MakeHeavyOnSlab(mixing);
   } else {
     scene = qs::MakeScene(name, stressCount, 42);
   }

@@ -20,9 +20,9 @@
 // and heap_mb (malloc bytes still held after warm-up); label = final state hash (16 hex digits).
 //
 // Own flags (parsed and removed before Google Benchmark sees the command line):
-//   --scenes a,b      scenes to run            (default circle_stress,polygon_stress)
+//   --scenes a,b      scenes to run            (default: DefaultBenchScenes(), sparse and dense)
 //   --engines a,b     engines to run           (default: every adapter)
-//   --counts 1000,... body counts              (default 1000,2000,4000,8000,16000)
+//   --counts 1000,... body counts, every scene (default: each scene's DefaultBenchCounts)
 //   --threads 1,2,... engine thread counts     (default 1,2,3,4)
 //   --steps S         timed steps              (default 120)
 //   --warmup W        untimed steps before timing (default 30)
@@ -69,9 +69,9 @@ namespace {
 namespace qs = quadrant::scene;
 
 struct Options {
-  std::vector<std::string> scenes{"circle_stress", "polygon_stress"};
+  std::vector<std::string> scenes = qs::DefaultBenchScenes();
   std::vector<std::string> engines;  // empty: every adapter
-  std::vector<int> counts{1000, 2000, 4000, 8000, 16000};
+  std::vector<int> counts;           // empty: each scene's DefaultBenchCounts
   std::vector<int> threads{1, 2, 3, 4};
   int steps = 120;
   int warmup = 30;
@@ -90,9 +90,11 @@ void PrintUsage(std::FILE* out) {
       "Own flags (the rest goes to Google Benchmark, e.g. --benchmark_repetitions=3\n"
       "--benchmark_out=bench.json --benchmark_out_format=json\n"
       "--benchmark_enable_random_interleaving=true):\n"
-      "  --scenes a,b       scenes (default circle_stress,polygon_stress)\n"
+      "  --scenes a,b       scenes (default circle_stress,polygon_stress,pyramid,many_pyramids,tumbler)\n"
       "  --engines a,b      engines (default: all adapters)\n"
-      "  --counts 1000,...  body counts (default 1000,2000,4000,8000,16000)\n"
+      "  --counts 1000,...  body counts for every scene (default: each scene's own; stress scenes\n"
+      "                     1000,2000,4000,8000,16000, pyramid 1275,5050, many_pyramids 1375,5500,\n"
+      "                     tumbler 1024,2025)\n"
       "  --threads 1,2,...  engine thread counts (default 1,2,3,4)\n"
       "  --steps S          timed steps per run (default 120)\n"
       "  --warmup W         untimed steps before timing (default 30)\n"
@@ -474,18 +476,28 @@ int main(int argc, char** argv) {
     std::vector<qs::Capabilities> caps;
     for (const std::string& engine : opts.engines) caps.push_back(qs::MakeAdapter(engine)->Caps());
 
+    // Counts per scene: --counts for every scene, or each scene's own defaults.
+    std::vector<std::vector<int>> sceneCounts;
+    std::vector<std::string> countsText;
+    for (const std::string& sceneName : opts.scenes) {
+      sceneCounts.push_back(opts.counts.empty() ? qs::DefaultBenchCounts(sceneName) : opts.counts);
+      countsText.push_back(fmt::format("{}:{}", sceneName, JoinList(sceneCounts.back(), "+")));
+    }
+
     // Scene descriptions for the context, from the smallest count (the settings do not depend
     // on N; the body count and box size do).
-    const int smallest = *std::min_element(opts.counts.begin(), opts.counts.end());
-    for (const std::string& sceneName : opts.scenes) {
-      const qs::Scene scene = qs::MakeScene(sceneName, smallest, opts.seed);
-      benchmark::AddCustomContext(fmt::format("scene_{}", sceneName),
-                                  fmt::format("n={}: {}", smallest, DescribeScene(scene)));
+    for (size_t s = 0; s < opts.scenes.size(); ++s) {
+      const int smallest = *std::min_element(sceneCounts[s].begin(), sceneCounts[s].end());
+      const qs::Scene scene = qs::MakeScene(opts.scenes[s], smallest, opts.seed);
+      benchmark::AddCustomContext(fmt::format("scene_{}", opts.scenes[s]),
+                                  fmt::format("n={}: {}{}", smallest, qs::IsDenseScene(opts.scenes[s]) ? "dense; " : "",
+                                              DescribeScene(scene)));
     }
 
     // Registration order: for each scene, N and T, every engine in turn (interleaved).
-    for (const std::string& sceneName : opts.scenes) {
-      for (int count : opts.counts) {
+    for (size_t s = 0; s < opts.scenes.size(); ++s) {
+      const std::string& sceneName = opts.scenes[s];
+      for (int count : sceneCounts[s]) {
         const qs::Scene scene = qs::MakeScene(sceneName, count, opts.seed);
         for (int threads : opts.threads) {
           for (size_t e = 0; e < opts.engines.size(); ++e) {
@@ -542,7 +554,7 @@ int main(int argc, char** argv) {
     benchmark::AddCustomContext("hostname", HostName());
     benchmark::AddCustomContext("scenes", JoinList(opts.scenes));
     benchmark::AddCustomContext("engines", JoinList(opts.engines));
-    benchmark::AddCustomContext("counts", JoinList(opts.counts));
+    benchmark::AddCustomContext("counts", JoinList(countsText));
     benchmark::AddCustomContext("thread_counts", JoinList(opts.threads));
     benchmark::AddCustomContext("steps", fmt::format("{}", opts.steps));
     benchmark::AddCustomContext("warmup", fmt::format("{}", opts.warmup));

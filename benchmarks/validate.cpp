@@ -1,7 +1,16 @@
 // quadrant_validate: runs the canonical validation cases on Quadrant and Box2D 2.4.1 and writes
-// DIR/validation.json and DIR/validation.md.
+// DIR/validation.json and DIR/validation.md; or, with --random N, the randomised campaign of N
+// oblique hits (benchmarks/scenes/random_hits.h) on every Quadrant solver and setting and on
+// Box2D, against Box2D and the analytic single-point impact, and writes
+// DIR/validation_random.json, DIR/validation_random.md and DIR/validation_random_hits.csv (a
+// row per hit, for the plot: tools/validation_random_plot.py).
 //
 //   quadrant_validate --out DIR [--cases a,b]
+//   quadrant_validate --out DIR --random N [--seed S] [--runs quadrant:VARIANT,...]
+//
+// --runs adds Quadrant variants (adapter names, e.g. quadrant:soft_step+sub16) to the campaign's
+// runs, reported as engine "quadrant:<solver>" and setting "<the other tokens>": how a
+// difference is traced to one modelling choice.
 //
 // The cases, their tolerances and the reasons for them live in
 // benchmarks/scenes/validation_cases.cpp, shared with tests/adapters/validation_test.cpp. Exit
@@ -16,7 +25,9 @@
 #include <vector>
 
 #include "quadrant/error.h"
+#include "random_hits.h"
 #include "report_common.h"
+#include "validate_random.h"
 #include "validation_cases.h"
 
 namespace qs = quadrant::scene;
@@ -27,10 +38,14 @@ namespace {
 struct Args {
   std::string out = ".";
   std::vector<std::string> cases = qs::ValidationCaseNames();
+  int random = 0;  ///< hits of the random campaign; 0: the canonical cases
+  uint64_t seed = 17;
+  std::vector<std::string> extraRuns;  ///< --runs: more Quadrant variants for the campaign
 };
 
 [[noreturn]] void Usage(const std::string& problem) {
-  std::cerr << "quadrant_validate: " << problem << "\nusage: quadrant_validate --out DIR [--cases a,b]\n";
+  std::cerr << "quadrant_validate: " << problem << "\nusage: quadrant_validate --out DIR [--cases a,b]\n"
+            << "       quadrant_validate --out DIR --random N [--seed S] [--runs quadrant:VARIANT,...]\n";
   std::exit(2);
 }
 
@@ -45,6 +60,16 @@ Args Parse(int argc, char** argv) {
       a.out = value;
     } else if (flag == "--cases") {
       a.cases = quadrant::report::SplitList(value);
+    } else if (flag == "--random") {
+      const std::optional<int> n = rp::ParseInt(value, 1, 1000000);
+      if (!n) Usage("--random needs a whole number of hits in [1, 1000000], got '" + value + "'");
+      a.random = *n;
+    } else if (flag == "--seed") {
+      const std::optional<int> s = rp::ParseInt(value, 0, 2147483647);
+      if (!s) Usage("--seed needs a whole number in [0, 2147483647], got '" + value + "'");
+      a.seed = uint64_t(*s);
+    } else if (flag == "--runs") {
+      a.extraRuns = rp::SplitList(value);
     } else {
       Usage("unknown option " + flag);
     }
@@ -116,6 +141,13 @@ void Write(const std::filesystem::path& path, const std::string& text) {
 
 int main(int argc, char** argv) {
   const Args args = Parse(argc, argv);
+  if (args.random > 0) {
+    try {
+      return quadrant::report::RunRandomCampaign(args.out, args.random, args.seed, args.extraRuns);
+    } catch (const quadrant::Error& e) {
+      Usage(e.what());
+    }
+  }
   std::vector<qs::ValidationResult> results;
   bool allPass = true;
   try {

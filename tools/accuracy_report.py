@@ -17,7 +17,8 @@ import math
 import os
 import sys
 
-PILES = ["vertical_stack", "pyramid", "mass_ratio_100", "mass_ratio_400"]
+PILES = ["vertical_stack", "pyramid", "mass_ratio_100", "mass_ratio_400", "tall_stack", "heavy_on_supports",
+         "heavy_on_slab"]
 STRESS = ["circle_stress", "polygon_stress"]
 
 # Per scene kind: the error columns of the tables (JSON name, heading, format) and the error the

@@ -33,7 +33,8 @@ NAME_RE = re.compile(
     r"(?:/iterations:\d+)?(?:/(?:real_time|manual_time))?(?:_(?P<aggregate>[A-Za-z0-9]+))?$"
 )
 LABEL_RE = re.compile(r"^[0-9a-f]{16}$")
-SCENE_NOUNS = {"circle_stress": "circles", "polygon_stress": "polygons"}
+SCENE_NOUNS = {"circle_stress": "circles", "polygon_stress": "polygons", "pyramid": "boxes",
+               "many_pyramids": "boxes", "tumbler": "boxes"}
 THESIS_FIGURES = {"circle_stress": "Figure 14", "polygon_stress": "Figure 15"}
 ENGINE_TITLES = {
     "quadrant": "Quadrant",
@@ -313,7 +314,8 @@ def markdown(results, source):
     for scene in results.scenes:
         noun = SCENE_NOUNS.get(scene, "bodies")
         fig = THESIS_FIGURES.get(scene)
-        out(f"## {scene}" + (f" (thesis {fig})" if fig else ""))
+        dense = ": dense; " in c.get(f"scene_{scene}", "")
+        out(f"## {scene}" + (f" (thesis {fig})" if fig else "") + (" (dense, solver-bound)" if dense else ""))
         out("")
         for n in results.counts(scene):
             out(f"### {scene}, N = {n} {noun}")

@@ -185,6 +185,43 @@ Scene MakeMassRatio(int ratio, Mixing mixing) {
   throw Error("mass ratio must be 100 or 400, got " + std::to_string(ratio));
 }
 
+Scene MakeTallStack(int count, Mixing mixing) {
+  RequireRange(count, 1, 1000, "tall stack box count");
+  Scene s = BaseScene("tall_stack");
+  // The default budget (8 velocity + 3 position iterations; soft_step 4 sub-steps): issue #13
+  // asks for Box2D 3's level at its defaults, where a 30-box stack stands.
+  const Real f = Coef(mixing, Real(0.6));
+  s.bodies.push_back(Ground({0, 0}, 50, f));
+  // Exactly touching, exactly aligned: no offset helps or hides anything.
+  for (int i = 0; i < count; ++i) s.bodies.push_back(Box({0, Real(0.5) + Real(i)}, Real(0.5), Real(0.5), true, f));
+  s.bounds = Bounds({-50, -1}, {50, Real(count) + 1});
+  return s;
+}
+
+Scene MakeHeavyOnSupports(Mixing mixing) {
+  Scene s = BaseScene("heavy_on_supports");
+  const Real f = Coef(mixing, Real(0.6));
+  s.bodies.push_back(Ground({0, 0}, 20, f));
+  // Three 1 m boxes of 1 kg at x = -9, 0, 9 under a 20 m x 2 m box of density 25: 1000 kg, 1000:1
+  // (Box2D 3's "big box on small boxes" sample has 400:1 on two).
+  for (int k = 0; k < 3; ++k) s.bodies.push_back(Box({Real(-9 + 9 * k), Real(0.5)}, Real(0.5), Real(0.5), true, f));
+  s.bodies.push_back(Box({0, 2}, 10, 1, true, f, 25));
+  s.bounds = Bounds({-20, -1}, {20, 4});
+  return s;
+}
+
+Scene MakeHeavyOnSlab(Mixing mixing) {
+  Scene s = BaseScene("heavy_on_slab");
+  const Real f = Coef(mixing, Real(0.6));
+  s.bodies.push_back(Ground({0, 0}, 20, f));
+  // A 4 m x 0.2 m slab of density 1.25 (1 kg) on the ground, and on it a 2 m box of density 250
+  // (1000 kg): one light body carries the whole heavy one, 1000:1.
+  s.bodies.push_back(Box({0, Real(0.1)}, 2, Real(0.1), true, f, Real(1.25)));
+  s.bodies.push_back(Box({0, Real(1.2)}, 1, 1, true, f, 250));
+  s.bounds = Bounds({-20, -1}, {20, 3});
+  return s;
+}
+
 Scene MakeArch(Mixing mixing) {
   Scene s = BaseScene("arch");
   const Real f = Coef(mixing, Real(0.6));

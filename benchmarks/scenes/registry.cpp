@@ -9,12 +9,13 @@ namespace quadrant::scene {
 
 std::vector<std::string> SceneNames() {
   return {"circle_stress", "polygon_stress", "circle_stress_clumped", "polygon_stress_clumped",
+          "many_pyramids", "tumbler",
           // The hard cases (hard_cases.cpp): fixed size except pyramid, where `count` is the
           // number of boxes and the base the largest b with b (b + 1) / 2 <= count (210 -> base
           // 20, 5050 -> base 100).
           "vertical_stack", "pyramid", "mass_ratio_100", "mass_ratio_400", "arch", "card_house",
           "friction_ramp", "restitution_drop", "overlap_recovery", "confined", "far_from_origin",
-          "newtons_cradle"};
+          "newtons_cradle", "tall_stack", "heavy_on_supports", "heavy_on_slab"};
 }
 
 Scene MakeScene(std::string_view name, int count, uint64_t seed) {
@@ -35,6 +36,8 @@ Scene MakeScene(std::string_view name, int count, uint64_t seed) {
     while (int64_t(base + 1) * (base + 2) / 2 <= count) ++base;
     return MakePyramid(base);
   }
+  if (name == "many_pyramids") return MakeManyPyramids(count);
+  if (name == "tumbler") return MakeTumbler(count);
   if (name == "vertical_stack") return MakeVerticalStack();
   if (name == "mass_ratio_100") return MakeMassRatio(100);
   if (name == "mass_ratio_400") return MakeMassRatio(400);
@@ -46,9 +49,31 @@ Scene MakeScene(std::string_view name, int count, uint64_t seed) {
   if (name == "confined") return MakeConfined(25, seed);
   if (name == "far_from_origin") return MakeFarFromOrigin();
   if (name == "newtons_cradle") return MakeNewtonsCradle();
+  if (name == "tall_stack") return MakeTallStack();
+  if (name == "heavy_on_supports") return MakeHeavyOnSupports();
+  if (name == "heavy_on_slab") return MakeHeavyOnSlab();
   std::string known;
   for (const std::string& n : SceneNames()) known += (known.empty() ? "" : ", ") + n;
   throw Error("unknown scene '" + std::string(name) + "' (known: " + known + ")");
+}
+
+bool IsDenseScene(std::string_view name) {
+  return name == "pyramid" || name == "many_pyramids" || name == "tumbler";
+}
+
+std::vector<std::string> DefaultBenchScenes() {
+  return {"circle_stress", "polygon_stress", "pyramid", "many_pyramids", "tumbler"};
+}
+
+std::vector<int> DefaultBenchCounts(std::string_view name) {
+  if (name.starts_with("circle_stress") || name.starts_with("polygon_stress")) return {1000, 2000, 4000, 8000, 16000};
+  // Dense scenes cost 3-10x more per body than the stress scenes (every body in contact), and
+  // Bullet and Box2D 2.4 are single-threaded: two sizes each, the larger one Box2D 3's own for
+  // the pyramid (base 100) and tumbler (45 x 45), a quarter of its 22000 for many_pyramids.
+  if (name == "pyramid") return {1275, 5050};
+  if (name == "many_pyramids") return {1375, 5500};
+  if (name == "tumbler") return {1024, 2025};
+  throw Error("no default bench counts for scene '" + std::string(name) + "'");
 }
 
 }  // namespace quadrant::scene

@@ -31,8 +31,34 @@ struct StressParams {
 /// outside (0, 0.9), min > max, non-finite values).
 Scene MakeStressScene(const StressParams& params);
 
-/// Scene names known to the suite: "circle_stress", "polygon_stress" (and later more).
+// ---- Dense, solver-bound scenes (dense.cpp; `pyramid` is the third) ------------------------
+
+/// Box2D 3's "many pyramids": `count` 1 m boxes (rounded down to a multiple of 55, at least 55) as
+/// base-10 pyramids of touching boxes, in a near-square grid of rows, each row on its own thin
+/// static shelf 11 m above the one below; friction 0.6, gravity, 8/3 iterations, no sleep.
+/// Bodies: the shelves bottom to top, then the pyramids row by row. Box2D 3 runs 22000.
+Scene MakeManyPyramids(int count);
+/// Box2D 3's "tumbler": four kinematic 1 m thick walls of a 20 m square centred at (0, 10),
+/// turned at 25 degrees per second by the scene's driver (bodies 0..3), and `count` 0.25 m boxes
+/// (1 <= count <= 2116) on a 0.4 m grid inside; friction 0.6, gravity, 8/3 iterations, no sleep.
+/// Box2D 3 runs 2025 (45 x 45). Engines without kinematic bodies driven by velocity (Bullet)
+/// report it unsupported.
+Scene MakeTumbler(int count);
+
+/// Scene names known to the suite: the stress scenes, the dense scenes and the hard cases.
 std::vector<std::string> SceneNames();
+
+/// Whether `name` is a dense, solver-bound scene (pyramid, many_pyramids, tumbler) rather than a
+/// sparse one (the stress scenes: about 4 % of the bodies touch at any moment).
+bool IsDenseScene(std::string_view name);
+
+/// The scenes `tools/quadrant bench` runs by default, sparse then dense.
+std::vector<std::string> DefaultBenchScenes();
+
+/// The body counts `tools/quadrant bench` runs `name` at when --counts is not given: 1000..16000
+/// for the stress scenes, sizes of their own for the dense ones (chosen so the dense scenes add a
+/// few minutes to the default run). Throws quadrant::Error for a scene the suite does not bench.
+std::vector<int> DefaultBenchCounts(std::string_view name);
 
 /// Builds a named scene with `count` bodies (ignored by fixed-size scenes) and a seed.
 /// Throws quadrant::Error for unknown names or bad counts.
@@ -71,6 +97,16 @@ Scene MakePyramidField(int pyramids, int base, Mixing mixing = Mixing::kBox2d);
 /// on its apex. ratio 400: ground, two 1 m boxes (1 kg) at x = -9 and 9, then a 20 m x 1 m plank
 /// of 400 kg (density 20) on them. Friction 0.6. Throws quadrant::Error for other ratios.
 Scene MakeMassRatio(int ratio, Mixing mixing = Mixing::kBox2d);
+/// Issue #13's stability cases, at the default budget (8 velocity + 3 position iterations):
+/// ground (100 m wide), then `count` 1 m boxes bottom to top, exactly touching and exactly aligned
+/// (centres at x = 0, y = 0.5 + i; friction 0.6). The last body is the top box.
+Scene MakeTallStack(int count = 30, Mixing mixing = Mixing::kBox2d);
+/// Ground, then three 1 m boxes of 1 kg at x = -9, 0, 9, then a 20 m x 2 m box of 1000 kg
+/// (density 25) resting on them: 1000:1 on several supports. Friction 0.6.
+Scene MakeHeavyOnSupports(Mixing mixing = Mixing::kBox2d);
+/// Ground, then a 4 m x 0.2 m slab of 1 kg (density 1.25) on it, then a 2 m box of 1000 kg
+/// (density 250) on the slab: 1000:1 on a single light body. Friction 0.6.
+Scene MakeHeavyOnSlab(Mixing mixing = Mixing::kBox2d);
 /// Ground, then 17 voussoirs of a semicircular arch (inner radius 4 m, outer 5 m, centre on the
 /// ground at the origin, radial joints every pi/17), left to right; friction 0.6.
 Scene MakeArch(Mixing mixing = Mixing::kBox2d);
@@ -114,5 +150,9 @@ class Random {
  private:
   uint64_t state_;
 };
+
+/// A random convex polygon of 3..8 vertices on a circle of `circumradius`, counter-clockwise,
+/// centred on its centroid (the stress scenes' polygons; also the random validation hits').
+std::vector<Vec2> RandomConvexPolygon(Random& rng, Real circumradius);
 
 }  // namespace quadrant::scene

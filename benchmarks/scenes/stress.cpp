@@ -14,9 +14,12 @@ void Check(bool ok, const std::string& message) {
   if (!ok) throw Error("stress scene: " + message);
 }
 
+
+}  // namespace
+
 // A random convex polygon: 3..8 vertices at sorted random angles on a circle, with each gap
 // between consecutive angles at least a fifth of the even spacing so no edge degenerates.
-std::vector<Vec2> RandomPolygon(Random& rng, Real circumradius) {
+std::vector<Vec2> RandomConvexPolygon(Random& rng, Real circumradius) {
   const int n = rng.UniformInt(3, 8);
   const double even = 2 * std::numbers::pi / n;
   const double minGap = 0.2 * even;
@@ -42,8 +45,6 @@ std::vector<Vec2> RandomPolygon(Random& rng, Real circumradius) {
   for (int i = 0; i < hull.count; ++i) out[i] = hull.vertices[i] - hull.centroid;
   return out;
 }
-
-}  // namespace
 
 Scene MakeStressScene(const StressParams& p) {
   Check(p.count > 0, "body count must be > 0, got " + std::to_string(p.count));
@@ -86,7 +87,7 @@ Scene MakeStressScene(const StressParams& p) {
     } else {
       b.shape = ShapeKind::kPolygon;
       const Real r = Real(rng.Uniform(p.minCircumradius, p.maxCircumradius));
-      b.vertices = RandomPolygon(rng, r);
+      b.vertices = RandomConvexPolygon(rng, r);
       area += ComputeArea(MakePolygon(b.vertices));
       maxExtent = std::max(maxExtent, 2.0 * r);
     }

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "integrate.h"
+#include "restitution_policy.h"
 #include "solver.h"
 #include "stage_clock.h"
 
@@ -29,6 +30,7 @@ struct PointConstraint {
   Real separation;        // at collision time
   Real bounceShift;       // early-bounce correction (m) applied after integration, 0 if none
   Real collisionImpulse;  // normal impulse of this step's collisions (pgs), not warm-started
+  Real restitutionBias;   // RestitutionPolicy::kBox2d: the row's target velocity (m/s), else 0
 };
 
 struct ContactConstraint {
@@ -160,6 +162,10 @@ class ContactSolverBase : public Solver {
       cc.invIA = kRotation ? bodies.inv[cc.a].invInertia : Real(0);
       cc.invIB = kRotation ? bodies.inv[cc.b].invInertia : Real(0);
       cc.pointCount = contact.manifold.pointCount;
+      // Shapes are read only with a skin: the quadrants scheme's private body copies carry none.
+      const Real skin = ctx.def->polygonSkin > 0 ? PolygonSkin(*ctx.def, bodies.shape[cc.a].type == ShapeType::kPolygon,
+                                                               bodies.shape[cc.b].type == ShapeType::kPolygon)
+                                                 : Real(0);
       const Vec2 n = cc.normal;
       const Vec2 t = RightPerp(n);
       for (int k = 0; k < cc.pointCount; ++k) {
@@ -180,8 +186,15 @@ class ContactSolverBase : public Solver {
         pc.normalImpulse = mp.normalImpulse;
         pc.tangentImpulse = mp.tangentImpulse;
         pc.collisionImpulse = 0;
-        pc.separation = mp.separation;
+        pc.separation = mp.separation - skin;
         pc.bounceShift = 0;
+        pc.restitutionBias = 0;
+        if (ctx.def->restitution == RestitutionPolicy::kBox2d && ctx.def->effects.restitution) {
+          const BodyVelocity& va = bodies.vel[cc.a];
+          const BodyVelocity& vb = bodies.vel[cc.b];
+          const Real vn = Dot(RelativeVelocity<kRotation>(va, vb, pc), n);
+          pc.restitutionBias = Box2dRestitutionBias(cc.restitution, ctx.def->restitutionThreshold, vn, pc.separation);
+        }
       }
       cc.k12 = 0;
       cc.block = false;

@@ -56,7 +56,8 @@ class PgsSolver final : public ContactSolverBase {
     run.For(Stage::kSolve, m, run.MinHeavyItems(), [&](int b, int e, int) { Prepare<kRotation>(ctx, b, e); });
     if (def.effects.warmStarting) ForEachColor(run, [&](int b, int e) { WarmStart<kRotation>(bodies, b, e); });
     const Real invDt = Real(1) / dt;
-    if (def.effects.restitution) ApplyCollisionPasses<kRotation>(run, bodies, def, invDt, Vec2{});
+    const bool collisions = def.effects.restitution && def.restitution == RestitutionPolicy::kCollisions;
+    if (collisions) ApplyCollisionPasses<kRotation>(run, bodies, def, invDt, Vec2{});
     for (int it = 0; it < def.velocityIterations; ++it) {
       ForEachColor(run, [&](int b, int e) { SolveVelocities<kRotation, kFriction>(bodies, invDt, b, e); });
     }
@@ -66,7 +67,7 @@ class PgsSolver final : public ContactSolverBase {
     const bool correct = def.positionIterations > 0 && m > 0;
     if (correct) SnapshotPositions(run, bodies);
     IntegratePositions(bodies, def, dt, run);
-    if (def.effects.restitution && m > 0) ForEachColor(run, [&](int b, int e) { ApplyBounceShifts(bodies, b, e); });
+    if (collisions && m > 0) ForEachColor(run, [&](int b, int e) { ApplyBounceShifts(bodies, b, e); });
     auto t3 = Clock::now();
     if (correct) CorrectPositions<kRotation>(run, bodies, def, def.linearSlop, def.positionIterations);
     auto t4 = Clock::now();
@@ -107,9 +108,10 @@ class PgsSolver final : public ContactSolverBase {
         for (int k = 0; k < cc.pointCount; ++k) {
           PointConstraint& pc = cc.points[k];
           const Real vn = Dot(RelativeVelocity<kRotation>(va, vb, pc), n);
-          // Speculative: a gap s may close this step, no more (target vn >= -s/dt).
-          const Real gap = pc.separation > 0 ? pc.separation * invDt : Real(0);
-          const Real newImpulse = std::max(pc.normalImpulse - pc.normalMass * (vn + gap), Real(0));
+          // Speculative: a gap s may close this step, no more (target vn >= -s/dt); or the
+          // restitution bias of RestitutionPolicy::kBox2d (restitution_policy.h).
+          const Real offset = NormalRowOffset(pc.separation, pc.restitutionBias, invDt);
+          const Real newImpulse = std::max(pc.normalImpulse - pc.normalMass * (vn + offset), Real(0));
           const Real lambda = newImpulse - pc.normalImpulse;
           pc.normalImpulse = newImpulse;
           apply(pc, lambda * n);
@@ -137,8 +139,8 @@ class PgsSolver final : public ContactSolverBase {
     const Vec2 n = cc.normal;
     const Real k11 = Real(1) / p0.normalMass, k22 = Real(1) / p1.normalMass, k12 = cc.k12;
     const Real a0 = p0.normalImpulse, a1 = p1.normalImpulse;
-    const Real gap0 = p0.separation > 0 ? p0.separation * invDt : Real(0);
-    const Real gap1 = p1.separation > 0 ? p1.separation * invDt : Real(0);
+    const Real gap0 = NormalRowOffset(p0.separation, p0.restitutionBias, invDt);
+    const Real gap1 = NormalRowOffset(p1.separation, p1.restitutionBias, invDt);
     // b = current velocity (plus allowed gap closing) minus what the accumulated impulses did.
     const Real b0 = Dot(RelativeVelocity<kRotation>(va, vb, p0), n) + gap0 - (k11 * a0 + k12 * a1);
     const Real b1 = Dot(RelativeVelocity<kRotation>(va, vb, p1), n) + gap1 - (k12 * a0 + k22 * a1);

@@ -238,6 +238,7 @@ class SoftStepSolver final : public ContactSolverBase {
               }
               p.normalImpulse[lane] = pc.normalImpulse;
               p.tangentImpulse[lane] = pc.tangentImpulse;
+              p.collisionImpulse[lane] = pc.collisionImpulse;
             }
           }
         }
@@ -250,6 +251,7 @@ class SoftStepSolver final : public ContactSolverBase {
     p.separation[lane] = kPadSeparation;
     p.normalMass[lane] = p.tangentMass[lane] = 0;
     p.normalImpulse[lane] = p.tangentImpulse[lane] = 0;
+    p.collisionImpulse[lane] = 0;
   }
 
   // A row that touches nothing: inverse masses 0, so it writes no body. It reads the bodies of

@@ -36,6 +36,15 @@ void ValidateWorldDef(const WorldDef& d) {
           "WorldDef.speculativeDistance must be finite and >= 0");
   Require(IsFinite(d.restitutionThreshold) && d.restitutionThreshold >= 0,
           "WorldDef.restitutionThreshold must be finite and >= 0");
+  Require(d.restitution == RestitutionPolicy::kCollisions || d.restitution == RestitutionPolicy::kBox2d,
+          "WorldDef.restitution is unknown");
+  Require(d.restitution == RestitutionPolicy::kCollisions || d.solver == SolverType::kPgs,
+          "WorldDef.restitution = kBox2d needs SolverType::kPgs");
+  Require(IsFinite(d.polygonSkin) && d.polygonSkin >= 0 && 2 * d.polygonSkin <= d.speculativeDistance,
+          "WorldDef.polygonSkin must be in [0, speculativeDistance / 2]");
+  // The quadrants scheme solves private copies of its bodies without their shapes (quadrants_scheme.cpp).
+  Require(d.polygonSkin == 0 || d.scheme == ParallelScheme::kDeterministic,
+          "WorldDef.polygonSkin > 0 is not supported with ParallelScheme::kQuadrants (use kDeterministic)");
   Require(IsFinite(d.maxLinearSpeed) && d.maxLinearSpeed > 0, "WorldDef.maxLinearSpeed must be > 0");
   Require(IsFinite(d.maxRotation) && d.maxRotation > 0, "WorldDef.maxRotation must be > 0");
   Require(d.threadCount >= 1 && d.threadCount <= kMaxThreads, "WorldDef.threadCount must be in [1, 64]");

@@ -36,11 +36,25 @@ void ExpectPasses(const std::string& name, const std::string& engine) {
   EXPECT_TRUE(r.pass) << Describe(r);
 }
 
+// The cases the default engine must pass (all but heavy_on_slab, see RequiredOfDefaultEngine).
+std::vector<std::string> RequiredCases() {
+  std::vector<std::string> out;
+  for (const std::string& name : HardCaseNames()) {
+    if (RequiredOfDefaultEngine(name)) out.push_back(name);
+  }
+  return out;
+}
+
+// Issue #13's tall_stack and heavy_on_supports (default budget, Box2D 3's levels) fail on the
+// pgs and soft_step solvers of c70fd1b (measured: the 30-stack's top moves 15.8 m with pgs and
+// 0.127 m with soft_step, limit 0.05 m; the 1000 kg box sinks 0.197 m with pgs, limit 0.15 m,
+// and slides 0.27 m with soft_step, limit 0.1 m). They are in this list because the solver
+// rewrite of issue #13 (branch feat/solver) is to make them pass.
 class QuadrantHardCase : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(QuadrantHardCase, Passes) { ExpectPasses(GetParam(), "quadrant"); }
 
-INSTANTIATE_TEST_SUITE_P(All, QuadrantHardCase, ::testing::ValuesIn(HardCaseNames()),
+INSTANTIATE_TEST_SUITE_P(All, QuadrantHardCase, ::testing::ValuesIn(RequiredCases()),
                          [](const ::testing::TestParamInfo<std::string>& info) { return info.param; });
 
 // The soft step solver (Box2D 3's family, 4 sub-steps at the scenes' default budget; the adapter
@@ -53,7 +67,7 @@ class QuadrantSoftStepHardCase : public ::testing::TestWithParam<std::string> {}
 
 TEST_P(QuadrantSoftStepHardCase, Passes) { ExpectPasses(GetParam(), "quadrant:soft_step"); }
 
-INSTANTIATE_TEST_SUITE_P(All, QuadrantSoftStepHardCase, ::testing::ValuesIn(HardCaseNames()),
+INSTANTIATE_TEST_SUITE_P(All, QuadrantSoftStepHardCase, ::testing::ValuesIn(RequiredCases()),
                          [](const ::testing::TestParamInfo<std::string>& info) { return info.param; });
 
 double Figure(const HardCaseResult& r, const std::string& name) {
@@ -80,7 +94,9 @@ TEST(HardCases, SoftStepHoldsHeavyBodiesAtDefaultSubSteps) {
 
 TEST(HardCases, NamesAndRegistry) {
   const std::vector<std::string> cases = HardCaseNames();
-  EXPECT_EQ(cases.size(), 13u);
+  EXPECT_EQ(cases.size(), 16u);
+  EXPECT_FALSE(RequiredOfDefaultEngine("heavy_on_slab"));
+  EXPECT_TRUE(RequiredOfDefaultEngine("tall_stack"));
   // Every hard-case scene is in the registry under its case name (the soak is polygon_stress).
   const std::vector<std::string> scenes = SceneNames();
   for (const std::string& c : cases) {
@@ -99,7 +115,8 @@ TEST(HardCases, ScenesAreValidUnderBothMixingRules) {
     for (const Scene& s : {MakeVerticalStack(15, m), MakePyramid(20, {}, m), MakeMassRatio(100, m),
                            MakeMassRatio(400, m), MakeArch(m), MakeCardHouse(5, m), MakeFrictionRamp(m),
                            MakeRestitutionDrop(m), MakeOverlapRecovery(10, m), MakeConfined(25, 42, m),
-                           MakeFarFromOrigin(m), MakeNewtonsCradle(m)}) {
+                           MakeFarFromOrigin(m), MakeNewtonsCradle(m), MakeTallStack(30, m),
+                           MakeHeavyOnSupports(m), MakeHeavyOnSlab(m)}) {
       EXPECT_NO_THROW(ValidateScene(s)) << s.name;
       EXPECT_EQ(s.timeStep, Real(1.0 / 60.0)) << s.name;
       // Box2D 2.4's defaults (8/3), except the cases that state the solver budget they need
@@ -136,6 +153,19 @@ TEST(HardCases, BuildersKeepTheirContracts) {
   // Mass ratios: 100 kg on 1 kg boxes, 400 kg on two 1 kg boxes.
   EXPECT_NEAR(ComputeMassProperties(MakeMassRatio(100).bodies.back()).mass, 100, 1e-3);
   EXPECT_NEAR(ComputeMassProperties(MakeMassRatio(400).bodies.back()).mass, 400, 1e-2);
+  // Issue #13's cases: 30 aligned boxes, the top last; 1000 kg on 1 kg bodies.
+  const Scene tall = MakeTallStack();
+  ASSERT_EQ(tall.bodies.size(), 1u + 30u);
+  EXPECT_EQ(tall.bodies.back().position.x, 0);
+  EXPECT_NEAR(tall.bodies.back().position.y, 29.5, 1e-5);
+  const Scene supports = MakeHeavyOnSupports();
+  ASSERT_EQ(supports.bodies.size(), 1u + 3u + 1u);
+  EXPECT_NEAR(ComputeMassProperties(supports.bodies.back()).mass, 1000, 1e-2);
+  EXPECT_NEAR(ComputeMassProperties(supports.bodies[1]).mass, 1, 1e-5);
+  const Scene slab = MakeHeavyOnSlab();
+  ASSERT_EQ(slab.bodies.size(), 3u);
+  EXPECT_NEAR(ComputeMassProperties(slab.bodies[1]).mass, 1, 1e-5);
+  EXPECT_NEAR(ComputeMassProperties(slab.bodies[2]).mass, 1000, 1e-2);
 }
 
 TEST(HardCases, MaterialsMixToTheIntendedCoefficients) {
@@ -172,6 +202,9 @@ TEST(HardCases, SpawnGeometry) {
   EXPECT_LT(pen(MakeCardHouse(5)), 1e-5);
   EXPECT_LT(pen(MakeFrictionRamp()), 1e-5);
   EXPECT_LT(pen(MakeNewtonsCradle()), 1e-5);
+  EXPECT_LT(pen(MakeTallStack()), 1e-5);
+  EXPECT_LT(pen(MakeHeavyOnSupports()), 1e-5);
+  EXPECT_LT(pen(MakeHeavyOnSlab()), 1e-5);
   EXPECT_NEAR(pen(MakeOverlapRecovery(10)), 0.25, 1e-5);
   EXPECT_NEAR(pen(MakeConfined()), 0.24, 0.01);  // 0.2 m on the grid, up to 0.04 m more from jitter
 }

@@ -47,10 +47,28 @@ WorldDef DefFor(const scene::Scene& s, int threads, int grain) {
   return def;
 }
 
+// Whether the last Step ran a section on more than one worker (its work then exceeds its
+// critical path; a serial section adds the same to both).
+bool ParallelSectionRan(const Profile& profile) {
+  for (const StageBalance& b : profile.balance) {
+    if (b.workMs > b.criticalMs) return true;
+  }
+  return false;
+}
+
+// The state hash after `steps` steps. With more than one thread it also checks that parallel
+// sections really ran, so a determinism test cannot pass by comparing serial with serial.
 uint64_t HashAfter(const scene::Scene& s, int threads, int grain, int steps) {
   World world(DefFor(s, threads, grain));
   Load(world, s);
-  for (int i = 0; i < steps; ++i) world.Step(kDt);
+  int parallelSteps = 0;
+  for (int i = 0; i < steps; ++i) {
+    world.Step(kDt);
+    parallelSteps += ParallelSectionRan(world.GetProfile()) ? 1 : 0;
+  }
+  if (threads > 1 && grain < 2048) {
+    EXPECT_GT(parallelSteps, 0) << threads << " threads, grain " << grain << ": no section ran in parallel";
+  }
   return world.StateHash();
 }
 
@@ -102,7 +120,9 @@ TEST(DeterministicSchemeTest, GrainDoesNotChangeTheResult) {
 TEST(DeterministicSchemeTest, AdapterHashMatchesWorldHashAndBenchmarkPath) {
   // The benchmark's label is the adapter's StateHash after warm-up + timed steps; the same
   // scene, steps and threads through the adapter must give the same hash at 1 and 3 threads.
-  const scene::Scene s = scene::MakeScene("circle_stress", 2000, 42);
+  // 4000 bodies: above the default grain of 2048 items, so the adapter's world (which keeps the
+  // default) runs its sections in parallel at 3 threads (checked from its stage totals).
+  const scene::Scene s = scene::MakeScene("circle_stress", 4000, 42);
   uint64_t hashes[2];
   const int threads[2] = {1, 3};
   for (int k = 0; k < 2; ++k) {
@@ -110,6 +130,14 @@ TEST(DeterministicSchemeTest, AdapterHashMatchesWorldHashAndBenchmarkPath) {
     adapter->Load(s, threads[k]);
     for (int i = 0; i < 150; ++i) adapter->Step();
     hashes[k] = adapter->StateHash();
+    if (threads[k] > 1) {
+      double work = 0, critical = 0;
+      for (const auto& [name, ms] : adapter->StageTotals()) {
+        if (name.starts_with("work_")) work += ms;
+        if (name.starts_with("critical_")) critical += ms;
+      }
+      EXPECT_GT(work, critical) << "no section ran in parallel";
+    }
   }
   EXPECT_EQ(hashes[0], hashes[1]);
 }

@@ -193,9 +193,14 @@ TEST(DeterministicSchemeSleep, StateHashIsThreadCountInvariant) {
     World world(def);
     const std::vector<BodyId> boxes = AddPyramid(world, 8);
     maxAsleep = 0;
+    int parallelSteps = 0;
     for (int s = 0; s < 240; ++s) {
       world.Step(kDt);
       maxAsleep = std::max(maxAsleep, int(boxes.size()) - AwakeCount(world, boxes));
+      parallelSteps += ParallelSectionRan(world.GetProfile()) ? 1 : 0;
+    }
+    if (threads > 1) {
+      EXPECT_GT(parallelSteps, 0) << threads << " threads: no section ran in parallel";
     }
     AddCircle(world, {-8, Real(0.5)}, Real(0.5), {12, 0}, 5);  // wakes the pile
     StepN(world, 120);

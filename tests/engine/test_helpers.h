@@ -65,6 +65,16 @@ inline BodyId AddCircle(World& world, Vec2 position, Real radius = Real(0.5), Ve
   return world.CreateBody(def);
 }
 
+/// Whether the last Step ran at least one section on more than one worker: a parallel section
+/// adds every worker's time to a stage's work but only the largest share to its critical path,
+/// so work exceeds critical path exactly when one ran (serial sections add the same to both).
+inline bool ParallelSectionRan(const Profile& profile) {
+  for (const StageBalance& b : profile.balance) {
+    if (b.workMs > b.criticalMs) return true;
+  }
+  return false;
+}
+
 inline void StepN(World& world, int n, Real dt = kDt) {
   for (int i = 0; i < n; ++i) world.Step(dt);
 }

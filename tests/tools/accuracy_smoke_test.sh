@@ -35,7 +35,8 @@ echo "== quadrant_accuracy --quick"
 import json, sys
 d = json.load(open(sys.argv[1]))
 runs = d["runs"]
-scenes = {"vertical_stack", "pyramid", "mass_ratio_100", "mass_ratio_400", "circle_stress", "polygon_stress"}
+scenes = {"vertical_stack", "pyramid", "mass_ratio_100", "mass_ratio_400", "tall_stack", "heavy_on_supports",
+          "heavy_on_slab", "circle_stress", "polygon_stress"}
 engines = {"quadrant", "box2d", "bullet", "chipmunk"}
 assert {r["scene"] for r in runs} == scenes, {r["scene"] for r in runs}
 assert {r["engine"] for r in runs} == engines, {r["engine"] for r in runs}

@@ -1,0 +1,110 @@
+// The dense, solver-bound scenes (benchmarks/scenes/dense.cpp): builders keep their contracts,
+// every engine runs them or says it cannot, and the tumbler's kinematic walls turn as a rigid
+// square in every engine that runs it.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <string>
+#include <vector>
+
+#include "adapter.h"
+#include "quadrant/error.h"
+#include "scenes.h"
+
+namespace quadrant::scene {
+namespace {
+
+TEST(DenseScenes, ManyPyramidsLayout) {
+  const Scene s = MakeManyPyramids(5500);  // 100 pyramids: 10 rows of 10, 10 shelves
+  EXPECT_EQ(s.name, "many_pyramids");
+  ASSERT_EQ(s.bodies.size(), 10u + 5500u);
+  int shelves = 0;
+  for (const BodyDesc& b : s.bodies) shelves += b.dynamic ? 0 : 1;
+  EXPECT_EQ(shelves, 10);
+  EXPECT_NO_THROW(ValidateScene(s));
+  EXPECT_EQ(MakeManyPyramids(5540).bodies.size(), 10u + 5500u);  // rounds down to whole pyramids
+  EXPECT_EQ(MakeManyPyramids(55).bodies.size(), 1u + 55u);
+  EXPECT_THROW(MakeManyPyramids(54), Error);
+  EXPECT_FALSE(s.effects.sleep);
+  EXPECT_EQ(s.velocityIterations, 8);
+}
+
+TEST(DenseScenes, TumblerLayout) {
+  const Scene s = MakeTumbler(2025);
+  ASSERT_EQ(s.bodies.size(), 4u + 2025u);
+  for (int k = 0; k < 4; ++k) {
+    EXPECT_FALSE(s.bodies[k].dynamic);
+    EXPECT_TRUE(s.bodies[k].kinematic);
+  }
+  EXPECT_TRUE(bool(s.driver));
+  EXPECT_NO_THROW(ValidateScene(s));
+  // Every box starts strictly inside the walls' inner faces (|x|, |y - 10| < 9.5).
+  for (size_t i = 4; i < s.bodies.size(); ++i) {
+    EXPECT_LT(std::abs(double(s.bodies[i].position.x)) + 0.125, 9.5);
+    EXPECT_LT(std::abs(double(s.bodies[i].position.y) - 10) + 0.125, 9.5);
+  }
+  EXPECT_NO_THROW(MakeTumbler(46 * 46));
+  EXPECT_THROW(MakeTumbler(46 * 46 + 1), Error);
+  EXPECT_THROW(MakeTumbler(0), Error);
+  // A body cannot be both dynamic and kinematic.
+  Scene bad = s;
+  bad.bodies[0].dynamic = true;
+  EXPECT_THROW(ValidateScene(bad), Error);
+}
+
+TEST(DenseScenes, RegistryAndBenchDefaults) {
+  for (const std::string& name : DefaultBenchScenes()) {
+    const std::vector<int> counts = DefaultBenchCounts(name);
+    ASSERT_FALSE(counts.empty()) << name;
+    EXPECT_NO_THROW(ValidateScene(MakeScene(name, counts.front()))) << name;
+  }
+  EXPECT_TRUE(IsDenseScene("pyramid"));
+  EXPECT_TRUE(IsDenseScene("many_pyramids"));
+  EXPECT_TRUE(IsDenseScene("tumbler"));
+  EXPECT_FALSE(IsDenseScene("circle_stress"));
+  EXPECT_THROW(DefaultBenchCounts("newtons_cradle"), Error);
+  EXPECT_EQ(MakeScene("tumbler", 2025).bodies.size(), 4u + 2025u);
+  EXPECT_EQ(MakeScene("many_pyramids", 22000).bodies.size(), 20u + 22000u);  // Box2D 3's size
+}
+
+// After 2 s the walls are where a rigid rotation of 25 deg/s about (0, 10) puts them (the driver
+// moves each along chords of its circle), and no box has left the square.
+void ExpectTumbles(const std::string& engine) {
+  SCOPED_TRACE(engine);
+  const Scene s = MakeTumbler(400);
+  auto adapter = MakeAdapter(engine);
+  adapter->Load(s, 1);
+  const int steps = 120;
+  for (int i = 0; i < steps; ++i) adapter->Step();
+  std::vector<BodyState> st;
+  adapter->ReadBodies(st);
+  const double a = 25.0 * std::numbers::pi / 180.0 * steps / 60.0;
+  const double offsets[4][2] = {{10, 0}, {-10, 0}, {0, 10}, {0, -10}};
+  for (int k = 0; k < 4; ++k) {
+    const double x = std::cos(a) * offsets[k][0] - std::sin(a) * offsets[k][1];
+    const double y = 10 + std::sin(a) * offsets[k][0] + std::cos(a) * offsets[k][1];
+    EXPECT_NEAR(double(st[k].position.x), x, 1e-3) << "wall " << k;
+    EXPECT_NEAR(double(st[k].position.y), y, 1e-3) << "wall " << k;
+    EXPECT_NEAR(double(st[k].angle), a, 1e-3) << "wall " << k;
+  }
+  int outside = 0;
+  for (size_t i = 4; i < st.size(); ++i) {
+    if (std::hypot(double(st[i].position.x), double(st[i].position.y) - 10) > 10 * std::sqrt(2.0)) ++outside;
+  }
+  EXPECT_EQ(outside, 0);
+  EXPECT_GT(adapter->ContactCount(), 400);  // a dense pile: more contacts than boxes
+}
+
+TEST(DenseScenes, TumblerTurnsInEveryEngineThatRunsIt) {
+  ExpectTumbles("quadrant");
+  ExpectTumbles("quadrant:soft_step");
+  ExpectTumbles("box2d");
+  ExpectTumbles("chipmunk");
+  // Bullet moves kinematic bodies by transform, not velocity: it says so instead of running.
+  auto bullet = MakeAdapter("bullet");
+  EXPECT_THROW(bullet->Load(MakeTumbler(16), 1), Unsupported);
+}
+
+}  // namespace
+}  // namespace quadrant::scene

@@ -1,0 +1,120 @@
+// The random validation campaign (benchmarks/scenes/random_hits.cpp) on a fixed sample: 300 hits
+// of seed 17 (under a second in a release build), the same code tools/quadrant validate --random
+// runs. Bounds are the committed campaign's figures on this sample (README "validation") with a
+// margin of about a third, so a solver change that moves responses away from Box2D or from the
+// analytic impact fails here; the Box2D-compatible setting must stay below 1 % (issue #17).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+#include "quadrant/error.h"
+#include "quadrant/world.h"
+#include "random_hits.h"
+
+namespace quadrant::scene {
+namespace {
+
+const Campaign& Sample() {
+  static const Campaign c = RunCampaign(17, 300, DefaultCampaignRuns());
+  return c;
+}
+
+const CampaignRow& Find(const std::vector<CampaignRow>& rows, const std::string& cls, const std::string& engine,
+                        const std::string& setting) {
+  for (const CampaignRow& r : rows) {
+    if (r.cls == cls && r.engine == engine && r.setting == setting) return r;
+  }
+  throw Error("no row " + cls + " / " + engine + " / " + setting);
+}
+
+TEST(RandomHits, HitsAreSeededAndStartInContactApproaching) {
+  for (int i = 0; i < 50; ++i) {
+    const RandomHit a = MakeRandomHit(17, i), b = MakeRandomHit(17, i);
+    EXPECT_EQ(a.scene.bodies[0].position, b.scene.bodies[0].position);
+    EXPECT_GE(a.speed, 2);
+    EXPECT_LE(a.speed, 8);
+    EXPECT_GE(a.massRatio, 1);
+    EXPECT_LE(a.massRatio, 100);
+    const ImpactResult r = AnalyticHit(a);
+    EXPECT_GE(r.approachSpeed, 1.25 - 1e-4) << "hit " << i << " must approach above the 1 m/s threshold";
+  }
+  EXPECT_NE(MakeRandomHit(17, 0).scene.bodies[0].position, MakeRandomHit(18, 0).scene.bodies[0].position);
+}
+
+TEST(RandomHits, BadCampaignsAreRefused) {
+  EXPECT_THROW(RunCampaign(17, 0, DefaultCampaignRuns()), Error);
+  EXPECT_THROW(RunCampaign(17, 5, {{"quadrant:pgs", "default", "quadrant:pgs"}}), Error);
+}
+
+TEST(RandomHits, Box2dCompatibleSettingStaysBelowOnePercent) {
+  const std::vector<CampaignRow> rows = Sample().Box2dRows();
+  const CampaignRow& compat = Find(rows, "all", "quadrant:pgs", "box2d_restitution+skin");
+  EXPECT_EQ(compat.n, 300);
+  EXPECT_LT(compat.p90, 0.01);
+  // Restitution alone already brings the whole campaign below 1 %; the skin removes the polygon
+  // classes that stay above 5 % without it.
+  EXPECT_LT(Find(rows, "all", "quadrant:pgs", "box2d_restitution").p90, 0.012);
+  for (const char* cls : {"polygon-polygon e=0", "polygon-polygon e=0.5", "polygon-polygon e=1", "circle-polygon e=0",
+                          "circle-polygon e=0.5", "circle-polygon e=1", "circle-circle e=0", "circle-circle e=0.5",
+                          "circle-circle e=1"}) {
+    // About 33 hits per class here: the 2000-hit campaign has every class below 2.1 %.
+    EXPECT_LT(Find(rows, cls, "quadrant:pgs", "box2d_restitution+skin").p90, 0.1) << cls;
+  }
+}
+
+TEST(RandomHits, EverySolverWithinItsBoundOfBox2d) {
+  const std::vector<CampaignRow> rows = Sample().Box2dRows();
+  EXPECT_LT(Find(rows, "all", "quadrant:pgs", "default").p90, 0.07);
+  EXPECT_LT(Find(rows, "all", "quadrant:soft_step", "default").p90, 0.14);
+  EXPECT_LT(Find(rows, "all", "quadrant:thesis", "default").p90, 0.26);
+  // The thesis's difference is its separate normal and friction formulas: coupled, it is within
+  // 1.5 % of Box2D at p90 (2000 hits: 22.9 % -> 0.94 %).
+  EXPECT_LT(Find(rows, "all", "quadrant:thesis", "coupled").p90, 0.015);
+  // Circle pairs are one point with no skin in either engine: pgs agrees with Box2D exactly
+  // (within float rounding) whatever the restitution.
+  for (const char* cls : {"circle-circle e=0", "circle-circle e=0.5", "circle-circle e=1"}) {
+    EXPECT_LT(Find(rows, cls, "quadrant:pgs", "default").max, 1e-4) << cls;
+  }
+}
+
+TEST(RandomHits, AnalyticReferenceAgreesWithBox2dAndTheCompatibleSetting) {
+  const Campaign& c = Sample();
+  const std::vector<CampaignRow> rows = c.AnalyticRows();
+  const CampaignRow& box2d = Find(rows, "all", "box2d", "default");
+  EXPECT_GT(box2d.n, 200) << "most hits are single-point";
+  EXPECT_LT(box2d.p90, 0.01);
+  EXPECT_LT(Find(rows, "all", "quadrant:pgs", "box2d_restitution").p90, 0.01);
+  // Quadrant's default restitution (a frictionless collision before the iterations) is the
+  // farther from the mechanics: its p90 distance is several times Box2D's.
+  EXPECT_GT(Find(rows, "all", "quadrant:pgs", "default").p90, 3 * box2d.p90);
+}
+
+TEST(RandomHits, MomentumIsConservedByEveryRun) {
+  const Campaign& c = Sample();
+  for (size_t i = 0; i < c.hits.size(); ++i) {
+    for (size_t r = 0; r < c.runs.size(); ++r) {
+      EXPECT_LT(c.cells[i][r].momentumError, 1e-5) << "hit " << i << " " << c.runs[r].adapter;
+    }
+  }
+}
+
+TEST(RandomHits, Box2dSettingsAreRefusedWhereTheyDoNotApply) {
+  WorldDef def;
+  def.solver = SolverType::kSoftStep;
+  def.restitution = RestitutionPolicy::kBox2d;
+  EXPECT_THROW(World{def}, Error);
+  def = WorldDef{};
+  def.polygonSkin = Real(-0.01);
+  EXPECT_THROW(World{def}, Error);
+  def.polygonSkin = def.speculativeDistance;  // more than half of it
+  EXPECT_THROW(World{def}, Error);
+  def.polygonSkin = Real(0.01);
+  def.restitution = RestitutionPolicy::kBox2d;
+  EXPECT_NO_THROW(World{def});
+  def.scheme = ParallelScheme::kQuadrants;
+  EXPECT_THROW(World{def}, Error);
+}
+
+}  // namespace
+}  // namespace quadrant::scene

@@ -1,0 +1,254 @@
+// Unit tests for the step's parts that only had tests through whole worlds: the 2x2 block solve
+// (SolveLcp2, contact_solver.h), the contact cache (contact_cache.h), the islands
+// (islands.h) and the contact sort (World::Impl::SortContacts, seen through GetContacts).
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <random>
+#include <vector>
+
+#include "contact_cache.h"
+#include "contact_solver.h"
+#include "islands.h"
+#include "quadrant/world.h"
+#include "test_helpers.h"
+#include "world_internal.h"
+
+namespace quadrant {
+namespace {
+
+using namespace test;
+
+// ---- The 2x2 block solve --------------------------------------------------------------------
+
+// x >= 0, w = K x + b >= 0 and x_i w_i = 0 for both rows: the complementarity conditions.
+void ExpectComplementary(Real k11, Real k12, Real k22, Real b0, Real b1, Real x0, Real x1) {
+  const double w0 = double(k11) * x0 + double(k12) * x1 + b0;
+  const double w1 = double(k12) * x0 + double(k22) * x1 + b1;
+  const double tol = 1e-4 * (1 + std::abs(double(b0)) + std::abs(double(b1)));
+  EXPECT_GE(x0, -tol);
+  EXPECT_GE(x1, -tol);
+  EXPECT_GE(w0, -tol);
+  EXPECT_GE(w1, -tol);
+  EXPECT_NEAR(x0 * w0, 0, tol);
+  EXPECT_NEAR(x1 * w1, 0, tol);
+}
+
+TEST(BlockSolve, EachOfTheFourCases) {
+  Real x0 = -1, x1 = -1;
+  // Both approaching equally on a symmetric K: both points push, equally.
+  ASSERT_TRUE(SolveLcp2(2, 1, 2, -3, -3, x0, x1));
+  EXPECT_NEAR(x0, 1, 1e-6);
+  EXPECT_NEAR(x1, 1, 1e-6);
+  // The second point separating fast: only the first pushes, and the second stays separating.
+  ASSERT_TRUE(SolveLcp2(2, 1, 2, -2, 5, x0, x1));
+  EXPECT_NEAR(x0, 1, 1e-6);
+  EXPECT_EQ(x1, 0);
+  // Mirror: only the second.
+  ASSERT_TRUE(SolveLcp2(2, 1, 2, 5, -2, x0, x1));
+  EXPECT_EQ(x0, 0);
+  EXPECT_NEAR(x1, 1, 1e-6);
+  // Both separating: no impulse.
+  ASSERT_TRUE(SolveLcp2(2, 1, 2, 1, 2, x0, x1));
+  EXPECT_EQ(x0, 0);
+  EXPECT_EQ(x1, 0);
+}
+
+TEST(BlockSolve, RandomProblemsSatisfyComplementarity) {
+  std::mt19937 rng(13);
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (int trial = 0; trial < 2000; ++trial) {
+    // A symmetric positive definite K, as the effective mass of two contact rows is.
+    const double a = 0.2 + std::abs(u(rng)), c = 0.2 + std::abs(u(rng));
+    const double off = 0.9 * std::sqrt(a * c) * u(rng);
+    const Real k11 = Real(a), k22 = Real(c), k12 = Real(off);
+    const Real b0 = Real(3 * u(rng)), b1 = Real(3 * u(rng));
+    Real x0 = 0, x1 = 0;
+    ASSERT_TRUE(SolveLcp2(k11, k12, k22, b0, b1, x0, x1)) << "trial " << trial;
+    ExpectComplementary(k11, k12, k22, b0, b1, x0, x1);
+  }
+}
+
+// ---- The contact cache ------------------------------------------------------------------------
+
+Contact MakeContact(int a, int b, int points, uint32_t id0, uint32_t id1, Real impulse) {
+  Contact c;
+  c.a = a;
+  c.b = b;
+  c.manifold.pointCount = points;
+  c.manifold.points[0].id = id0;
+  c.manifold.points[1].id = id1;
+  for (int k = 0; k < points; ++k) {
+    c.manifold.points[k].normalImpulse = impulse + Real(k);
+    c.manifold.points[k].tangentImpulse = -impulse;
+  }
+  return c;
+}
+
+TEST(ContactCache, RestoresByPairAndFeatureId) {
+  ContactCache cache;
+  std::vector<Contact> last = {MakeContact(0, 1, 2, 7, 8, 1), MakeContact(0, 2, 1, 3, 0, 5),
+                               MakeContact(1, 2, 1, 4, 0, 0),  // carries nothing: not stored
+                               MakeContact(3, 9, 2, 1, 2, 2)};
+  last[2].manifold.points[0].tangentImpulse = 0;
+  cache.Store(last);
+  // This step: the first pair kept one feature (8) and gained one (9); the second pair's feature
+  // changed; a new pair; the last pair unchanged.
+  std::vector<Contact> now = {MakeContact(0, 1, 2, 9, 8, 0), MakeContact(0, 2, 1, 4, 0, 0),
+                              MakeContact(1, 2, 1, 4, 0, 0), MakeContact(2, 5, 1, 1, 0, 0),
+                              MakeContact(3, 9, 2, 1, 2, 0)};
+  EXPECT_EQ(cache.Restore(now), 3);
+  EXPECT_EQ(now[0].manifold.points[0].normalImpulse, 0);  // feature 9 is new
+  EXPECT_EQ(now[0].manifold.points[1].normalImpulse, 2);  // feature 8 was point 1: 1 + 1
+  EXPECT_EQ(now[0].manifold.points[1].tangentImpulse, -1);
+  EXPECT_EQ(now[1].manifold.points[0].normalImpulse, 0);  // feature 3 is gone
+  EXPECT_EQ(now[2].manifold.points[0].normalImpulse, 0);  // nothing was stored for (1, 2)
+  EXPECT_EQ(now[3].manifold.points[0].normalImpulse, 0);  // a new pair
+  EXPECT_EQ(now[4].manifold.points[0].normalImpulse, 2);
+  EXPECT_EQ(now[4].manifold.points[1].normalImpulse, 3);
+  // Out of key order the lookup still finds every entry.
+  std::vector<Contact> shuffled = {MakeContact(3, 9, 2, 1, 2, 0), MakeContact(0, 1, 2, 9, 8, 0)};
+  EXPECT_EQ(cache.Restore(shuffled), 3);
+  EXPECT_EQ(shuffled[1].manifold.points[1].normalImpulse, 2);
+  cache.Clear();
+  std::vector<Contact> again = {MakeContact(3, 9, 2, 1, 2, 0)};
+  EXPECT_EQ(cache.Restore(again), 0);
+}
+
+TEST(ContactCache, ParallelStoreEqualsSerialStore) {
+  std::vector<Contact> contacts;
+  for (int i = 0; i < 3000; ++i) contacts.push_back(MakeContact(i, i + 1, 1 + i % 2, uint32_t(i), 5, Real(i % 3)));
+  ContactCache serial, parallel;
+  serial.Store(contacts);
+  auto pool = MakeThreadPool(3);
+  StageRunner run(*pool, 16);
+  parallel.Store(contacts, run);
+  EXPECT_GT(run.Balance()[size_t(Stage::kPersistence)].workMs, 0.0);
+  std::vector<Contact> a = contacts, b = contacts;
+  for (Contact& c : a) c.manifold.points[0].normalImpulse = c.manifold.points[1].normalImpulse = -7;
+  for (Contact& c : b) c.manifold.points[0].normalImpulse = c.manifold.points[1].normalImpulse = -7;
+  EXPECT_EQ(serial.Restore(a), parallel.Restore(b));
+  for (size_t i = 0; i < a.size(); ++i) {
+    ASSERT_EQ(a[i].manifold.points[0].normalImpulse, b[i].manifold.points[0].normalImpulse) << i;
+  }
+}
+
+// ---- Islands ------------------------------------------------------------------------------
+
+// Bodies as the world keeps them, for `types`, all awake and at rest.
+Bodies MakeBodies(const std::vector<BodyType>& types) {
+  Bodies b;
+  for (size_t i = 0; i < types.size(); ++i) {
+    const bool dyn = types[i] == BodyType::kDynamic;
+    b.type.push_back(types[i]);
+    b.vel.push_back({});
+    b.mass.push_back(dyn ? 1 : 0);
+    b.inertia.push_back(dyn ? Real(0.5) : 0);
+    b.inv.push_back(dyn ? BodyInverseMass{1, 2} : BodyInverseMass{});
+    b.dynamic.push_back(dyn ? 1 : 0);
+    b.awake.push_back(types[i] == BodyType::kStatic ? 0 : 1);
+    b.sleepTime.push_back(0);
+    b.islandOf.push_back(0);
+    b.slot.push_back(uint32_t(i));
+    b.aabb.push_back({{Real(i), 0}, {Real(i) + Real(0.5), 1}});
+  }
+  return b;
+}
+
+Contact Pair(int a, int b) {
+  Contact c;
+  c.a = a;
+  c.b = b;
+  return c;
+}
+
+TEST(Islands, ConnectedBodiesSleepTogetherAndWakeTogether) {
+  using T = BodyType;
+  // 0 ground; island {1, 2, 3} on it; island {4, 5}; 6 alone; 7 a kinematic body touching 6.
+  Bodies bodies = MakeBodies({T::kStatic, T::kDynamic, T::kDynamic, T::kDynamic, T::kDynamic, T::kDynamic,
+                              T::kDynamic, T::kKinematic});
+  const std::vector<Contact> contacts = {Pair(0, 1), Pair(1, 2), Pair(0, 3), Pair(2, 3), Pair(4, 5), Pair(6, 7)};
+  WorldDef def;
+  Islands islands;
+  bodies.vel[7].v = {1, 0};  // a moving kinematic body keeps what it touches awake
+  bodies.vel[5].v = {1, 0};  // 5 moves: its island {4, 5} stays awake
+  const Real dt = Real(0.1);
+  for (int step = 0; step < 6; ++step) islands.Update(bodies, contacts, def, dt);  // 0.6 s > 0.5 s
+  for (int i : {1, 2, 3}) EXPECT_TRUE(Islands::IsSleeping(bodies, i)) << i;
+  for (int i : {4, 5, 6}) EXPECT_FALSE(Islands::IsSleeping(bodies, i)) << i;
+  EXPECT_EQ(bodies.islandOf[1], bodies.islandOf[2]);
+  EXPECT_EQ(bodies.islandOf[1], bodies.islandOf[3]);
+  EXPECT_EQ(bodies.inv[2].invMass, 0);  // a sleeper is static to every stage
+  EXPECT_EQ(bodies.dynamic[2], 0);
+  // An awake body touching one sleeper wakes its whole island, with its mass back bit for bit.
+  EXPECT_EQ(islands.WakeTouched(bodies, std::vector<Contact>{Pair(3, 4)}), 3);
+  for (int i : {1, 2, 3}) {
+    EXPECT_FALSE(Islands::IsSleeping(bodies, i)) << i;
+    EXPECT_EQ(bodies.inv[i].invMass, 1);
+    EXPECT_EQ(bodies.inv[i].invInertia, 2);
+    EXPECT_EQ(bodies.sleepTime[i], 0);
+  }
+  EXPECT_EQ(islands.Changed().size(), 3u);
+}
+
+TEST(Islands, WakeOverlappingAndWakeIslandOf) {
+  using T = BodyType;
+  Bodies bodies = MakeBodies({T::kDynamic, T::kDynamic, T::kDynamic});
+  Islands::Sleep(bodies, 0, 10);
+  Islands::Sleep(bodies, 1, 10);
+  Islands::Sleep(bodies, 2, 11);
+  Islands islands;
+  // Body 2's box is [2, 2.5] x [0, 1]: a box over it wakes island 11 only.
+  EXPECT_EQ(islands.WakeOverlapping(bodies, {{Real(2.2), 0}, {3, 1}}), 1);
+  EXPECT_TRUE(Islands::IsSleeping(bodies, 0));
+  EXPECT_FALSE(Islands::IsSleeping(bodies, 2));
+  islands.WakeIslandOf(bodies, 1);
+  EXPECT_FALSE(Islands::IsSleeping(bodies, 0));
+  EXPECT_FALSE(Islands::IsSleeping(bodies, 1));
+}
+
+// ---- The contact sort ----------------------------------------------------------------------
+
+// The world's contacts come out of the narrow phase per worker and are put in key order (a
+// radix sort per worker, then a merge). Read back, they are in (bodyA, bodyB) order, each pair
+// once, and the same list for any thread count.
+TEST(ContactSort, ContactsAreInKeyOrderForAnyThreadCount) {
+  auto contactsWith = [](int threads) {
+    WorldDef def;
+    def.threadCount = threads;
+    def.minParallelItems = 8;  // split the narrow phase and the sort across the workers
+    World world(def);
+    AddGround(world, 30, Real(0.5), {0, -0.5});
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> u(-0.05, 0.05);
+    // Created top row first, so body index order is not the contacts' spatial order.
+    for (int row = 11; row >= 0; --row) {
+      for (int col = 0; col < 40; ++col) {
+        AddCircle(world, {Real(-20 + col * 1.0 + u(rng)), Real(0.5 + row * 1.0)}, Real(0.5));
+      }
+    }
+    StepN(world, 30);
+    if (threads > 1) {
+      EXPECT_TRUE(ParallelSectionRan(world.GetProfile()));
+    }
+    return world.GetContacts();
+  };
+  const std::vector<ContactInfo> one = contactsWith(1);
+  ASSERT_GT(one.size(), 400u);
+  for (size_t i = 1; i < one.size(); ++i) {
+    const auto key = [](const ContactInfo& c) { return (uint64_t(c.bodyA.index) << 32) | c.bodyB.index; };
+    ASSERT_LT(key(one[i - 1]), key(one[i])) << "contact " << i;
+  }
+  for (int threads : {2, 3, 4}) {
+    const std::vector<ContactInfo> many = contactsWith(threads);
+    ASSERT_EQ(many.size(), one.size()) << threads;
+    for (size_t i = 0; i < one.size(); ++i) {
+      ASSERT_EQ(many[i].bodyA, one[i].bodyA) << threads << " threads, contact " << i;
+      ASSERT_EQ(many[i].bodyB, one[i].bodyB) << threads << " threads, contact " << i;
+      ASSERT_EQ(many[i].normalImpulses[0], one[i].normalImpulses[0]) << threads << " threads, contact " << i;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace quadrant
