@@ -44,6 +44,8 @@ class QuadrantAdapter final : public Adapter {
       } else if (token.size() > 3 && token.starts_with("sub") && ParseCount(token.substr(3), &softSubSteps_)) {
       } else if (token.size() > 2 && token.starts_with("it") && ParseCount(token.substr(2), &iterations_)) {
       } else if (token.size() > 3 && token.starts_with("pos") && ParseCount(token.substr(3), &positionIterations_)) {
+      } else if (token.size() > 5 && token.starts_with("relax") && ParseCount(token.substr(5), &relaxIterations_)) {
+        // soft_step's WorldDef::softRelaxIterations.
       } else if (token.size() > 5 && token.starts_with("ratio") && ParseCount(token.substr(5), &massRatioLimit_)) {
         // soft_step's WorldDef::softMassRatioLimit (issue #13 item 3: a heavy body on a light one).
       } else if (token == "b2rest") {
@@ -61,7 +63,7 @@ class QuadrantAdapter final : public Adapter {
       } else if (token == "quadrants") {
         scheme_ = ParallelScheme::kQuadrants;
       } else {
-        throw Error("unknown quadrant variant '" + std::string(token) + "' (known: thesis, pgs, soft_step, quadtree, grid, deterministic, quadrants, sub<N>, it<N>, pos<N>, ratio<N>, b2rest, b2skin, coupled)");
+        throw Error("unknown quadrant variant '" + std::string(token) + "' (known: thesis, pgs, soft_step, quadtree, grid, deterministic, quadrants, sub<N>, it<N>, pos<N>, relax<N>, ratio<N>, b2rest, b2skin, coupled)");
       }
       if (end == std::string_view::npos) break;
       start = end + 1;
@@ -107,6 +109,7 @@ class QuadrantAdapter final : public Adapter {
     }
     def.positionIterations = positionIterations_ > 0 ? positionIterations_ : scene.positionIterations;
     def.softMassRatioLimit = Real(massRatioLimit_);
+    if (relaxIterations_ > 0) def.softRelaxIterations = relaxIterations_;
     def.restitutionThreshold = scene.restitutionThreshold;
     def.restitution = restitution_;
     def.polygonSkin = polygonSkin_;
@@ -241,6 +244,7 @@ class QuadrantAdapter final : public Adapter {
   ParallelScheme scheme_ = ParallelScheme::kDeterministic;
   int softSubSteps_ = 0;  // 0: the engine's default
   int massRatioLimit_ = 0;  // 0: off (WorldDef::softMassRatioLimit)
+  int relaxIterations_ = 0;  // 0: the engine's default (WorldDef::softRelaxIterations)
   int iterations_ = 0;    // 0: the scene's
   int positionIterations_ = 0;  // 0: the scene's
   static constexpr int kMaxThreads = 64;

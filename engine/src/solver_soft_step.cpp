@@ -131,9 +131,11 @@ class SoftStepSolver final : public ContactSolverBase {
       // instead of 47 at 4 sub-steps), and spinning triangles of the soak left the box.
       IntegrateStatePositions(run, bodies, def, h, ctx.dt);
       integrateMs += Ms(ti, Clock::now());
-      ForEachGroup(run, simd, [&](auto lanes, SoftRowGroup& g, int lane) {
-        SolveRows<decltype(lanes), kRotation, kFriction, false>(states_.data(), g, lane, prm);
-      });
+      for (int it = 0; it < def.softRelaxIterations; ++it) {
+        ForEachGroup(run, simd, [&](auto lanes, SoftRowGroup& g, int lane) {
+          SolveRows<decltype(lanes), kRotation, kFriction, false>(states_.data(), g, lane, prm);
+        });
+      }
     }
     if (def.effects.restitution && m > 0) ForEachColor(run, [&](int b, int e) { ApplyStateBounceShifts(b, e); });
     // Overlap deeper than the soft contacts push out (contactPushMaxDepth) is moved out here, by pgs's

@@ -19,6 +19,8 @@ void ValidateWorldDef(const WorldDef& d) {
   Require(IsFinite(d.contactPushMaxVelocity) && d.contactPushMaxVelocity > 0,
           "WorldDef.contactPushMaxVelocity must be > 0");
   Require(IsFinite(d.contactPushMaxDepth) && d.contactPushMaxDepth > 0, "WorldDef.contactPushMaxDepth must be > 0");
+  Require(d.softRelaxIterations >= 1 && d.softRelaxIterations <= kMaxIterations,
+          "WorldDef.softRelaxIterations must be in [1, 1000]");
   Require(IsFinite(d.softMassRatioLimit) && (d.softMassRatioLimit == 0 || d.softMassRatioLimit >= 1),
           "WorldDef.softMassRatioLimit must be 0 (off) or >= 1");
   Require(d.broadPhase == BroadPhaseType::kQuadTree || d.broadPhase == BroadPhaseType::kUniformGrid,

@@ -140,3 +140,36 @@ TEST(SoftMassRatioLimitTest, BadLimitIsRefused) {
 
 }  // namespace
 }  // namespace quadrant
+
+namespace quadrant {
+namespace {
+
+TEST(SoftRelaxIterationsTest, BadCountIsRefusedAndASecondPassChangesTheResult) {
+  for (int bad : {0, -1, 1001}) {
+    WorldDef def;
+    def.softRelaxIterations = bad;
+    EXPECT_THROW(World{def}, Error);
+  }
+  // The relax pass count reaches the solver: a box settling on the ground ends elsewhere with two.
+  auto run = [](int relax) {
+    WorldDef def;
+    def.solver = SolverType::kSoftStep;
+    def.softRelaxIterations = relax;
+    World world(def);
+    BodyDef ground;
+    ground.shape = ShapeDef::Box(5, 0.5f);
+    world.CreateBody(ground);
+    BodyDef box;
+    box.type = BodyType::kDynamic;
+    box.position = {0, 1.2f};
+    box.angle = 0.2f;
+    box.shape = ShapeDef::Box(0.5f, 0.5f);
+    world.CreateBody(box);
+    for (int s = 0; s < 60; ++s) world.Step(1.0f / 60);
+    return world.StateHash();
+  };
+  EXPECT_NE(run(1), run(2));
+}
+
+}  // namespace
+}  // namespace quadrant
