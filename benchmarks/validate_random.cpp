@@ -69,7 +69,9 @@ std::string Json(const qs::Campaign& c, const std::vector<qs::CampaignRow>& rows
        "\"restitution_threshold\": 1, \"steps\": "
     << qs::kRandomHitSteps << ", \"sleep\": false, \"continuous\": false, \"warm_starting\": true},\n"
     << " \"difference\": \"largest over both bodies of |v - v_box2d| and |w - w_box2d| x circumradius after the "
-       "steps, as a fraction of the mover's speed\",\n \"runs\": [";
+       "steps, as a fraction of the mover's speed\",\n \"analytic_single_point_hits\": "
+    << std::count(c.singlePoint.begin(), c.singlePoint.end(), true) << ", \"analytic_jams\": " << c.analyticJams
+    << ", \"analytic_recontacts\": " << c.analyticRecontacts << ",\n \"runs\": [";
   const std::vector<Balance> balance = Balances(c);
   for (size_t r = 0; r < c.runs.size(); ++r) {
     o << (r ? ",\n  " : "\n  ") << "{\"engine\": " << JsonString(c.runs[r].engine) << ", \"setting\": "
@@ -191,8 +193,9 @@ std::string Markdown(const qs::Campaign& c, const std::vector<qs::CampaignRow>& 
     << "The analytic answer (Coulomb friction, Newton restitution, stick / slide / slip reversal integrated over the "
        "normal impulse, as Stronge does) applies to hits whose impact is one instantaneous impact at one point: it "
        "does not jam, and the two bodies, moving on with the analytic velocities, do not meet again within the "
-    << qs::kRandomHitSteps << " steps (1.5 mm deeper than they start). Same cells, distance from the analytic "
-       "velocities.\n\n";
+    << qs::kRandomHitSteps << " steps (1.5 mm deeper than they start). Of the " << c.hits.size() << " hits, "
+    << c.analyticJams << " jam (the normal contact velocity would not rise with the normal impulse) and "
+    << c.analyticRecontacts << " meet again. Same cells, distance from the analytic velocities.\n\n";
   Table(o, analytic);
 
   o << "\n## Classes above 5 %, and the one choice that removes each\n\n"

@@ -364,7 +364,10 @@ Campaign RunCampaign(uint64_t seed, int count, const std::vector<CampaignRun>& r
     std::vector<HitRun> results;
     for (const CampaignRun& run : runs) results.push_back(RunRandomHit(hit, run.adapter));
     const ImpactResult analytic = AnalyticHit(hit);
-    const bool single = analytic.ok && !AnalyticRecontacts(hit, analytic);
+    const bool recontacts = analytic.ok && AnalyticRecontacts(hit, analytic);
+    const bool single = analytic.ok && !recontacts;
+    c.analyticJams += analytic.ok ? 0 : 1;
+    c.analyticRecontacts += recontacts ? 1 : 0;
     const std::vector<BodyState> exact = single ? AnalyticStates(hit, analytic) : std::vector<BodyState>{};
     std::vector<Campaign::Cell> row;
     for (const HitRun& r : results) {

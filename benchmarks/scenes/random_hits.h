@@ -110,6 +110,8 @@ struct Campaign {
   std::vector<double> analyticToBox2d;    ///< per hit; NaN where the hit has no analytic answer
   std::vector<double> analyticEnergyRatio;  ///< per hit: kinetic energy after / before the analytic impact; NaN as above
   std::vector<bool> singlePoint;          ///< the analytic answer applies (see RunCampaign)
+  int analyticJams = 0;                   ///< hits whose analytic impact jams (no answer)
+  int analyticRecontacts = 0;             ///< hits whose bodies would meet again after it
 
   /// Per class (and "all") and run: the distribution of the difference to Box2D; plus rows of
   /// engine "analytic" (the analytic answer's difference to Box2D on single-point hits).
