@@ -53,8 +53,8 @@ class StageRunner {
 
   /// Runs fn(begin, end, block) over [0, count) in parallel when count >= minParallel,
   /// otherwise inline on the caller as one block (block 0). `block` indexes per-block outputs
-  /// (Workers() of them); it says nothing about which thread runs the block. Both give the same results for
-  /// work whose blocks are independent.
+  /// (Workers() of them); it says nothing about which thread runs the block. Both give the
+  /// same results for work whose blocks are independent.
   template <class Fn>
   void For(Stage stage, int count, int minParallel, Fn&& fn) {
     if (count <= 0) return;
