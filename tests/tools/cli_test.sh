@@ -44,7 +44,7 @@ expect_refusal() {
 # The driver: refused before anything is built (the rows of docs/bad_input.md).
 for args in "--counts abc" "--counts 0" "--counts -5" "--counts 1000,,2000" "--counts ,1000" \
             "--counts 1000," "--threads 0" "--threads 100" "--threads 1,x" "--repetitions 0" \
-            "--repetitions abc" "--steps 0" "--warmup -1"; do
+            "--repetitions abc" "--steps 0" "--warmup -1" "--busy x" "--busy -1" "--busy 65"; do
   read -ra words <<<"$args"
   expect_refusal "${words[0]}" "$DRIVER" bench "${words[@]}" --out "$OUT"
 done
@@ -55,6 +55,7 @@ expect_refusal "--scenes" "$DRIVER" bench --scenes 'a b' --out "$OUT"
 expect_refusal "is not a directory" "$DRIVER" bench --out "$WORK/a_file/sub"
 expect_refusal "is not a directory" "$DRIVER" bench --out "$WORK/a_file"
 expect_refusal "unknown option '--frob'" "$DRIVER" bench --frob 1 --out "$OUT"
+expect_refusal "--busy measures a loaded machine" "$DRIVER" bench --busy 1 --compare --out "$OUT"
 expect_refusal "--steps needs a value" "$DRIVER" bench --out "$OUT" --steps=
 expect_refusal "--counts needs a value" "$DRIVER" bench --out "$OUT" --counts
 expect_refusal "exclude each other" "$DRIVER" bench --baseline --compare --out "$OUT"
