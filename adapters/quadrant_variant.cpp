@@ -57,6 +57,10 @@ QuadrantVariant QuadrantVariant::Parse(std::string_view variant) {
     } else if (token.size() > 3 && token.starts_with("sub") && ParseCount(token.substr(3), &v.softSubSteps)) {
     } else if (token.size() > 2 && token.starts_with("it") && ParseCount(token.substr(2), &v.iterations)) {
     } else if (token.size() > 3 && token.starts_with("pos") && ParseCount(token.substr(3), &v.positionIterations)) {
+    } else if (token.size() > 5 && token.starts_with("relax") && ParseCount(token.substr(5), &v.relaxIterations)) {
+      // soft_step's WorldDef::softRelaxIterations.
+    } else if (token.size() > 5 && token.starts_with("ratio") && ParseCount(token.substr(5), &v.massRatioLimit)) {
+      // soft_step's WorldDef::softMassRatioLimit (issue #13 item 3: a heavy body on a light one).
     } else if (token == "b2rest") {
       v.restitution = RestitutionPolicy::kBox2d;
     } else if (token == "coupled") {
@@ -74,7 +78,7 @@ QuadrantVariant QuadrantVariant::Parse(std::string_view variant) {
     } else {
       throw Error("unknown quadrant variant '" + std::string(token) +
                   "' (known: thesis, pgs, soft_step, quadtree, grid, deterministic, quadrants, sub<N>, it<N>, pos<N>, "
-                  "b2rest, b2skin, coupled)");
+                  "relax<N>, ratio<N>, b2rest, b2skin, coupled)");
     }
     if (end == std::string_view::npos) break;
     start = end + 1;
@@ -99,6 +103,8 @@ WorldDef QuadrantVariant::MakeWorldDef(const Scene& scene, int threads) const {
   def.restitution = restitution;
   def.polygonSkin = polygonSkin;
   def.thesisCoupledImpulse = thesisCoupled;
+  def.softMassRatioLimit = Real(massRatioLimit);
+  if (relaxIterations > 0) def.softRelaxIterations = relaxIterations;
   def.threadCount = threads;
   def.scheme = scheme;
   def.effects = scene.effects;  // one type (scene.h); sleep with Box2D 2.4's tolerances, WorldDef's defaults

@@ -17,7 +17,9 @@
 // Per benchmark: real_time (the timed steps), counters steps_per_second (steps / real time),
 // ms_per_step, bodies, contacts (touching manifolds after the last step), engine_threads,
 // steps, warmup, memory_mb (peak RSS growth while making, loading and warming up the adapter)
-// and heap_mb (malloc bytes still held after warm-up); label = final state hash (16 hex digits).
+// heap_mb (malloc bytes still held after warm-up), others_cpu (cores' worth of CPU other
+// processes used during the benchmark, if it lasted 0.25 s or more) and load_avg (1-minute
+// load average after it); label = final state hash (16 hex digits).
 //
 // Own flags (parsed and removed before Google Benchmark sees the command line):
 //   --scenes a,b      scenes to run            (default: DefaultBenchScenes(), sparse and dense)
@@ -33,6 +35,7 @@
 #include <benchmark/benchmark.h>
 #include <fmt/format.h>
 #include <malloc.h>
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -262,6 +265,58 @@ std::string EnvOr(const char* name, std::string fallback) {
   return (value != nullptr && *value != '\0') ? std::string(value) : fallback;
 }
 
+// ---- Machine load ----------------------------------------------------------------------------
+
+/// What other processes did to the machine during a run: CPU time used by anyone but this
+/// process (busy time from /proc/stat, steal included, less this process's own user + system
+/// time), in cores, and the 1-minute load average at the end. A load average alone cannot tell
+/// this run's own threads from a neighbour's; the CPU time difference can.
+class LoadProbe {
+ public:
+  void Begin() {
+    machine0_ = MachineBusySeconds();
+    own0_ = OwnSeconds();
+    wall0_ = std::chrono::steady_clock::now();
+  }
+  /// Cores' worth of CPU used by other processes since Begin(), or -1 if unknown or if less
+  /// than 0.25 s passed (/proc/stat counts in 10 ms ticks per core: too coarse below that).
+  double OthersCores() const {
+    const double machine = MachineBusySeconds();
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0_).count();
+    if (machine0_ < 0 || machine < 0 || wall < 0.25) return -1;
+    return std::max(0.0, (machine - machine0_) - (OwnSeconds() - own0_)) / wall;
+  }
+  static double LoadAverage() {
+    double one = -1;
+    if (FILE* f = std::fopen("/proc/loadavg", "r")) {
+      if (std::fscanf(f, "%lf", &one) != 1) one = -1;
+      std::fclose(f);
+    }
+    return one;
+  }
+
+ private:
+  static double MachineBusySeconds() {
+    FILE* f = std::fopen("/proc/stat", "r");
+    if (f == nullptr) return -1;
+    // cpu user nice system idle iowait irq softirq steal ...
+    unsigned long long v[8] = {};
+    const int got = std::fscanf(f, "cpu %llu %llu %llu %llu %llu %llu %llu %llu", &v[0], &v[1], &v[2], &v[3], &v[4],
+                                &v[5], &v[6], &v[7]);
+    std::fclose(f);
+    if (got < 4) return -1;
+    const double ticks = double(sysconf(_SC_CLK_TCK));
+    return double(v[0] + v[1] + v[2] + v[5] + v[6] + v[7]) / ticks;
+  }
+  static double OwnSeconds() {
+    rusage u{};
+    getrusage(RUSAGE_SELF, &u);
+    return double(u.ru_utime.tv_sec + u.ru_stime.tv_sec) + 1e-6 * double(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
+  }
+  double machine0_ = -1, own0_ = 0;
+  std::chrono::steady_clock::time_point wall0_;
+};
+
 // ---- Memory measurement --------------------------------------------------------------------
 
 /// A field of /proc/self/status in kB (VmRSS, VmHWM), or -1.
@@ -384,6 +439,8 @@ struct Job {
 };
 
 void RunJob(benchmark::State& state, const Job& job) {
+  LoadProbe load;  // over the whole benchmark (setup, warm-up, timed steps): long enough to count
+  load.Begin();
   // Setup, untimed, repeated for every repetition so that repetitions are independent.
   std::unique_ptr<qs::Adapter> adapter;
   MemoryProbe memory;
@@ -416,6 +473,7 @@ void RunJob(benchmark::State& state, const Job& job) {
     elapsedMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   }
   if (state.error_occurred()) return;
+  const double othersCores = load.OthersCores();
 
   using benchmark::Counter;
   state.counters["steps_per_second"] = Counter(double(job.steps), Counter::kIsRate);
@@ -430,6 +488,10 @@ void RunJob(benchmark::State& state, const Job& job) {
   // RSS growth (peak) while making, loading and warming up this adapter, MB; see MemoryProbe.
   state.counters["memory_mb"] = Counter(memoryMb);
   state.counters["heap_mb"] = Counter(heapMb);
+  // What the rest of the machine did during this benchmark (LoadProbe): other processes' CPU
+  // use in cores (the run's own `--busy` processes included) and the 1-minute load average.
+  if (othersCores >= 0) state.counters["others_cpu"] = Counter(othersCores);
+  if (const double avg = LoadProbe::LoadAverage(); avg >= 0) state.counters["load_avg"] = Counter(avg);
   // Load balance over the timed steps (engines that time their stages): work over the critical
   // path, the speed-up this thread count allows whatever the machine's cores (see StageRunner:
   // thread CPU time when oversubscribed, wall time otherwise; one thread is not measured, its
@@ -592,6 +654,10 @@ int main(int argc, char** argv) {
     benchmark::AddCustomContext("steps", fmt::format("{}", opts.steps));
     benchmark::AddCustomContext("warmup", fmt::format("{}", opts.warmup));
     benchmark::AddCustomContext("seed", fmt::format("{}", opts.seed));
+    // Set by tools/quadrant bench: busy processes it ran beside the suite (--busy K), and the
+    // 1-minute load average before it started them.
+    benchmark::AddCustomContext("busy_processes", EnvOr("QUADRANT_BUSY", "0"));
+    benchmark::AddCustomContext("load_avg_before", EnvOr("QUADRANT_LOAD_BEFORE", "unknown"));
     for (size_t e = 0; e < opts.engines.size(); ++e) {
       benchmark::AddCustomContext(fmt::format("engine_notes_{}", opts.engines[e]), caps[e].notes);
       benchmark::AddCustomContext(fmt::format("engine_max_threads_{}", opts.engines[e]),

@@ -6,8 +6,14 @@ Usage (run with Debian's interpreter, /usr/bin/python3, which sees python3-matpl
     /usr/bin/python3 tools/bench_report.py bench.json [--out DIR]
         writes DIR/speedup.md and DIR/fps_<scene>.png for every scene in the run and prints
         the Markdown to stdout (DIR defaults to the JSON's directory)
+    /usr/bin/python3 tools/bench_report.py bench.json --busy bench_busy.json [--out DIR]
+        the same, plus a busy machine table from a `tools/quadrant bench --busy K` run
     /usr/bin/python3 tools/bench_report.py --check bench.json
         validates the JSON's structure; exits 1 with a message naming the first problems
+
+Noise: a figure whose repetitions spread by more than 50 %, or measured while other processes
+used the machine (see flags()), is marked **noisy** in the tables and listed, and the plots'
+footers name it: such figures are not results.
 
 Figures: for every benchmark <scene>/<engine>/n:<N>/threads:<T> the MEDIAN steps per second
 over its repetitions, computed here from the per-repetition rows (Google Benchmark's own
@@ -179,6 +185,8 @@ class Results:
                     "memory_mb": statistics.median([r.get("memory_mb", 0) for r in rows_k]),
                     "labels": sorted({r.get("label", "") for r in rows_k}),
                     "bound": statistics.median([r["balance_bound"] for r in rows_k]) if all("balance_bound" in r for r in rows_k) else None,
+                    "load_avg": max((r["load_avg"] for r in rows_k if isinstance(r.get("load_avg"), (int, float))), default=None),
+                    "others_cpu": max((r["others_cpu"] for r in rows_k if isinstance(r.get("others_cpu"), (int, float))), default=None),
                 }
             else:
                 row = medians[key]
@@ -241,6 +249,124 @@ class Results:
         return self.stats.get((scene, engine, n, threads))
 
 
+# ---- Noise flags ------------------------------------------------------------------------------
+
+# A benchmark's figure is flagged, not printed as a result, when its repetitions spread by more
+# than this fraction of their median ((max - min) / median) ...
+SPREAD_LIMIT = 0.5
+# ... or when the machine was loaded beyond its cores by something other than the run: the
+# 1-minute load average before the run started (context load_avg_before, read by tools/quadrant
+# before it starts any busy process) above the core count, or other processes using more than
+# OTHERS_LIMIT cores during a repetition beyond the run's own --busy processes (counter
+# others_cpu, over each repetition's setup, warm-up and timed steps). The load average during
+# the run is not the test: it counts the run's own threads, so every quiet 3- and 4-thread run
+# on 2 cores would exceed the cores.
+OTHERS_LIMIT = 0.5
+
+
+def busy_count(results):
+    try:
+        return int(results.context.get("busy_processes", 0))
+    except (TypeError, ValueError):
+        return 0
+
+
+def run_flags(results):
+    """Reasons (strings) that make the whole run suspect."""
+    reasons = []
+    try:
+        before = float(results.context.get("load_avg_before"))
+    except (TypeError, ValueError):
+        before = None
+    if before is not None and results.cores and before > results.cores:
+        reasons.append(f"load average {before:.2f} before the run, above the {results.cores} cores")
+    return reasons
+
+
+def flags(results):
+    """{key: [reasons]} for benchmarks whose figures are not to be trusted as results."""
+    out = {}
+    busy = busy_count(results)
+    for key, s in results.stats.items():
+        why = []
+        if s["reps"] > 1 and s["sps"] > 0 and (s["max"] - s["min"]) / s["sps"] > SPREAD_LIMIT:
+            why.append(f"repetitions spread {100 * (s['max'] - s['min']) / s['sps']:.0f} %")
+        others = s.get("others_cpu")
+        if others is not None and others - busy > OTHERS_LIMIT:
+            why.append(f"other processes used {others:.1f} cores" + (f" ({busy} of them the run's busy loops)" if busy else ""))
+        if why:
+            out[key] = why
+    return out
+
+
+def flag_mark(flagged, key):
+    return " (**noisy**)" if key in flagged else ""
+
+
+def flag_lines(results, flagged, title):
+    """Markdown lines listing the flagged runs of `results`."""
+    lines = []
+    whole = run_flags(results)
+    if not whole and not flagged:
+        return [f"No {title} figure is flagged: every benchmark's repetitions spread by at most "
+                f"{100 * SPREAD_LIMIT:.0f} %, other processes used at most {OTHERS_LIMIT} cores beside "
+                "the run, and the load average before it was within the core count.", ""]
+    if whole:
+        lines.append(f"**Every {title} figure is flagged**: " + "; ".join(whole) + ".")
+        lines.append("")
+    if flagged:
+        lines.append(f"Flagged {title} figures (marked **noisy** in the tables; re-run them on a quiet machine):")
+        lines.append("")
+        for key in sorted(flagged):
+            lines.append(f"- `{key[0]}/{key[1]}/n:{key[2]}/threads:{key[3]}`: " + "; ".join(flagged[key]))
+        lines.append("")
+    return lines
+
+
+def busy_markdown(busy, quiet_cores):
+    """The busy machine table: every engine, scene and size at each thread count."""
+    lines = []
+    out = lines.append
+    k = busy_count(busy)
+    flagged = flags(busy)
+    cores = busy.cores or quiet_cores
+    out(f"## Busy machine ({k} busy process{'es' if k != 1 else ''} beside the run)")
+    out("")
+    out(f"The same benchmarks while `tools/quadrant bench --busy {k}` ran {k} shell busy loop(s) for the "
+        f"whole run (commit {ctx(busy, 'commit')}, {ctx(busy, 'date')}, {ctx(busy, 'steps')} timed steps "
+        f"after {ctx(busy, 'warmup')} warm-up). A graceful engine is no slower on more threads than "
+        "on one: 'vs 1T' is the steps-per-second ratio to 1 thread under the same load.")
+    out("")
+    threads = busy.threads or [1]
+    head = ["scene", "N", "engine"] + [f"steps/s {t}T" for t in threads] + [f"vs 1T {t}T" for t in threads if t != 1]
+    out("| " + " | ".join(head) + " |")
+    out("|---|---:|---|" + "---:|" * (len(head) - 3))
+    for scene in busy.scenes:
+        for n in busy.counts(scene):
+            for e in busy.engines:
+                base = busy.get(scene, e, n, 1)
+                cells = []
+                anything = False
+                for t in threads:
+                    s = busy.get(scene, e, n, t)
+                    anything |= s is not None
+                    cells.append(fmt_sps(s["sps"]) + flag_mark(flagged, (scene, e, n, t)) if s else
+                                 ("-" if busy.beyond_engine(e, t) else "n/a"))
+                for t in threads:
+                    if t == 1:
+                        continue
+                    s = busy.get(scene, e, n, t)
+                    cells.append(f"{s['sps'] / base['sps']:.2f}x" if s and base else ("-" if busy.beyond_engine(e, t) else "n/a"))
+                if anything:
+                    out(f"| {scene} | {n} | {engine_title(e)} | " + " | ".join(cells) + " |")
+    out("")
+    if cores:
+        out(f"Thread counts above {cores} are oversubscribed even without the busy loops.")
+        out("")
+    lines.extend(flag_lines(busy, flagged, "busy-machine"))
+    return lines
+
+
 # ---- Markdown --------------------------------------------------------------------------------
 
 
@@ -265,8 +391,9 @@ def ctx(results, key, default="unknown"):
     return default if v in (None, "") else v
 
 
-def markdown(results, source):
+def markdown(results, source, busy=None):
     c = results.context
+    flagged = flags(results)
     cores = results.cores
     lines = []
     out = lines.append
@@ -278,6 +405,10 @@ def markdown(results, source):
         f"flags `{ctx(results, 'cxx_flags')}`; Quadrant scalar {ctx(results, 'quadrant_real')}")
     out(f"- commit: {ctx(results, 'commit')}")
     out(f"- date: {ctx(results, 'date')}")
+    if busy_count(results):
+        out(f"- **busy machine run**: {busy_count(results)} busy process(es) (shell busy loops) ran beside "
+            "every benchmark (`tools/quadrant bench --busy`)")
+    out(f"- load: 1-minute load average {ctx(results, 'load_avg_before')} before the run")
     reps = sorted({s['reps'] for s in results.stats.values()})
     out(f"- settings: {ctx(results, 'steps')} timed steps after {ctx(results, 'warmup')} untimed warm-up "
         f"steps, seed {ctx(results, 'seed')}, repetitions per benchmark: {', '.join(map(str, reps)) or 'none'}; "
@@ -332,6 +463,8 @@ def markdown(results, source):
                     cell = fmt_sps(s["sps"]) if s else ("-" if results.beyond_engine(e, t) else "n/a")
                     if s and over(t):
                         cell += " (oversubscribed)"
+                    if s:
+                        cell += flag_mark(flagged, (scene, e, n, t))
                     row.append(cell)
                 for t in threads:
                     if t == 1:
@@ -402,6 +535,11 @@ def markdown(results, source):
         out(f"Median spread (max - min) / median over repetitions: {100 * statistics.median(x for x, _ in spread):.1f} %; "
             f"largest {100 * worst:.1f} % ({key[0]}/{key[1]}/n:{key[2]}/threads:{key[3]}).")
         out("")
+    for line in flag_lines(results, flagged, "quiet-machine" if busy is not None else "benchmark"):
+        out(line)
+    if busy is not None:
+        for line in busy_markdown(busy, cores):
+            out(line)
     varying = []
     for scene in results.scenes:
         for e in results.engines:
@@ -448,8 +586,9 @@ def markdown(results, source):
 
 # ---- Plots -----------------------------------------------------------------------------------
 
-def plot_footer(results, engines):
-    """What the figure shows and where it comes from; notes only for the engines drawn."""
+def plot_footer(results, engines, scene=None):
+    """What the figure shows and where it comes from; notes only for the engines drawn; the
+    noise flags of the run and of the scene's points."""
     notes = []
     if any(plot_style.canonical(e) == "bullet" for e in engines):
         notes.append("Bullet serial (Debian builds it without BT_THREADSAFE)")
@@ -461,7 +600,20 @@ def plot_footer(results, engines):
             f"Machine {ctx(results, 'machine', ctx(results, 'host_name'))} ({ctx(results, 'cpu_model')}, "
             f"{results.cores or '?'} cores); commit {ctx(results, 'commit')}; {ctx(results, 'steps')} steps "
             f"after {ctx(results, 'warmup')} warm-up; {ctx(results, 'date')}."
-            + (" " + "; ".join(notes) + "." if notes else ""))
+            + (" " + "; ".join(notes) + "." if notes else "")
+            + flag_footer(results, scene))
+
+
+def flag_footer(results, scene):
+    noisy = sorted(k for k in flags(results) if scene is None or k[0] == scene)
+    whole = run_flags(results)
+    if not whole and not noisy:
+        return ""
+    parts = list(whole)
+    if noisy:
+        parts.append(f"{len(noisy)} noisy point(s) (spread > {100 * SPREAD_LIMIT:.0f} % or other load): "
+                     + ", ".join(f"{k[1]} n={k[2]} {k[3]}T" for k in noisy))
+    return " FLAGGED: " + "; ".join(parts) + "; see speedup.md."
 
 
 def plot_scene(results, scene, path):
@@ -531,7 +683,7 @@ def plot_scene(results, scene, path):
         ax.legend(handles=thread_handles, fontsize=8, loc="upper right", title="engine threads", title_fontsize=8)
     else:
         ax.text(0.5, 0.5, "no data", transform=ax.transAxes, ha="center")
-    fig.text(0.01, 0.01, plot_footer(results, drawn_engines), fontsize=6.5, ha="left", va="bottom", wrap=True)
+    fig.text(0.01, 0.01, plot_footer(results, drawn_engines, scene), fontsize=6.5, ha="left", va="bottom", wrap=True)
     fig.tight_layout(rect=(0, 0.05, 1, 1))
     fig.savefig(path)
     plt.close(fig)
@@ -546,6 +698,7 @@ def main(argv):
     ap.add_argument("--check", metavar="FILE", help="validate FILE's structure and exit")
     ap.add_argument("--out", metavar="DIR", help="output directory (default: the JSON's directory)")
     ap.add_argument("--quiet", action="store_true", help="do not print the tables")
+    ap.add_argument("--busy", metavar="FILE", help="the same suite's JSON from `bench --busy K`: adds the busy machine table")
     args = ap.parse_args(argv)
 
     if args.check:
@@ -576,7 +729,18 @@ def main(argv):
     out_dir = args.out or os.path.dirname(os.path.abspath(args.json))
     os.makedirs(out_dir, exist_ok=True)
 
-    text = markdown(results, args.json)
+    busy = None
+    if args.busy:
+        try:
+            busy_data = load_json(args.busy)
+        except ReportError as e:
+            print(f"bench_report: {e}", file=sys.stderr)
+            return 1
+        if not isinstance(busy_data, dict) or not isinstance(busy_data.get("benchmarks"), list):
+            print(f"bench_report: {args.busy}: not a Google Benchmark JSON (no \"benchmarks\")", file=sys.stderr)
+            return 1
+        busy = Results(busy_data)
+    text = markdown(results, args.json, busy)
     with open(os.path.join(out_dir, "speedup.md"), "w", encoding="utf-8") as f:
         f.write(text + "\n")
     written = [os.path.join(out_dir, "speedup.md")]

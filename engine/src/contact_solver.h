@@ -12,20 +12,16 @@
 #include <algorithm>
 #include <atomic>
 #include <bit>
-#include <chrono>
 #include <utility>
 #include <vector>
 
 #include "integrate.h"
 #include "restitution_policy.h"
 #include "solver.h"
+#include "stage_clock.h"
 
 namespace quadrant {
 
-using SolverClock = std::chrono::steady_clock;
-inline double Ms(SolverClock::time_point a, SolverClock::time_point b) {
-  return std::chrono::duration<double, std::milli>(b - a).count();
-}
 
 struct PointConstraint {
   Vec2 rA, rB;

@@ -6,6 +6,12 @@
 // per pair, which lets a box rock on its single contact and a stack topple.
 #include "narrow_phase.h"
 
+#include <algorithm>
+#include <cmath>
+
+#include "broad_phase.h"
+#include "world_internal.h"
+
 #include <cfloat>
 
 namespace quadrant {
@@ -15,11 +21,15 @@ namespace {
 // two nearly equal axes from step to step (that would change feature ids and lose warm starts).
 constexpr Real kAxisPreference = Real(0.0005);
 
-// Largest separation of `b` (given in a's frame) along one of a's face normals.
+// Largest separation of `b` (given in a's frame) along one of a's face normals. kA and kB are
+// the vertex counts when known at compile time (0: read them at run time).
+template <int kA, int kB>
 Real MaxSeparation(const Polygon& a, const Vec2* bVerts, int bCount, int* edgeOut) {
+  const int aCount = kA > 0 ? kA : a.count;
+  if constexpr (kB > 0) bCount = kB;
   Real best = -FLT_MAX;
   int bestEdge = 0;
-  for (int i = 0; i < a.count; ++i) {
+  for (int i = 0; i < aCount; ++i) {
     const Vec2 n = a.normals[i];
     const Vec2 v = a.vertices[i];
     Real minDot = FLT_MAX;
@@ -130,21 +140,30 @@ Manifold CollidePolygonAndCircle(const Polygon& a, Transform xfA, const Circle& 
   return m;
 }
 
-Manifold CollidePolygons(const Polygon& a, Transform xfA, const Polygon& b, Transform xfB, Real speculative) {
+namespace {
+
+// CollidePolygons with the vertex counts kA, kB fixed at compile time (0: at run time). Box
+// pairs (4 and 4), the pyramid's and the stacks' only pairs, get fully unrolled loops: the same
+// operations in the same order, so the same manifold bit for bit. Base-100 pyramid: see the
+// commit that added it for the instruction counts.
+template <int kA, int kB>
+Manifold CollidePolygonsT(const Polygon& a, Transform xfA, const Polygon& b, Transform xfB, Real speculative) {
+  const int aCount = kA > 0 ? kA : a.count;
+  const int bCount = kB > 0 ? kB : b.count;
   Manifold m;
   // Each polygon's vertices in the other's frame, so both axis searches are plain dot products.
   const Transform bInA = InvMulTransforms(xfA, xfB);
   const Transform aInB = InvMulTransforms(xfB, xfA);
   Vec2 bVerts[kMaxPolygonVertices];
   Vec2 aVerts[kMaxPolygonVertices];
-  for (int i = 0; i < b.count; ++i) bVerts[i] = TransformPoint(bInA, b.vertices[i]);
-  for (int i = 0; i < a.count; ++i) aVerts[i] = TransformPoint(aInB, a.vertices[i]);
+  for (int i = 0; i < bCount; ++i) bVerts[i] = TransformPoint(bInA, b.vertices[i]);
+  for (int i = 0; i < aCount; ++i) aVerts[i] = TransformPoint(aInB, a.vertices[i]);
 
   int edgeA = 0;
-  const Real sepA = MaxSeparation(a, bVerts, b.count, &edgeA);
+  const Real sepA = MaxSeparation<kA, kB>(a, bVerts, bCount, &edgeA);
   if (sepA > speculative) return m;
   int edgeB = 0;
-  const Real sepB = MaxSeparation(b, aVerts, a.count, &edgeB);
+  const Real sepB = MaxSeparation<kB, kA>(b, aVerts, aCount, &edgeB);
   if (sepB > speculative) return m;
 
   const bool flip = sepB > sepA + kAxisPreference;
@@ -153,24 +172,27 @@ Manifold CollidePolygons(const Polygon& a, Transform xfA, const Polygon& b, Tran
   const Vec2* incVerts = flip ? aVerts : bVerts;  // incident vertices in the reference frame
   const Transform& refXf = flip ? xfB : xfA;
   const int refEdge = flip ? edgeB : edgeA;
+  // Either polygon may be the reference one: counts are compile-time only when both are.
+  const int incCount = kA > 0 && kA == kB ? kA : inc.count;
+  const int refCount = kA > 0 && kA == kB ? kA : ref.count;
 
   // Incident edge: the one whose normal is most anti-parallel to the reference normal.
   const Vec2 refNormal = ref.normals[refEdge];
   const Rot incInRef = flip ? InvMul(xfB.q, xfA.q) : InvMul(xfA.q, xfB.q);
   int incEdge = 0;
   Real minDot = FLT_MAX;
-  for (int i = 0; i < inc.count; ++i) {
+  for (int i = 0; i < incCount; ++i) {
     Real d = Dot(refNormal, Rotate(incInRef, inc.normals[i]));
     if (d < minDot) {
       minDot = d;
       incEdge = i;
     }
   }
-  const int incNext = incEdge + 1 < inc.count ? incEdge + 1 : 0;
+  const int incNext = incEdge + 1 < incCount ? incEdge + 1 : 0;
   const ClipVertex incident[2] = {{incVerts[incEdge], uint32_t(incEdge)}, {incVerts[incNext], uint32_t(incNext)}};
 
   const Vec2 r1 = ref.vertices[refEdge];
-  const Vec2 r2 = ref.vertices[refEdge + 1 < ref.count ? refEdge + 1 : 0];
+  const Vec2 r2 = ref.vertices[refEdge + 1 < refCount ? refEdge + 1 : 0];
   const Vec2 tangent = Normalize(r2 - r1);
   ClipVertex clip1[2];
   ClipVertex clip2[2];
@@ -190,6 +212,13 @@ Manifold CollidePolygons(const Polygon& a, Transform xfA, const Polygon& b, Tran
   return m;
 }
 
+}  // namespace
+
+Manifold CollidePolygons(const Polygon& a, Transform xfA, const Polygon& b, Transform xfB, Real speculative) {
+  if (a.count == 4 && b.count == 4) return CollidePolygonsT<4, 4>(a, xfA, b, xfB, speculative);
+  return CollidePolygonsT<0, 0>(a, xfA, b, xfB, speculative);
+}
+
 Manifold Collide(const ShapeDef& a, Transform xfA, const ShapeDef& b, Transform xfB, Real speculative) {
   if (a.type == ShapeType::kCircle) {
     if (b.type == ShapeType::kCircle) return CollideCircles(a.circle, xfA, b.circle, xfB, speculative);
@@ -199,6 +228,55 @@ Manifold Collide(const ShapeDef& a, Transform xfA, const ShapeDef& b, Transform 
   }
   if (b.type == ShapeType::kCircle) return CollidePolygonAndCircle(a.polygon, xfA, b.circle, xfB, speculative);
   return CollidePolygons(a.polygon, xfA, b.polygon, xfB, speculative);
+}
+
+// The pair loop of the narrow phase (the world runs it over blocks of the broad phase's pairs,
+// one output list per worker).
+void CollidePairs(const Bodies& bodies, const WorldDef& def, Real dt, std::span<const CandidatePair> pairs,
+                  std::vector<Contact>& out) {
+  for (const CandidatePair& p : pairs) {
+    const int a = p.a, b = p.b;
+    // Two bodies that cannot be moved by contacts (kinematic vs kinematic) need no manifold.
+    if (!(bodies.dynamic[a] | bodies.dynamic[b])) continue;
+    // How far the two surfaces can approach each other this step, plus the base distance: points
+    // closer than this become speculative constraints (the solver lets the gap close, no more).
+    const BodyVelocity& va = bodies.vel[a];
+    const BodyVelocity& vb = bodies.vel[b];
+    const Real sweep = def.effects.continuous ? dt : Real(0);
+    const Real spec = def.speculativeDistance +
+                      sweep * (Length(vb.v - va.v) + std::abs(va.w) * bodies.boundRadius[a] + std::abs(vb.w) * bodies.boundRadius[b]);
+    // Bounding circles reject most AABB-overlapping pairs before any shape test.
+    const Real reach = bodies.boundRadius[a] + bodies.boundRadius[b] + spec;
+    if (LengthSquared(bodies.center[b] - bodies.center[a]) > reach * reach) continue;
+    Manifold m = Collide(bodies.shape[a], bodies.xf[a], bodies.shape[b], bodies.xf[b], spec);
+    if (m.pointCount == 0) continue;
+    // Keep a point that is still apart only if it can close within the step at its current
+    // approach speed (plus the base distance for gravity and other contacts' pushes). The rest
+    // are far more numerous in sparse scenes (99 % at the stress scenes' density) and would
+    // only cost solver iterations.
+    int kept = 0;
+    for (int k = 0; k < m.pointCount; ++k) {
+      const ManifoldPoint& mp = m.points[k];
+      if (mp.separation > def.speculativeDistance) {
+        const Vec2 rA = mp.point - bodies.center[a];
+        const Vec2 rB = mp.point - bodies.center[b];
+        const Vec2 dv = vb.v + Cross(vb.w, rB) - va.v - Cross(va.w, rA);
+        const Real approach = -Dot(dv, m.normal);
+        if (mp.separation > def.speculativeDistance + sweep * approach) continue;
+      }
+      m.points[kept++] = mp;
+    }
+    m.pointCount = kept;
+    if (kept == 0) continue;
+    Contact c;
+    c.a = a;
+    c.b = b;
+    // Mixing as Box2D: friction geometric mean, restitution the larger.
+    c.friction = std::sqrt(bodies.shape[a].friction * bodies.shape[b].friction);
+    c.restitution = std::max(bodies.shape[a].restitution, bodies.shape[b].restitution);
+    c.manifold = m;
+    out.push_back(c);
+  }
 }
 
 }  // namespace quadrant

@@ -2,15 +2,14 @@
 #include "quadrants_scheme.h"
 
 #include <algorithm>
-#include <chrono>
 
 #include "quadrant/task_system.h"
+#include "stage_clock.h"
 
 namespace quadrant {
 namespace {
 
-using Clock = std::chrono::steady_clock;
-double Ms(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double, std::milli>(b - a).count(); }
+using Clock = StageClock;
 
 // Interleaves the bits of x and y (Morton order), so a block of consecutive cells is a compact
 // region: for 4 threads at level 1 each thread gets one quadrant, for 2 threads a half.

@@ -23,7 +23,7 @@
 namespace quadrant {
 namespace {
 
-using Clock = SolverClock;
+using Clock = StageClock;
 
 class PgsSolver final : public ContactSolverBase {
  public:

@@ -28,15 +28,27 @@
 // by load / stiffness whatever the sub-step (1000 N on a 1 kg box's corner at 30 Hz: 0.071 m).
 // The Quadrant adapter turns a scene's larger solver budget into more sub-steps with the
 // stiffness scaled along (quadrant_adapter.cpp says why).
+//
+// Data (issue #13, after Box2D 3's layout; the code is this project's): the sub-steps work on a
+// 32-byte solver state per body (velocity, and the motion dp, dq since the step began), not on
+// the body arrays, and on the contact rows in structure-of-arrays groups of four per graph
+// colour, solved four at a time with SSE2 (soft_rows.h; the one-row path gives the same bits,
+// WorldDef::softSimd, SoftSimdTest). A point's separation in a sub-step is its prepared one plus
+// the normal part of how far its anchors moved; the anchors, fixed at preparation, are also the
+// lever arms (Box2D 3 does the same). The bounce shifts and the position pass act on the states
+// too, and the states go back to the bodies once, after the position pass. Base-100 pyramid,
+// instructions per step (callgrind, 1 thread): 80.9M at c70fd1b, 38.9M now (solver 62.1M ->
+// 22.7M); docs/soft_step.md has the steps.
 #include <cmath>
 #include <numbers>
 
 #include "contact_solver.h"
+#include "soft_rows.h"
 
 namespace quadrant {
 namespace {
 
-using Clock = SolverClock;
+using Clock = StageClock;
 
 // Soft constraint coefficients for a spring of `hertz` and damping ratio `zeta` over step h:
 // the bias velocity is biasRate * C, and massScale / impulseScale soften the impulse.
@@ -93,102 +105,418 @@ class SoftStepSolver final : public ContactSolverBase {
       const Vec2 stepGravity = def.effects.gravity ? ctx.dt * def.gravity : Vec2{};
       ApplyCollisionPasses<kRotation>(run, bodies, def, Real(1) / ctx.dt, stepGravity);
     }
+    // The sub-steps run on the compact solver state (velocity and motion since the step began,
+    // 32 bytes a body) and on the rows in groups of four (soft_rows.h), not on the body arrays
+    // and the constraints.
+    BuildRows(run, soft, staticSoft, def.softMassRatioLimit);
+    auto ti = Clock::now();
+    LoadStates(run, bodies);
+    integrateMs += Ms(ti, Clock::now());
+    const SoftSolveParams prm{invH, def.contactPushMaxDepth, def.contactPushMaxVelocity};
+    const bool simd = def.softSimd;
     for (int sub = 0; sub < n; ++sub) {
-      auto ti = Clock::now();
-      IntegrateVelocities(bodies, def, h, run);
+      ti = Clock::now();
+      IntegrateStateVelocities(run, bodies, def, h);
       integrateMs += Ms(ti, Clock::now());
-      if (def.effects.warmStarting) ForEachColor(run, [&](int b, int e) { WarmStart<kRotation>(bodies, b, e); });
-      ForEachColor(run, [&](int b, int e) { Solve<kRotation, kFriction, true>(bodies, def, soft, staticSoft, invH, b, e); });
+      if (def.effects.warmStarting) {
+        ForEachGroup(run, simd, [&](auto lanes, SoftRowGroup& g, int lane) {
+          WarmStartRows<decltype(lanes), kRotation>(states_.data(), g, lane);
+        });
+      }
+      ForEachGroup(run, simd, [&](auto lanes, SoftRowGroup& g, int lane) {
+        SolveRows<decltype(lanes), kRotation, kFriction, true>(states_.data(), g, lane, prm);
+      });
       ti = Clock::now();
       // The rotation guard is per world step: per sub-step it allowed n times the turn (188 rad/s
       // instead of 47 at 4 sub-steps), and spinning triangles of the soak left the box.
-      IntegratePositions(bodies, def, h, ctx.dt, run);
+      IntegrateStatePositions(run, bodies, def, h, ctx.dt);
       integrateMs += Ms(ti, Clock::now());
-      ForEachColor(run, [&](int b, int e) { Solve<kRotation, kFriction, false>(bodies, def, soft, staticSoft, invH, b, e); });
+      for (int it = 0; it < def.softRelaxIterations; ++it) {
+        ForEachGroup(run, simd, [&](auto lanes, SoftRowGroup& g, int lane) {
+          SolveRows<decltype(lanes), kRotation, kFriction, false>(states_.data(), g, lane, prm);
+        });
+      }
     }
-    if (def.effects.restitution && m > 0) ForEachColor(run, [&](int b, int e) { ApplyBounceShifts(bodies, b, e); });
+    if (def.effects.restitution && m > 0) ForEachColor(run, [&](int b, int e) { ApplyStateBounceShifts(b, e); });
     // Overlap deeper than the soft contacts push out (contactPushMaxDepth) is moved out here, by pgs's
-    // position pass: positions change, velocities do not, so deep overlap cannot fling bodies.
-    if (m > 0) CorrectPositions<kRotation>(run, bodies, def, def.contactPushMaxDepth, def.positionIterations);
+    // position pass (on the solver states): positions change, velocities do not, so deep overlap
+    // cannot fling bodies.
+    if (m > 0) CorrectStatePositions<kRotation>(run, def, simd);
+    ti = Clock::now();
+    StoreStates(run, bodies, def);
+    integrateMs += Ms(ti, Clock::now());
+    StoreRowImpulses(run);
     run.For(Stage::kSolve, m, run.MinHeavyItems(), [&](int b, int e, int) { StoreImpulses(ctx.contacts, b, e); });
     const double total = Ms(t0, Clock::now());
     ctx.profile->integrate += integrateMs;
     ctx.profile->solve += total - integrateMs;
   }
 
-  // One pass over the rows: with kBias the soft solve (push-out toward zero separation at a
-  // bounded speed), without it the relax pass (rigid rows, no bias). Speculative points (still
-  // apart) may close their gap within the sub-step, no more, in both passes.
-  //
-  // Friction is solved in the relax pass only (as Box2D 3 does since it split its push stage):
-  // during the soft solve the velocities still carry the push-out the relax pass removes and the
-  // normal impulse its soft bias, so a friction row there resists a sliding that is not real
-  // and is bounded by a load that is not real, and the warm start carries its impulse into the
-  // next sub-step. With friction in both passes the 15-box stack's top crept 0.014 m in 9 s and
-  // slowly toppled (worse at 8 and 16 sub-steps, with less numerical damping: 0.14-0.17 m); with
-  // friction in the relax pass only it moves 0.0003 m.
-  template <bool kRotation, bool kFriction, bool kBias>
-  void Solve(Bodies& bodies, const WorldDef& def, const Softness& soft, const Softness& staticSoft, Real invH,
-             int begin, int end) {
-    for (int c = begin; c < end; ++c) {
-      ContactConstraint& cc = constraints_[c];
-      const Vec2 n = cc.normal;
-      BodyVelocity va = bodies.vel[cc.a];
-      BodyVelocity vb = bodies.vel[cc.b];
-      const Softness& s = (cc.invMassA == 0 || cc.invMassB == 0) ? staticSoft : soft;
-      auto apply = [&](const PointConstraint& pc, Vec2 P) {
-        va.v -= cc.invMassA * P;
-        vb.v += cc.invMassB * P;
-        if constexpr (kRotation) {
-          va.w -= cc.invIA * Cross(pc.rA, P);
-          vb.w += cc.invIB * Cross(pc.rB, P);
-        }
-      };
-      for (int k = 0; k < cc.pointCount; ++k) {
-        PointConstraint& pc = cc.points[k];
-        Vec2 rA, rB;
-        const Real sep = CurrentSeparation<kRotation>(bodies, cc, pc, rA, rB);
-        Real bias = 0, massScale = 1, impulseScale = 0;
-        if (sep > 0) {
-          bias = sep * invH;
-        } else if constexpr (kBias) {
-          if (sep >= -def.contactPushMaxDepth) {
-            bias = std::max(s.biasRate * sep, -def.contactPushMaxVelocity);
-            massScale = s.massScale;
-            impulseScale = s.impulseScale;
-          } else {
-            // Deeper than the cap: a rigid row (holds any load) pushing apart at the cap's rate;
-            // the rest of the overlap is left to the position pass after the sub-steps.
-            bias = std::max(-s.biasRate * def.contactPushMaxDepth, -def.contactPushMaxVelocity);
+  // The rows in groups of four, colour by colour (a colour's last group padded), from the
+  // prepared constraints. Friction is solved in the relax pass only (as Box2D 3 does since it
+  // split its push stage): during the soft solve the velocities still carry the push-out the
+  // relax pass removes and the normal impulse its soft bias, so a friction row there resists a
+  // sliding that is not real and is bounded by a load that is not real, and the warm start
+  // carries its impulse into the next sub-step. With friction in both passes the 15-box stack's
+  // top crept 0.014 m in 9 s and slowly toppled (worse at 8 and 16 sub-steps, with less
+  // numerical damping: 0.14-0.17 m); with friction in the relax pass only it moves 0.0003 m.
+  void BuildRows(StageRunner& run, const Softness& soft, const Softness& staticSoft, Real massLimit) {
+    groupStart_.assign(kColors + 2, 0);
+    for (int k = 0; k <= kColors; ++k) {
+      const int count = colorStart_[k + 1] - colorStart_[k];
+      groupStart_[k + 1] = groupStart_[k] + (count + kLanes - 1) / kLanes;
+    }
+    groups_.resize(groupStart_[kColors + 1]);
+    for (int k = 0; k <= kColors; ++k) {
+      const int begin = groupStart_[k], count = groupStart_[k + 1] - begin;
+      if (count == 0) continue;
+      run.For(Stage::kSolve, count, std::max(1, MinColorItems(run) / kLanes), [&](int gb, int ge, int) {
+        for (int gi = begin + gb; gi < begin + ge; ++gi) {
+          SoftRowGroup& g = groups_[gi];
+          for (int lane = 0; lane < kLanes; ++lane) {
+            const int c = colorStart_[k] + (gi - begin) * kLanes + lane;
+            if (c >= colorStart_[k + 1]) {
+              PadLane(g, lane);
+              continue;
+            }
+            const ContactConstraint& cc = constraints_[c];
+            g.a[lane] = cc.a;
+            g.b[lane] = cc.b;
+            g.constraint[lane] = c;
+            g.nx[lane] = cc.normal.x;
+            g.ny[lane] = cc.normal.y;
+            g.friction[lane] = cc.friction;
+            g.invMassA[lane] = cc.invMassA;
+            g.invIA[lane] = cc.invIA;
+            g.invMassB[lane] = cc.invMassB;
+            g.invIB[lane] = cc.invIB;
+            // WorldDef::softMassRatioLimit: in a contact of two dynamic bodies whose masses differ
+            // by more than the limit, the lighter one takes part as if it were only `limit` times
+            // lighter (its inverse mass and inertia scaled down alike), so the heavy body's load
+            // cannot drive it out of the way within the sub-step's single pass (docs/soft_step.md
+            // gives the figures: a 1000 kg box on a 1 kg slab sinks 0.16 m and slides 0.86 m at
+            // 4 sub-steps without it, 0.004 m and 0.0001 m with a limit of 10).
+            bool limited = false;
+            if (massLimit > 0 && cc.invMassA > 0 && cc.invMassB > 0) {
+              if (cc.invMassA > massLimit * cc.invMassB) {
+                const Real f = massLimit * cc.invMassB / cc.invMassA;
+                g.invMassA[lane] *= f;
+                g.invIA[lane] *= f;
+                limited = true;
+              } else if (cc.invMassB > massLimit * cc.invMassA) {
+                const Real f = massLimit * cc.invMassA / cc.invMassB;
+                g.invMassB[lane] *= f;
+                g.invIB[lane] *= f;
+                limited = true;
+              }
+            }
+            const Softness& s = (cc.invMassA == 0 || cc.invMassB == 0) ? staticSoft : soft;
+            g.biasRate[lane] = s.biasRate;
+            g.massScale[lane] = s.massScale;
+            g.impulseScale[lane] = s.impulseScale;
+            for (int pt = 0; pt < 2; ++pt) {
+              SoftPointRows& p = g.p[pt];
+              if (pt >= cc.pointCount) {
+                PadPoint(p, lane);
+                continue;
+              }
+              const PointConstraint& pc = cc.points[pt];
+              p.rAx[lane] = pc.rA.x;
+              p.rAy[lane] = pc.rA.y;
+              p.rBx[lane] = pc.rB.x;
+              p.rBy[lane] = pc.rB.y;
+              p.separation[lane] = pc.separation;
+              p.normalMass[lane] = pc.normalMass;
+              p.tangentMass[lane] = pc.tangentMass;
+              if (limited) {
+                const Vec2 n = cc.normal, t = RightPerp(n);
+                const Real rnA = Cross(pc.rA, n), rnB = Cross(pc.rB, n);
+                const Real rtA = Cross(pc.rA, t), rtB = Cross(pc.rB, t);
+                const Real mA = g.invMassA[lane], mB = g.invMassB[lane], iA = g.invIA[lane], iB = g.invIB[lane];
+                const Real kn = mA + mB + iA * rnA * rnA + iB * rnB * rnB;
+                const Real kt = mA + mB + iA * rtA * rtA + iB * rtB * rtB;
+                p.normalMass[lane] = kn > 0 ? Real(1) / kn : Real(0);
+                p.tangentMass[lane] = kt > 0 ? Real(1) / kt : Real(0);
+              }
+              p.normalImpulse[lane] = pc.normalImpulse;
+              p.tangentImpulse[lane] = pc.tangentImpulse;
+              p.collisionImpulse[lane] = pc.collisionImpulse;
+            }
           }
         }
-        const Real vn = Dot(RelativeVelocity<kRotation>(va, vb, pc), n);
-        const Real impulse = -pc.normalMass * massScale * (vn + bias) - impulseScale * pc.normalImpulse;
-        const Real newImpulse = std::max(pc.normalImpulse + impulse, Real(0));
-        const Real lambda = newImpulse - pc.normalImpulse;
-        pc.normalImpulse = newImpulse;
-        apply(pc, lambda * n);
-      }
-      if constexpr (kFriction && !kBias) {
-        const Vec2 t = RightPerp(n);
-        for (int k = 0; k < cc.pointCount; ++k) {
-          PointConstraint& pc = cc.points[k];
-          const Real vt = Dot(RelativeVelocity<kRotation>(va, vb, pc), t);
-          // Coulomb over the whole impact, as pgs: the step's collision impulse (ApplyCollisions)
-          // counts. Bounded by the sub-steps' normal impulse alone, a bouncing hit got almost no
-          // friction: the random campaign's p90 difference to Box2D was 49 %, now 9.5 %
-          // (2000 hits, seed 17; README "validation").
-          const Real maxFriction = cc.friction * (pc.normalImpulse + pc.collisionImpulse);
-          const Real newImpulse = std::clamp(pc.tangentImpulse - pc.tangentMass * vt, -maxFriction, maxFriction);
-          const Real lambda = newImpulse - pc.tangentImpulse;
-          pc.tangentImpulse = newImpulse;
-          apply(pc, lambda * t);
-        }
-      }
-      if (cc.invMassA > 0) bodies.vel[cc.a] = va;
-      if (cc.invMassB > 0) bodies.vel[cc.b] = vb;
+      });
     }
   }
+
+  static void PadPoint(SoftPointRows& p, int lane) {
+    p.rAx[lane] = p.rAy[lane] = p.rBx[lane] = p.rBy[lane] = 0;
+    p.separation[lane] = kPadSeparation;
+    p.normalMass[lane] = p.tangentMass[lane] = 0;
+    p.normalImpulse[lane] = p.tangentImpulse[lane] = 0;
+    p.collisionImpulse[lane] = 0;
+  }
+
+  // A row that touches nothing: inverse masses 0, so it writes no body. It reads the bodies of
+  // the group's first row (always a real one), which only this thread writes in this colour:
+  // any other body could be written by another thread meanwhile (a race, though its values
+  // would be discarded).
+  static void PadLane(SoftRowGroup& g, int lane) {
+    g.a[lane] = g.a[0];
+    g.b[lane] = g.b[0];
+    g.constraint[lane] = -1;
+    g.nx[lane] = 0;
+    g.ny[lane] = 1;
+    g.friction[lane] = 0;
+    g.invMassA[lane] = g.invIA[lane] = g.invMassB[lane] = g.invIB[lane] = 0;
+    g.biasRate[lane] = 0;
+    g.massScale[lane] = 1;
+    g.impulseScale[lane] = 0;
+    PadPoint(g.p[0], lane);
+    PadPoint(g.p[1], lane);
+  }
+
+  // fn(lanes, group, lane): lanes is a Real (one row: the given lane) or an F4 (the four rows
+  // from lane 0). The overflow colour's rows may share bodies: one at a time, in order, on one
+  // thread.
+  template <class Fn>
+  void ForEachGroup(StageRunner& run, bool simd, Fn&& fn) {
+    auto rows = [&](int gb, int ge) {
+#if QUADRANT_SOFT_SIMD
+      if (simd) {
+        for (int gi = gb; gi < ge; ++gi) fn(F4{}, groups_[gi], 0);
+        return;
+      }
+#else
+      (void)simd;
+#endif
+      for (int gi = gb; gi < ge; ++gi) {
+        for (int lane = 0; lane < kLanes; ++lane) fn(Real{}, groups_[gi], lane);
+      }
+    };
+    const int minGroups = std::max(1, MinColorItems(run) / kLanes);
+    for (int color = 0; color < kColors; ++color) {
+      const int begin = groupStart_[color], count = groupStart_[color + 1] - begin;
+      if (count == 0) continue;
+      run.For(Stage::kSolve, count, minGroups, [&](int b, int e, int) { rows(begin + b, begin + e); });
+    }
+    const int begin = groupStart_[kColors], end = groupStart_[kColors + 1];
+    if (begin < end) {
+      run.Serial(Stage::kSolve, [&] {
+        for (int gi = begin; gi < end; ++gi) {
+          for (int lane = 0; lane < kLanes; ++lane) fn(Real{}, groups_[gi], lane);
+        }
+      });
+    }
+  }
+
+  // ApplyBounceShifts (contact_solver.h) on the solver states.
+  void ApplyStateBounceShifts(int begin, int end) {
+    for (int c = begin; c < end; ++c) {
+      const ContactConstraint& cc = constraints_[c];
+      Real shift = 0;
+      for (int k = 0; k < cc.pointCount; ++k) shift = std::max(shift, cc.points[k].bounceShift);
+      const Real sum = cc.invMassA + cc.invMassB;
+      if (shift == 0 || sum == 0) continue;
+      const Vec2 d = (shift / sum) * cc.normal;
+      if (cc.invMassA > 0) states_[cc.a].dp += cc.invMassA * d;
+      if (cc.invMassB > 0) states_[cc.b].dp -= cc.invMassB * d;
+    }
+  }
+
+  // Up to positionIterations passes of SolvePositionRows (soft_rows.h), colour by colour; a pass
+  // that moves nothing leaves every later one nothing to do, so the loop stops there.
+  template <bool kRotation>
+  void CorrectStatePositions(StageRunner& run, const WorldDef& def, bool simd) {
+    const SoftPositionParams prm{def.contactPushMaxDepth, def.baumgarte, def.maxLinearCorrection};
+    SolverBody* states = states_.data();
+    for (int it = 0; it < def.positionIterations; ++it) {
+      std::atomic<bool> anyMoved{false};
+      ForEachGroup(run, simd, [&](auto lanes, SoftRowGroup& g, int lane) {
+        bool moved = false;
+        if constexpr (std::is_same_v<decltype(lanes), Real>) {
+          SolvePositionRows<Real, kRotation>(states, g, lane, prm, moved);
+        } else if (!SolvePositionRows<decltype(lanes), kRotation>(states, g, lane, prm, moved)) {
+          for (int l = 0; l < kLanes; ++l) SolvePositionRows<Real, kRotation>(states, g, l, prm, moved);
+        }
+        if (moved) anyMoved.store(true, std::memory_order_relaxed);
+      });
+      if (!anyMoved.load(std::memory_order_relaxed)) break;  // read after the last colour's join
+    }
+  }
+
+  // The accumulated impulses back into the constraints (StoreImpulses keeps them for the next
+  // step's warm start).
+  void StoreRowImpulses(StageRunner& run) {
+    const int count = static_cast<int>(groups_.size());
+    run.For(Stage::kSolve, count, std::max(1, run.MinHeavyItems() / kLanes), [&](int gb, int ge, int) {
+      for (int gi = gb; gi < ge; ++gi) {
+        const SoftRowGroup& g = groups_[gi];
+        for (int lane = 0; lane < kLanes; ++lane) {
+          if (g.constraint[lane] < 0) continue;
+          ContactConstraint& cc = constraints_[g.constraint[lane]];
+          for (int pt = 0; pt < cc.pointCount; ++pt) {
+            cc.points[pt].normalImpulse = g.p[pt].normalImpulse[lane];
+            cc.points[pt].tangentImpulse = g.p[pt].tangentImpulse[lane];
+          }
+        }
+      }
+    });
+  }
+
+  // The solver state of every body: its velocity (after the restitution passes), no motion yet.
+  void LoadStates(StageRunner& run, const Bodies& bodies) {
+    states_.resize(bodies.Count());
+    run.For(Stage::kIntegrate, bodies.Count(), run.MinItems(), [&](int b, int e, int) {
+      for (int i = b; i < e; ++i) states_[i] = SolverBody{bodies.vel[i].v, bodies.vel[i].w, 0, Vec2{}, Rot{}};
+    });
+  }
+
+  // Gravity and damping over a sub-step, as IntegrateVelocities does on the bodies: for bodies
+  // with an inverse mass (dynamic and awake; a sleeping body has inverse mass 0).
+  void IntegrateStateVelocities(StageRunner& run, const Bodies& bodies, const WorldDef& def, Real h) {
+    const Effects& fx = def.effects;
+    if (!fx.gravity && !fx.damping) return;
+    const Vec2 dv = fx.gravity ? h * def.gravity : Vec2{};
+#if QUADRANT_SOFT_SIMD
+    // Gravity alone: one four-wide add per body of (dv.x, dv.y, -0, -0), which leaves w and the
+    // pad word exactly as they are (x + -0 is x for every x, signed zeros included).
+    if (!fx.damping && def.softSimd) {
+      const __m128 add = _mm_set_ps(-0.0f, -0.0f, dv.y, dv.x);
+      run.For(Stage::kIntegrate, bodies.Count(), run.MinItems(), [&](int b, int e, int) {
+        for (int i = b; i < e; ++i) {
+          if (bodies.inv[i].invMass == 0) continue;
+          float* v = &states_[i].v.x;
+          _mm_storeu_ps(v, _mm_add_ps(_mm_loadu_ps(v), add));
+        }
+      });
+      return;
+    }
+#endif
+    run.For(Stage::kIntegrate, bodies.Count(), run.MinItems(), [&](int b, int e, int) {
+      for (int i = b; i < e; ++i) {
+        if (bodies.inv[i].invMass == 0) continue;
+        SolverBody& st = states_[i];
+        st.v += dv;
+        if (fx.damping) {
+          st.v = (Real(1) / (Real(1) + h * bodies.linearDamping[i])) * st.v;
+          st.w *= Real(1) / (Real(1) + h * bodies.angularDamping[i]);
+        }
+      }
+    });
+  }
+
+  // Motion over a sub-step, with integrate.cpp's guards (speed limit; the turn limit per world
+  // step stepDt). Every moving body (dynamic awake or kinematic) moves; static ones stay.
+  void IntegrateStatePositions(StageRunner& run, const Bodies& bodies, const WorldDef& def, Real h, Real stepDt) {
+    const Real maxSpeed2 = def.maxLinearSpeed * def.maxLinearSpeed;
+    const Real maxAngularSpeed = def.maxRotation / stepDt;
+    const bool rotation = def.effects.rotation, sleep = def.effects.sleep;
+    run.For(Stage::kIntegrate, bodies.Count(), run.MinItems(), [&](int b, int e, int) {
+      int i = b;
+#if QUADRANT_SOFT_SIMD
+      // Four bodies at a time: the same operations per body as the loop below (IntegrateRot's
+      // small-angle branch is TurnBy), so the same bits. Circle stress (N = 4000, soft_step):
+      // this pass was a third of the step's instructions, most of them IntegrateRot calls.
+      if (def.softSimd) {
+        for (; i + kLanes <= e; i += kLanes) {
+          if (!IntegrateFour(bodies, i, sleep, rotation, h, maxSpeed2, def.maxLinearSpeed, maxAngularSpeed)) {
+            IntegrateOne(bodies, i, sleep, rotation, h, maxSpeed2, def.maxLinearSpeed, maxAngularSpeed);
+            IntegrateOne(bodies, i + 1, sleep, rotation, h, maxSpeed2, def.maxLinearSpeed, maxAngularSpeed);
+            IntegrateOne(bodies, i + 2, sleep, rotation, h, maxSpeed2, def.maxLinearSpeed, maxAngularSpeed);
+            IntegrateOne(bodies, i + 3, sleep, rotation, h, maxSpeed2, def.maxLinearSpeed, maxAngularSpeed);
+          }
+        }
+      }
+#endif
+      for (; i < e; ++i) IntegrateOne(bodies, i, sleep, rotation, h, maxSpeed2, def.maxLinearSpeed, maxAngularSpeed);
+    });
+  }
+
+  static bool Moves(const Bodies& bodies, int i, bool sleep) {
+    return sleep ? bodies.awake[i] != 0 : bodies.type[i] != BodyType::kStatic;
+  }
+
+  void IntegrateOne(const Bodies& bodies, int i, bool sleep, bool rotation, Real h, Real maxSpeed2, Real maxSpeed,
+                    Real maxAngularSpeed) {
+    if (!Moves(bodies, i, sleep)) return;
+    SolverBody& st = states_[i];
+    const Real speed2 = LengthSquared(st.v);
+    if (speed2 > maxSpeed2) st.v = (maxSpeed / std::sqrt(speed2)) * st.v;
+    st.w = std::clamp(st.w, -maxAngularSpeed, maxAngularSpeed);
+    st.dp += h * st.v;
+    if (rotation && st.w != 0) st.dq = IntegrateRot(st.dq, h * st.w);
+  }
+
+#if QUADRANT_SOFT_SIMD
+  // Bodies i..i+3; returns false, having written nothing, if one of them turns by 0.5 rad or
+  // more in the sub-step (IntegrateRot takes sin and cos there).
+  bool IntegrateFour(const Bodies& bodies, int i, bool sleep, bool rotation, Real h, Real maxSpeed2, Real maxSpeed,
+                     Real maxAngularSpeed) {
+    float* s0 = &states_[i].v.x;
+    __m128 a0 = _mm_loadu_ps(s0), a1 = _mm_loadu_ps(s0 + 8), a2 = _mm_loadu_ps(s0 + 16), a3 = _mm_loadu_ps(s0 + 24);
+    __m128 b0 = _mm_loadu_ps(s0 + 4), b1 = _mm_loadu_ps(s0 + 12), b2 = _mm_loadu_ps(s0 + 20), b3 = _mm_loadu_ps(s0 + 28);
+    _MM_TRANSPOSE4_PS(a0, a1, a2, a3);
+    _MM_TRANSPOSE4_PS(b0, b1, b2, b3);
+    F4 vx{a0}, vy{a1}, w{a2}, dpx{b0}, dpy{b1}, qc{b2}, qs{b3};
+    const F4 speed2 = vx * vx + vy * vy;
+    const M4 fast = Greater(speed2, Splat(maxSpeed2, F4{}));
+    if (Any(fast)) {
+      const F4 scale = Div(Splat(maxSpeed, F4{}), Sqrt(speed2));
+      vx = Select(fast, scale * vx, vx);
+      vy = Select(fast, scale * vy, vy);
+    }
+    const F4 maxW = Splat(maxAngularSpeed, F4{});
+    w = Min(Max(w, Neg(maxW)), maxW);
+    const F4 hv = Splat(h, F4{});
+    dpx = dpx + hv * vx;
+    dpy = dpy + hv * vy;
+    if (rotation) {
+      const F4 turn = hv * w;
+      const M4 turns = {_mm_cmpneq_ps(w.v, _mm_setzero_ps())};
+      if (Any(turns)) {
+        if (Any(GreaterEqual(Max(turn, Neg(turn)), Splat(Real(0.5), F4{})))) return false;
+        F4 c = qc, sn = qs;
+        TurnBy(c, sn, turn);
+        qc = Select(turns, c, qc);
+        qs = Select(turns, sn, qs);
+      }
+    }
+    a0 = vx.v, a1 = vy.v, a2 = w.v, a3 = _mm_setzero_ps();
+    b0 = dpx.v, b1 = dpy.v, b2 = qc.v, b3 = qs.v;
+    _MM_TRANSPOSE4_PS(a0, a1, a2, a3);
+    _MM_TRANSPOSE4_PS(b0, b1, b2, b3);
+    const __m128 as[4] = {a0, a1, a2, a3}, bs[4] = {b0, b1, b2, b3};
+    for (int k = 0; k < kLanes; ++k) {
+      if (!Moves(bodies, i + k, sleep)) continue;
+      _mm_storeu_ps(s0 + 8 * k, as[k]);
+      _mm_storeu_ps(s0 + 8 * k + 4, bs[k]);
+    }
+    return true;
+  }
+#endif
+
+  // Back to the bodies: velocity, centre (where the step began plus the motion) and rotation.
+  void StoreStates(StageRunner& run, Bodies& bodies, const WorldDef& def) {
+    const bool sleep = def.effects.sleep;
+    run.For(Stage::kIntegrate, bodies.Count(), run.MinItems(), [&](int b, int e, int) {
+      for (int i = b; i < e; ++i) {
+        if (sleep ? bodies.awake[i] == 0 : bodies.type[i] == BodyType::kStatic) continue;
+        const SolverBody& st = states_[i];
+        bodies.vel[i] = BodyVelocity{st.v, st.w};
+        bodies.center[i] = center0_[i] + st.dp;
+        if (st.dq.s != 0 || st.dq.c != 1) {
+          const Rot q = Mul(rot0_[i], st.dq);
+          const Real inv = Real(1) / std::sqrt(q.c * q.c + q.s * q.s);
+          bodies.xf[i].q = {q.c * inv, q.s * inv};
+        }
+        SyncTransform(bodies, i);
+      }
+    });
+  }
+
+  std::vector<SolverBody> states_;
+  std::vector<SoftRowGroup> groups_;
+  std::vector<int> groupStart_;
 };
 
 }  // namespace

@@ -1,9 +1,10 @@
 // Runs the step's stages on the task system and measures their load balance.
 //
 // Every block of every parallel stage is timed. Per stage the runner adds up the total work
-// and the critical path (the largest worker share of each parallel section, all of each serial
-// one); work / critical path is the speed-up that the partition allows at this thread count,
-// whatever the machine's core count.
+// and the critical path (the largest block of each parallel section, all of each serial one);
+// work / critical path is the speed-up that the partition allows at this thread count, whatever
+// the machine's core count. There are as many blocks as threads, but any thread may run any
+// block (task_system.h), so the times are kept per block index, never per thread.
 //
 // Which clock: with more threads than cores, blocks are timed with the thread's own CPU clock,
 // so a worker that the OS preempts in favour of another of the pool is not charged for the
@@ -50,8 +51,9 @@ class StageRunner {
   /// hundred of them already pay for a parallel-for instead of staying on one thread.
   int MinHeavyItems() const { return std::max(1, minItems_ / 8); }
 
-  /// Runs fn(begin, end, worker) over [0, count) in parallel when count >= minParallel,
-  /// otherwise inline on the caller as one block (worker 0). Both give the same results for
+  /// Runs fn(begin, end, block) over [0, count) in parallel when count >= minParallel,
+  /// otherwise inline on the caller as one block (block 0). `block` indexes per-block outputs
+  /// (Workers() of them); it says nothing about which thread runs the block. Both give the same results for
   /// work whose blocks are independent.
   template <class Fn>
   void For(Stage stage, int count, int minParallel, Fn&& fn) {
@@ -61,10 +63,10 @@ class StageRunner {
       return;
     }
     std::fill(workerMs_.begin(), workerMs_.end(), 0.0);
-    tasks_.ParallelFor(count, [&](int begin, int end, int worker) {
+    tasks_.ParallelFor(count, [&](int begin, int end, int block) {
       const double t0 = NowMs();
-      fn(begin, end, worker);
-      workerMs_[worker] += Elapsed(t0);
+      fn(begin, end, block);
+      workerMs_[block] += Elapsed(t0);
     });
     double sum = 0, largest = 0;
     for (double ms : workerMs_) {
@@ -117,7 +119,7 @@ class StageRunner {
 
   TaskSystem& tasks_;
   int minItems_;
-  std::vector<double> workerMs_;
+  std::vector<double> workerMs_;  // per block index
   bool measure_;      // more than one worker: a single one's bound is 1 by definition
   bool threadClock_;  // more workers than cores: time blocks by thread CPU time
   double readMs_;     // the cost of one clock read, subtracted from every timed block

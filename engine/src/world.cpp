@@ -1,7 +1,6 @@
 // The world: body storage, validation, and the step pipeline
 //   broad phase -> narrow phase -> persistence -> solver (velocities, contacts, positions).
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -9,6 +8,7 @@
 
 #include "broad_phase.h"
 #include "contact_cache.h"
+#include "contact_sort.h"
 #include "integrate.h"
 #include "islands.h"
 #include "narrow_phase.h"
@@ -16,6 +16,8 @@
 #include "quadrants_scheme.h"
 #include "quadrant/world.h"
 #include "solver.h"
+#include "stage_clock.h"
+#include "validation.h"
 #include "world_internal.h"
 
 namespace quadrant {
@@ -24,106 +26,7 @@ uint64_t HashBodies(const Bodies& bodies);  // state_hash.cpp
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-double Ms(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double, std::milli>(b - a).count(); }
-
-constexpr int kMaxThreads = 64;
-
-void Require(bool ok, const std::string& message) {
-  if (!ok) throw Error(message);
-}
-
-void ValidateWorldDef(const WorldDef& d) {
-  Require(IsFinite(d.gravity), "WorldDef.gravity is not finite");
-  Require(d.solver == SolverType::kThesis || d.solver == SolverType::kPgs || d.solver == SolverType::kSoftStep,
-          "WorldDef.solver is unknown");
-  Require(d.softSubSteps >= 1, "WorldDef.softSubSteps must be >= 1");
-  Require(d.softSubSteps <= kMaxIterations, "WorldDef.softSubSteps must be <= 1000");
-  Require(IsFinite(d.contactHertz) && d.contactHertz > 0, "WorldDef.contactHertz must be > 0");
-  Require(IsFinite(d.contactDampingRatio) && d.contactDampingRatio >= 0, "WorldDef.contactDampingRatio must be >= 0");
-  Require(IsFinite(d.contactPushMaxVelocity) && d.contactPushMaxVelocity > 0,
-          "WorldDef.contactPushMaxVelocity must be > 0");
-  Require(IsFinite(d.contactPushMaxDepth) && d.contactPushMaxDepth > 0, "WorldDef.contactPushMaxDepth must be > 0");
-  Require(d.broadPhase == BroadPhaseType::kQuadTree || d.broadPhase == BroadPhaseType::kUniformGrid,
-          "WorldDef.broadPhase is unknown");
-  Require(d.velocityIterations >= 1, "WorldDef.velocityIterations must be >= 1");
-  Require(d.velocityIterations <= kMaxIterations, "WorldDef.velocityIterations must be <= 1000");
-  Require(d.positionIterations >= 0, "WorldDef.positionIterations must be >= 0");
-  Require(d.positionIterations <= kMaxIterations, "WorldDef.positionIterations must be <= 1000");
-  Require(d.restitutionIterations >= 1, "WorldDef.restitutionIterations must be >= 1");
-  Require(d.restitutionIterations <= kMaxIterations, "WorldDef.restitutionIterations must be <= 1000");
-  Require(IsFinite(d.linearSlop) && d.linearSlop >= 0, "WorldDef.linearSlop must be finite and >= 0");
-  Require(IsFinite(d.baumgarte) && d.baumgarte >= 0 && d.baumgarte <= 1, "WorldDef.baumgarte must be in [0, 1]");
-  Require(IsFinite(d.maxLinearCorrection) && d.maxLinearCorrection > 0, "WorldDef.maxLinearCorrection must be > 0");
-  Require(IsFinite(d.speculativeDistance) && d.speculativeDistance >= 0,
-          "WorldDef.speculativeDistance must be finite and >= 0");
-  Require(IsFinite(d.restitutionThreshold) && d.restitutionThreshold >= 0,
-          "WorldDef.restitutionThreshold must be finite and >= 0");
-  Require(d.restitution == RestitutionPolicy::kCollisions || d.restitution == RestitutionPolicy::kBox2d,
-          "WorldDef.restitution is unknown");
-  Require(d.restitution == RestitutionPolicy::kCollisions || d.solver == SolverType::kPgs,
-          "WorldDef.restitution = kBox2d needs SolverType::kPgs");
-  Require(IsFinite(d.polygonSkin) && d.polygonSkin >= 0 && 2 * d.polygonSkin <= d.speculativeDistance,
-          "WorldDef.polygonSkin must be in [0, speculativeDistance / 2]");
-  // The quadrants scheme solves private copies of its bodies without their shapes (quadrants_scheme.cpp).
-  Require(d.polygonSkin == 0 || d.scheme == ParallelScheme::kDeterministic,
-          "WorldDef.polygonSkin > 0 is not supported with ParallelScheme::kQuadrants (use kDeterministic)");
-  Require(IsFinite(d.maxLinearSpeed) && d.maxLinearSpeed > 0, "WorldDef.maxLinearSpeed must be > 0");
-  Require(IsFinite(d.maxRotation) && d.maxRotation > 0, "WorldDef.maxRotation must be > 0");
-  Require(d.threadCount >= 1 && d.threadCount <= kMaxThreads, "WorldDef.threadCount must be in [1, 64]");
-  Require(d.quadTreeMaxDepth >= 1 && d.quadTreeMaxDepth <= 12, "WorldDef.quadTreeMaxDepth must be in [1, 12]");
-  Require(d.minParallelItems >= 1, "WorldDef.minParallelItems must be >= 1");
-  Require(d.scheme == ParallelScheme::kDeterministic || d.scheme == ParallelScheme::kQuadrants,
-          "WorldDef.scheme is unknown");
-  Require(IsFinite(d.linearSleepTolerance) && d.linearSleepTolerance >= 0,
-          "WorldDef.linearSleepTolerance must be finite and >= 0");
-  Require(IsFinite(d.angularSleepTolerance) && d.angularSleepTolerance >= 0,
-          "WorldDef.angularSleepTolerance must be finite and >= 0");
-  Require(IsFinite(d.timeToSleep) && d.timeToSleep > 0, "WorldDef.timeToSleep must be finite and > 0");
-  // The quadrants scheme solves private copies of its regions' bodies (quadrants_scheme.cpp)
-  // that carry no sleep state, and its results depend on the thread count anyway; sleeping is
-  // refused there rather than half supported.
-  Require(!(d.effects.sleep && d.scheme == ParallelScheme::kQuadrants),
-          "WorldDef.effects.sleep is not supported with ParallelScheme::kQuadrants (use kDeterministic)");
-}
-
-// std::to_string prints 1e-40 as 0.000000; %g keeps the exponent.
-std::string DensityText(Real density) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%g", double(density));
-  return buffer;
-}
-
-// Validates a body definition and returns its shape in canonical form (polygons re-hulled).
-ShapeDef ValidateBodyDef(const BodyDef& def) {
-  Require(def.type == BodyType::kStatic || def.type == BodyType::kKinematic || def.type == BodyType::kDynamic,
-          "BodyDef.type is unknown");
-  Require(IsFinite(def.position) && IsFinite(def.angle), "BodyDef position or angle is not finite");
-  Require(std::abs(def.position.x) <= kMaxCoordinate && std::abs(def.position.y) <= kMaxCoordinate,
-          "BodyDef.position is beyond the coordinate limit of 1e6 m");
-  Require(IsFinite(def.linearVelocity) && IsFinite(def.angularVelocity), "BodyDef velocity is not finite");
-  Require(std::abs(def.linearVelocity.x) <= kMaxInputSpeed && std::abs(def.linearVelocity.y) <= kMaxInputSpeed &&
-              std::abs(def.angularVelocity) <= kMaxInputSpeed,
-          "BodyDef velocity is beyond the limit of 1e6 m/s (rad/s)");
-  Require(IsFinite(def.linearDamping) && def.linearDamping >= 0, "BodyDef.linearDamping must be finite and >= 0");
-  Require(IsFinite(def.angularDamping) && def.angularDamping >= 0, "BodyDef.angularDamping must be finite and >= 0");
-  ShapeDef shape = def.shape;
-  Require(IsFinite(shape.density) && shape.density >= 0, "ShapeDef.density must be finite and >= 0");
-  Require(def.type != BodyType::kDynamic || shape.density > 0, "a dynamic body needs ShapeDef.density > 0");
-  Require(IsFinite(shape.friction) && shape.friction >= 0, "ShapeDef.friction must be finite and >= 0");
-  Require(IsFinite(shape.restitution) && shape.restitution >= 0 && shape.restitution <= 1,
-          "ShapeDef.restitution must be in [0, 1]");
-  if (shape.type == ShapeType::kCircle) {
-    ValidateCircle(shape.circle);
-  } else if (shape.type == ShapeType::kPolygon) {
-    const int count = shape.polygon.count;
-    Require(count >= 3 && count <= kMaxPolygonVertices, "polygon vertex count must be in [3, 8], got " + std::to_string(count));
-    shape.polygon = MakePolygon(std::span<const Vec2>(shape.polygon.vertices.data(), size_t(count)));
-  } else {
-    throw Error("ShapeDef.type is unknown");
-  }
-  return shape;
-}
+using Clock = StageClock;
 
 }  // namespace
 
@@ -167,17 +70,7 @@ struct World::Impl {
   Islands islands;  // only used when def.effects.sleep is on
   std::vector<CandidatePair> pairs;
   std::vector<Contact> contacts;
-  struct SortKey {
-    uint64_t key;
-    uint32_t index;
-  };
-  // One per worker: the radix sort's buffers and the worker's contacts in key order.
-  struct SortPart {
-    std::vector<SortKey> keys, keyScratch;
-    std::vector<uint32_t> radixCounts;
-    std::vector<Contact> sorted;
-  };
-  std::vector<SortPart> sortParts;
+  ContactSorter sorter;
   Profile profile;
   Counters counters;
 
@@ -218,9 +111,7 @@ struct World::Impl {
   void SubStep(Real dt);
   void CountContacts(int candidatePairs);
   void NarrowPhase(Real dt);
-  void SortContacts();
-  void SortPartContacts(const std::vector<Contact>& in, SortPart& part) const;
-  void MergeSortedParts(int ranges);
+  void SortContacts() { sorter.Sort(*run, bodies.Count(), workerContacts, contacts); }
 };
 
 World::World(const WorldDef& def) : impl_(std::make_unique<Impl>()) {
@@ -276,28 +167,30 @@ BodyId World::CreateBody(const BodyDef& def) {
   w.denseOf[slot] = i;
 
   Bodies& b = w.bodies;
+  b.ForEachArray([](auto& v) { v.emplace_back(); });
   const Transform xf{def.position, MakeRot(def.angle)};
-  b.type.push_back(def.type);
-  b.xf.push_back(xf);
-  b.center.push_back(TransformPoint(xf, md.center));
-  b.localCenter.push_back(md.center);
+  b.type[i] = def.type;
+  b.xf[i] = xf;
+  b.center[i] = TransformPoint(xf, md.center);
+  b.localCenter[i] = md.center;
   const bool moves = def.type != BodyType::kStatic;
-  b.vel.push_back(moves ? BodyVelocity{def.linearVelocity, w.def.effects.rotation ? def.angularVelocity : Real(0)}
-                        : BodyVelocity{});
-  b.inv.push_back(dynamic ? BodyInverseMass{Real(1) / md.mass, md.rotationalInertia > 0 ? Real(1) / md.rotationalInertia : Real(0)}
-                          : BodyInverseMass{});
-  b.mass.push_back(dynamic ? md.mass : Real(0));
-  b.inertia.push_back(dynamic ? md.rotationalInertia : Real(0));
-  b.linearDamping.push_back(def.linearDamping);
-  b.angularDamping.push_back(def.angularDamping);
-  b.shape.push_back(shape);
-  b.boundRadius.push_back(boundRadius);
-  b.aabb.push_back({});
-  b.dynamic.push_back(dynamic ? 1 : 0);
-  b.slot.push_back(slot);
-  b.awake.push_back(def.type == BodyType::kStatic ? 0 : 1);
-  b.sleepTime.push_back(0);
-  b.islandOf.push_back(0);
+  b.vel[i] = moves ? BodyVelocity{def.linearVelocity, w.def.effects.rotation ? def.angularVelocity : Real(0)}
+                   : BodyVelocity{};
+  b.inv[i] = dynamic ? BodyInverseMass{Real(1) / md.mass,
+                                       md.rotationalInertia > 0 ? Real(1) / md.rotationalInertia : Real(0)}
+                     : BodyInverseMass{};
+  b.mass[i] = dynamic ? md.mass : Real(0);
+  b.inertia[i] = dynamic ? md.rotationalInertia : Real(0);
+  b.linearDamping[i] = def.linearDamping;
+  b.angularDamping[i] = def.angularDamping;
+  b.shape[i] = shape;
+  b.boundRadius[i] = boundRadius;
+  b.aabb[i] = {};
+  b.dynamic[i] = dynamic ? 1 : 0;
+  b.slot[i] = slot;
+  b.awake[i] = def.type == BodyType::kStatic ? 0 : 1;
+  b.sleepTime[i] = 0;
+  b.islandOf[i] = 0;
   w.UpdateAABB(i, 0);
   w.WakeAround(i);  // a body created touching a sleeping pile wakes it
   return BodyId{slot, w.generation[slot]};
@@ -313,10 +206,7 @@ void World::DestroyBody(BodyId id) {
     v[i] = v[last];
     v.pop_back();
   };
-  moveLast(b.type); moveLast(b.xf); moveLast(b.center); moveLast(b.localCenter); moveLast(b.vel);
-  moveLast(b.inv); moveLast(b.mass); moveLast(b.inertia); moveLast(b.linearDamping);
-  moveLast(b.angularDamping); moveLast(b.shape); moveLast(b.boundRadius); moveLast(b.aabb);
-  moveLast(b.dynamic); moveLast(b.slot); moveLast(b.awake); moveLast(b.sleepTime); moveLast(b.islandOf);
+  b.ForEachArray(moveLast);
   if (i != last) w.denseOf[b.slot[i]] = i;
   w.denseOf[id.index] = -1;
   // Generation 0 means null, so skip it when the counter wraps.
@@ -449,165 +339,6 @@ void World::Impl::NarrowPhase(Real dt) {
                           workerContacts[worker]);
            });
   // The workers' contacts are put in key order and merged by SortContacts.
-}
-
-void CollidePairs(const Bodies& bodies, const WorldDef& def, Real dt, std::span<const CandidatePair> pairs,
-                  std::vector<Contact>& out) {
-  for (const CandidatePair& p : pairs) {
-    const int a = p.a, b = p.b;
-    // Two bodies that cannot be moved by contacts (kinematic vs kinematic) need no manifold.
-    if (!(bodies.dynamic[a] | bodies.dynamic[b])) continue;
-    // How far the two surfaces can approach each other this step, plus the base distance: points
-    // closer than this become speculative constraints (the solver lets the gap close, no more).
-    const BodyVelocity& va = bodies.vel[a];
-    const BodyVelocity& vb = bodies.vel[b];
-    const Real sweep = def.effects.continuous ? dt : Real(0);
-    const Real spec = def.speculativeDistance +
-                      sweep * (Length(vb.v - va.v) + std::abs(va.w) * bodies.boundRadius[a] + std::abs(vb.w) * bodies.boundRadius[b]);
-    // Bounding circles reject most AABB-overlapping pairs before any shape test.
-    const Real reach = bodies.boundRadius[a] + bodies.boundRadius[b] + spec;
-    if (LengthSquared(bodies.center[b] - bodies.center[a]) > reach * reach) continue;
-    Manifold m = Collide(bodies.shape[a], bodies.xf[a], bodies.shape[b], bodies.xf[b], spec);
-    if (m.pointCount == 0) continue;
-    // Keep a point that is still apart only if it can close within the step at its current
-    // approach speed (plus the base distance for gravity and other contacts' pushes). The rest
-    // are far more numerous in sparse scenes (99 % at the stress scenes' density) and would
-    // only cost solver iterations.
-    int kept = 0;
-    for (int k = 0; k < m.pointCount; ++k) {
-      const ManifoldPoint& mp = m.points[k];
-      if (mp.separation > def.speculativeDistance) {
-        const Vec2 rA = mp.point - bodies.center[a];
-        const Vec2 rB = mp.point - bodies.center[b];
-        const Vec2 dv = vb.v + Cross(vb.w, rB) - va.v - Cross(va.w, rA);
-        const Real approach = -Dot(dv, m.normal);
-        if (mp.separation > def.speculativeDistance + sweep * approach) continue;
-      }
-      m.points[kept++] = mp;
-    }
-    m.pointCount = kept;
-    if (kept == 0) continue;
-    Contact c;
-    c.a = a;
-    c.b = b;
-    // Mixing as Box2D: friction geometric mean, restitution the larger.
-    c.friction = std::sqrt(bodies.shape[a].friction * bodies.shape[b].friction);
-    c.restitution = std::max(bodies.shape[a].restitution, bodies.shape[b].restitution);
-    c.manifold = m;
-    out.push_back(c);
-  }
-}
-
-// Contacts are solved in pair-key order, not broad-phase order, so the result does not depend
-// on which broad phase found them or on how threads split the work. Keys are unique (the
-// broad phase reports a pair once), so the order is the same whichever way it is reached:
-// every worker sorts its own contacts (in parallel), then the sorted parts are merged in
-// parallel, each worker producing one range of keys.
-void World::Impl::SortContacts() {
-  const int parts = static_cast<int>(workerContacts.size());
-  sortParts.resize(parts);
-  size_t total = 0;
-  for (const std::vector<Contact>& part : workerContacts) total += part.size();
-  // Few contacts: one thread does it all (a parallel-for would cost more than it saves).
-  const bool parallel = total >= size_t(run->MinHeavyItems());
-  run->For(Stage::kPersistence, parts, parallel ? 1 : parts + 1, [&](int begin, int end, int) {
-    for (int p = begin; p < end; ++p) SortPartContacts(workerContacts[p], sortParts[p]);
-  });
-  MergeSortedParts(parallel ? run->Workers() : 1);
-}
-
-// The key a*n+b fits 32 bits for up to 65536 bodies; an LSD radix sort of (key, index) in
-// 11-bit digits, then one gather of the contacts, keeps it linear and moves each contact once.
-void World::Impl::SortPartContacts(const std::vector<Contact>& in, SortPart& part) const {
-  const size_t count = in.size();
-  part.sorted.resize(count);
-  if (count < 2) {
-    std::copy(in.begin(), in.end(), part.sorted.begin());
-    return;
-  }
-  const uint64_t n = uint64_t(bodies.Count());
-  std::vector<SortKey>& keys = part.keys;
-  std::vector<SortKey>& keyScratch = part.keyScratch;
-  keys.resize(count);
-  keyScratch.resize(count);
-  uint64_t maxKey = 0;
-  for (size_t i = 0; i < count; ++i) {
-    const uint64_t key = uint64_t(in[i].a) * n + uint64_t(in[i].b);
-    keys[i] = {key, uint32_t(i)};
-    maxKey = std::max(maxKey, key);
-  }
-  constexpr int kDigitBits = 11;
-  constexpr size_t kBuckets = size_t(1) << kDigitBits;
-  std::vector<uint32_t>& radixCounts = part.radixCounts;
-  radixCounts.resize(kBuckets + 1);
-  for (int shift = 0; shift < 64 && (maxKey >> shift) != 0; shift += kDigitBits) {
-    std::fill(radixCounts.begin(), radixCounts.end(), 0u);
-    for (const SortKey& k : keys) ++radixCounts[((k.key >> shift) & (kBuckets - 1)) + 1];
-    for (size_t b = 0; b < kBuckets; ++b) radixCounts[b + 1] += radixCounts[b];
-    for (const SortKey& k : keys) keyScratch[radixCounts[(k.key >> shift) & (kBuckets - 1)]++] = k;
-    keys.swap(keyScratch);
-  }
-  for (size_t i = 0; i < count; ++i) part.sorted[i] = in[keys[i].index];
-}
-
-// Merges the sorted parts into `contacts`. The key space is cut into `ranges` ranges at evenly
-// spaced keys of the largest part (the parts are samples of the same scene, so the ranges hold
-// similar numbers of contacts); each range finds its start in every part by binary search, its
-// place in the output by adding those starts, and merges its share on its own.
-void World::Impl::MergeSortedParts(int ranges) {
-  int live = 0, largest = -1;
-  size_t total = 0;
-  for (int p = 0; p < static_cast<int>(sortParts.size()); ++p) {
-    const size_t size = sortParts[p].sorted.size();
-    total += size;
-    if (size == 0) continue;
-    ++live;
-    if (largest < 0 || size > sortParts[largest].sorted.size()) largest = p;
-  }
-  if (live <= 1) {  // one thread's case: the sorted part is the result
-    if (live == 0) contacts.clear();
-    else contacts.swap(sortParts[largest].sorted);
-    return;
-  }
-  contacts.resize(total);
-  const std::vector<Contact>& sample = sortParts[largest].sorted;
-  auto split = [&](int r) -> uint64_t {  // the first key of range r
-    if (r <= 0) return 0;
-    if (r >= ranges) return ~uint64_t(0);
-    return sample[sample.size() * size_t(r) / size_t(ranges)].Key();
-  };
-  auto lowerBound = [](const std::vector<Contact>& v, uint64_t key) -> size_t {
-    if (key == ~uint64_t(0)) return v.size();
-    return size_t(std::partition_point(v.begin(), v.end(), [&](const Contact& c) { return c.Key() < key; }) - v.begin());
-  };
-  const int parts = static_cast<int>(sortParts.size());
-  run->For(Stage::kPersistence, ranges, ranges > 1 ? 1 : 2, [&](int r0, int r1, int) {
-    size_t head[kMaxThreads], end[kMaxThreads];
-    for (int r = r0; r < r1; ++r) {
-      const uint64_t lo = split(r), hi = split(r + 1);
-      size_t out = 0;
-      for (int p = 0; p < parts; ++p) {
-        const std::vector<Contact>& v = sortParts[p].sorted;
-        head[p] = lowerBound(v, lo);
-        end[p] = lowerBound(v, hi);
-        out += head[p];
-      }
-      for (;;) {
-        int best = -1;
-        uint64_t bestKey = 0;
-        for (int p = 0; p < parts; ++p) {
-          if (head[p] == end[p]) continue;
-          const uint64_t key = sortParts[p].sorted[head[p]].Key();
-          if (best < 0 || key < bestKey) {
-            best = p;
-            bestKey = key;
-          }
-        }
-        if (best < 0) break;
-        contacts[out++] = sortParts[best].sorted[head[best]++];
-      }
-    }
-  });
 }
 
 Vec2 World::GetPosition(BodyId id) const { return impl_->bodies.xf[impl_->Dense(id)].p; }

@@ -48,6 +48,15 @@ struct Bodies {
   std::vector<uint32_t> islandOf;      ///< while asleep: the id of the island it fell asleep with
 
   int Count() const { return static_cast<int>(type.size()); }
+
+  /// Calls fn on every array above: the one list of them (adding and removing a body use it,
+  /// so an array added here is grown and shrunk with the rest).
+  template <class Fn>
+  void ForEachArray(Fn&& fn) {
+    fn(type), fn(xf), fn(center), fn(localCenter), fn(vel), fn(inv), fn(mass), fn(inertia);
+    fn(linearDamping), fn(angularDamping), fn(shape), fn(boundRadius), fn(aabb), fn(dynamic);
+    fn(slot), fn(awake), fn(sleepTime), fn(islandOf);
+  }
 };
 
 /// A touching or speculative contact between two bodies (dense indices, a < b).

@@ -57,4 +57,25 @@ done
 grep -q "circle_stress, N = 50" "$TMP/speedup.md" || fail "speedup.md has no circle_stress table"
 grep -q "polygon_stress, N = 50" "$TMP/speedup.md" || fail "speedup.md has no polygon_stress table"
 
+echo "== bench_report.py --busy (busy machine table, noise flags)"
+# A copy of the run as if made with --busy 1, one benchmark given a second repetition three
+# times slower (a 200 % spread): the report must add the busy table and flag that benchmark.
+"$PYTHON" - "$TMP/bench.json" "$TMP/bench_busy.json" <<'PY'
+import copy, json, sys
+d = json.load(open(sys.argv[1]))
+d["context"]["busy_processes"] = "1"
+row = next(r for r in d["benchmarks"] if r["name"].startswith("circle_stress/quadrant/n:50/threads:2"))
+slow = copy.deepcopy(row)
+slow["real_time"] *= 3
+slow["steps_per_second"] /= 3
+d["benchmarks"].append(slow)
+json.dump(d, open(sys.argv[2], "w"))
+PY
+"$PYTHON" "$TOOLS/bench_report.py" "$TMP/bench.json" --busy "$TMP/bench_busy.json" --out "$TMP" >"$TMP/report.txt" \
+  || fail "report with --busy failed"
+grep -q "^## Busy machine (1 busy process" "$TMP/speedup.md" || fail "speedup.md has no busy machine table"
+grep -q "^- \`circle_stress/quadrant/n:50/threads:2\`: repetitions spread" "$TMP/speedup.md" \
+  || fail "the 200 % spread is not flagged"
+grep -q "circle_stress | 50 | Quadrant | .*(\*\*noisy\*\*)" "$TMP/speedup.md" || fail "no noisy mark in the busy table"
+
 echo "PASS"

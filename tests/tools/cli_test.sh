@@ -74,7 +74,7 @@ expect_refusal "--engines" "$BENCH" --engines ,
 expect_refusal "unknown engine 'nosuchengine'" "$BENCH" --engines nosuchengine --counts 10 --threads 1
 expect_refusal "unknown quadrant variant 'bogus'" "$BENCH" --engines quadrant:bogus --counts 10 --threads 1
 expect_refusal "unknown scene 'nosuch'" "$BENCH" --scenes nosuch --counts 10 --threads 1
-expect_refusal "nothing to run" "$BENCH" --engines box2d --threads 2 --counts 10
+expect_refusal "nothing to run" "$BENCH" --scenes circle_stress --engines box2d --threads 2 --counts 10
 expect_refusal "unknown engine 'nosuchengine'" "$HARDCASES" --out "$OUT" --peers nosuchengine
 expect_refusal "unknown case 'nosuch'" "$HARDCASES" --out "$OUT" --cases nosuch
 expect_refusal "unknown case 'nosuch'" "$VALIDATE" --out "$OUT" --cases nosuch

@@ -1,0 +1,203 @@
+// Tests for the task system (engine/src/thread_pool.cpp, include/quadrant/task_system.h): the
+// block partition, that every index runs exactly once whichever thread claims it, nesting,
+// empty ranges, exceptions, and a world stepped on more threads than there are free cores.
+// Nothing here is timed.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <atomic>
+#include <mutex>
+#include <random>
+#include <stdexcept>
+#include <thread>
+#include <tuple>
+#include <vector>
+
+#include "quadrant/task_system.h"
+#include "quadrant/world.h"
+#include "test_helpers.h"
+
+namespace quadrant {
+namespace {
+
+using namespace test;
+
+struct Call {
+  int begin, end, block;
+  bool operator<(const Call& o) const { return std::tie(block, begin, end) < std::tie(o.block, o.begin, o.end); }
+};
+
+// Runs one ParallelFor and returns its calls (sorted by block) and how often each index ran.
+std::vector<Call> RunOnce(TaskSystem& tasks, int count, std::vector<int>& hits) {
+  std::mutex mutex;
+  std::vector<Call> calls;
+  hits.assign(size_t(std::max(count, 0)), 0);
+  std::vector<std::atomic<int>> counter(hits.size());
+  tasks.ParallelFor(count, [&](int begin, int end, int block) {
+    for (int i = begin; i < end; ++i) counter[size_t(i)].fetch_add(1, std::memory_order_relaxed);
+    std::lock_guard<std::mutex> lock(mutex);
+    calls.push_back({begin, end, block});
+  });
+  for (size_t i = 0; i < hits.size(); ++i) hits[i] = counter[i].load();
+  std::sort(calls.begin(), calls.end());
+  return calls;
+}
+
+TEST(ThreadPoolTest, EveryIndexRunsOnceInTheStaticBlocks) {
+  const int hardware = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  for (int threads : {1, 2, 3, 4, hardware + 3}) {
+    auto tasks = MakeThreadPool(threads);
+    ASSERT_EQ(tasks->WorkerCount(), threads);
+    for (int count : {1, 2, 3, 5, 7, 64, 1000, 4099}) {
+      SCOPED_TRACE(testing::Message() << threads << " threads, count " << count);
+      std::vector<int> hits;
+      const std::vector<Call> calls = RunOnce(*tasks, count, hits);
+      EXPECT_TRUE(std::all_of(hits.begin(), hits.end(), [](int h) { return h == 1; }));
+      // Exactly the non-empty blocks of the partition, each once, with its own index.
+      std::vector<Call> want;
+      for (int b = 0; b < threads; ++b) {
+        const int begin = BlockBegin(count, threads, b), end = BlockBegin(count, threads, b + 1);
+        if (begin < end) want.push_back({begin, end, b});
+      }
+      ASSERT_EQ(calls.size(), want.size());
+      for (size_t k = 0; k < want.size(); ++k) {
+        EXPECT_EQ(calls[k].block, want[k].block);
+        EXPECT_EQ(calls[k].begin, want[k].begin);
+        EXPECT_EQ(calls[k].end, want[k].end);
+      }
+    }
+  }
+}
+
+TEST(ThreadPoolTest, ZeroAndNegativeCountsCallNothing) {
+  for (int threads : {1, 2, 4}) {
+    auto tasks = MakeThreadPool(threads);
+    int calls = 0;
+    tasks->ParallelFor(0, [&](int, int, int) { ++calls; });
+    tasks->ParallelFor(-5, [&](int, int, int) { ++calls; });
+    EXPECT_EQ(calls, 0) << threads << " threads";
+  }
+}
+
+TEST(ThreadPoolTest, BackToBackJobsEachCoverTheirRange) {
+  // Many short jobs in a row: a worker that wakes late must not run a block of the next job
+  // with the previous job's function, nor twice.
+  auto tasks = MakeThreadPool(3);
+  std::vector<std::atomic<int>> sum(3);
+  long long want = 0;
+  for (int job = 0; job < 3000; ++job) {
+    const int count = 1 + job % 17;
+    want += count;
+    tasks->ParallelFor(count, [&](int begin, int end, int block) {
+      sum[size_t(block)].fetch_add(end - begin, std::memory_order_relaxed);
+    });
+  }
+  EXPECT_EQ(sum[0].load() + sum[1].load() + sum[2].load(), want);
+}
+
+TEST(ThreadPoolTest, NestedCallsRunInlineAndCoverTheirRange) {
+  auto tasks = MakeThreadPool(2);
+  std::vector<std::atomic<int>> hits(40 * 30);
+  tasks->ParallelFor(40, [&](int begin, int end, int) {
+    for (int i = begin; i < end; ++i) {
+      tasks->ParallelFor(30, [&](int b, int e, int) {
+        for (int j = b; j < e; ++j) hits[size_t(i * 30 + j)].fetch_add(1, std::memory_order_relaxed);
+      });
+    }
+  });
+  for (const auto& h : hits) EXPECT_EQ(h.load(), 1);
+}
+
+TEST(ThreadPoolTest, AnExceptionInABlockReachesTheCallerAndThePoolStaysUsable) {
+  for (int threads : {1, 2, 4}) {
+    SCOPED_TRACE(testing::Message() << threads << " threads");
+    auto tasks = MakeThreadPool(threads);
+    for (int round = 0; round < 20; ++round) {
+      // The last block throws (on one thread: the only block).
+      EXPECT_THROW(tasks->ParallelFor(1000,
+                                      [&](int, int end, int) {
+                                        if (end == 1000) throw std::runtime_error("block failed");
+                                      }),
+                   std::runtime_error);
+      std::vector<int> hits;
+      RunOnce(*tasks, 1000, hits);
+      EXPECT_TRUE(std::all_of(hits.begin(), hits.end(), [](int h) { return h == 1; }));
+    }
+    // The message arrives intact.
+    try {
+      tasks->ParallelFor(10, [](int, int, int) { throw std::invalid_argument("bad item 7"); });
+      ADD_FAILURE() << "no exception";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_STREQ(e.what(), "bad item 7");
+    }
+  }
+}
+
+// Spinning threads that occupy every core while they live.
+class BusyCores {
+ public:
+  explicit BusyCores(int n) {
+    for (int k = 0; k < n; ++k) {
+      threads_.emplace_back([this] {
+        while (!stop_.load(std::memory_order_relaxed)) {
+        }
+      });
+    }
+  }
+  ~BusyCores() {
+    stop_.store(true);
+    for (auto& t : threads_) t.join();
+  }
+
+ private:
+  std::atomic<bool> stop_{false};
+  std::vector<std::thread> threads_;
+};
+
+// A scene whose every stage runs parallel sections (minParallelItems 8): circles with random
+// velocities and a small pyramid of boxes on a ground, in a closed box.
+void BuildBusyScene(World& world) {
+  AddGround(world, 12, Real(0.5), {0, -0.5});
+  AddGround(world, Real(0.5), 10, {-12.5, 9.5});
+  AddGround(world, Real(0.5), 10, {12.5, 9.5});
+  std::mt19937 rng(7);
+  auto uni = [&](double lo, double hi) { return lo + (hi - lo) * (double(rng()) / double(std::mt19937::max())); };
+  for (int row = 0; row < 6; ++row) {
+    for (int col = 0; col < 4 - row / 2; ++col) AddBox(world, {Real(-10 + 1.1 * col + 0.55 * (row % 2)), Real(0.5 + row)});
+  }
+  for (int row = 0; row < 8; ++row) {
+    for (int col = 0; col < 12; ++col) {
+      Vec2 p{Real(-4 + 1.3 * col), Real(2 + 1.2 * row)};
+      AddCircle(world, p, Real(uni(0.2, 0.5)), {Real(uni(-4, 4)), Real(uni(-4, 4))}, 1, Real(0.4), Real(0.3));
+    }
+  }
+}
+
+uint64_t HashAfterSteps(int threads, int steps) {
+  WorldDef def;
+  def.threadCount = threads;
+  def.minParallelItems = 8;
+  World world(def);
+  BuildBusyScene(world);
+  StepN(world, steps);
+  return world.StateHash();
+}
+
+TEST(ThreadPoolTest, MoreThreadsThanFreeCoresGiveTheOneThreadHash) {
+  // Every core is kept busy by a spinning thread while the world steps on more threads than the
+  // machine has cores, so the pool's workers are descheduled mid-step and blocks move between
+  // threads; the result must still be the one-thread result, bit for bit.
+  const int hardware = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  const uint64_t serial = HashAfterSteps(1, 90);
+  uint64_t busy2 = 0, busyMany = 0;
+  {
+    BusyCores busy(hardware);
+    busy2 = HashAfterSteps(2, 90);
+    busyMany = HashAfterSteps(hardware + 2, 90);
+  }
+  EXPECT_EQ(busy2, serial);
+  EXPECT_EQ(busyMany, serial);
+}
+
+}  // namespace
+}  // namespace quadrant
