@@ -8,6 +8,7 @@
 
 #include "quadrant/error.h"
 #include "scenes.h"
+#include "validation_cases.h"
 
 namespace quadrant::scene {
 namespace {
@@ -215,21 +216,8 @@ RandomHit MakeRandomHit(uint64_t seed, int index) {
   mover.angularVelocity = Real(hit.moverSpin);
 
   Scene& s = hit.scene;
-  s.name = "random_hit";
-  s.gravity = {0, 0};
-  s.timeStep = Real(1.0 / 60.0);
-  s.subSteps = 1;
-  s.velocityIterations = 8;
-  s.positionIterations = 3;
+  s = ValidationWorld("random_hit", false);
   s.restitutionThreshold = 1;
-  s.effects.gravity = false;
-  s.effects.friction = true;
-  s.effects.restitution = true;
-  s.effects.rotation = true;
-  s.effects.warmStarting = true;
-  s.effects.sleep = false;
-  s.effects.continuous = false;
-  s.effects.damping = false;
   s.bodies = {mover, target};
   s.seed = seed;
   hit.radius[0] = Circumradius(mover);

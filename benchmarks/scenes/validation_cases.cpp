@@ -37,25 +37,6 @@ std::string Num(double v) {
 
 // ---- Scenes --------------------------------------------------------------------------------
 
-Scene Base(const char* name, bool gravity) {
-  Scene s;
-  s.name = name;
-  s.gravity = gravity ? Vec2{0, Real(-kG)} : Vec2{0, 0};
-  s.timeStep = Real(kDt);
-  s.subSteps = 1;
-  s.velocityIterations = 8;
-  s.positionIterations = 3;
-  s.restitutionThreshold = 0;
-  s.effects.gravity = gravity;
-  s.effects.friction = true;
-  s.effects.restitution = true;
-  s.effects.rotation = true;
-  s.effects.warmStarting = true;
-  s.effects.sleep = false;
-  s.effects.continuous = false;
-  s.effects.damping = false;
-  return s;
-}
 
 BodyDesc Ball(Vec2 position, Real radius, Real density, Real friction, Real restitution) {
   BodyDesc b = MakeCircleBody(position, radius);
@@ -160,7 +141,7 @@ ValidationResult HeadOn(double ratio, double e) {
   r.description = "circle (r = 0.5 m, 1 kg/m^2) at +1 m/s hits a resting circle of " + Num(ratio) +
                   " times its mass, touching at the start; zero gravity, friction 0, restitution " + Num(e) +
                   " on both, threshold 0. Velocities after the impact step.";
-  Scene s = Base("head_on", false);
+  Scene s = ValidationWorld("head_on", false);
   s.effects.friction = false;
   s.bodies = {Ball({Real(-0.5), 0}, Real(0.5), 1, 0, Real(e)), Ball({Real(0.5), 0}, Real(0.5), Real(ratio), 0, Real(e))};
   s.bodies[0].velocity = {1, 0};
@@ -187,7 +168,7 @@ ValidationResult Oblique() {
   r.description = "circle at (2, 0) m/s hits an equal resting circle whose centre is 30 degrees off its path, "
                   "touching at the start; zero gravity, frictionless, restitution 1. The struck ball leaves "
                   "along the line of centres, the striker at right angles to it.";
-  Scene s = Base("oblique", false);
+  Scene s = ValidationWorld("oblique", false);
   s.effects.friction = false;
   const double angle = std::numbers::pi / 6;
   const Vec2 n{Real(std::cos(angle)), Real(std::sin(angle))};
@@ -217,7 +198,7 @@ ValidationResult CircleOnFace() {
   r.description = "circle (r = 0.5 m) dropped from 0.5 m onto a static box's top face, restitution 0, friction "
                   "0.6; read after 2 s at rest: height, contact normal and point, and the normal impulse per step "
                   "(m g dt).";
-  Scene s = Base("circle_on_face", true);
+  Scene s = ValidationWorld("circle_on_face", true);
   s.bodies = {Ground(Real(0.6), 0), Ball({0, 1}, Real(0.5), 1, Real(0.6), 0)};
   Run q("quadrant", s), b("box2d", s);
   q.Step(120);
@@ -248,7 +229,7 @@ ValidationResult CircleOnVertex() {
   r.description = "circle (r = 0.5 m) moving at (-1, 0) m/s touches the top-right corner of a static 1 m box, the "
                   "corner 30 degrees below its centre; zero gravity, frictionless, restitution 1: it leaves at "
                   "v - 2 (v.n) n = (0.5, 0.866) m/s.";
-  Scene s = Base("circle_on_vertex", false);
+  Scene s = ValidationWorld("circle_on_vertex", false);
   s.effects.friction = false;
   const double angle = std::numbers::pi / 6;
   const double nx = std::cos(angle), ny = std::sin(angle);
@@ -273,7 +254,7 @@ ValidationResult CircleOnVertex() {
 // A 1 m box (1 kg) at `angle` whose lowest corner (or face) touches the ground, moving down at
 // `speed`; returns the scene and the contact corner.
 Scene LandingScene(const char* name, double angle, double speed, double friction, double restitution, Vec2& corner) {
-  Scene s = Base(name, true);
+  Scene s = ValidationWorld(name, true);
   s.restitutionThreshold = 1;  // Box2D's default: the first impact bounces, the resting box does not jitter
   const double c = std::cos(angle), sn = std::sin(angle);
   double lowest = 1e9, cx = 0;
@@ -397,7 +378,7 @@ ValidationResult CornerToFace() {
                   "box, its corner touching 0.25 m right of the struck box's centre; frictionless, restitution 1. "
                   "The impulse (normal (0, 1)) passes through the striker's centre but not the struck box's, "
                   "which spins.";
-  Scene s = Base("corner_to_face", false);
+  Scene s = ValidationWorld("corner_to_face", false);
   s.effects.friction = false;
   const double h = std::sqrt(0.5);  // half diagonal
   s.bodies = {Box({0, 0}, Real(0.5), Real(0.5), 0, true, 0, 1),
@@ -434,7 +415,7 @@ ValidationResult SpinningCircleLands() {
   r.description = "circle (r = 0.5 m) spinning clockwise at 6 rad/s is dropped 0.1 m onto the ground, friction 0.5, "
                   "restitution 0: friction turns spin into rolling; angular momentum about the contact point is "
                   "conserved, so it rolls at v = -w0 r I / (I + m r^2) = 1 m/s, w = -2 rad/s (read after 2 s).";
-  Scene s = Base("spinning_circle_lands", true);
+  Scene s = ValidationWorld("spinning_circle_lands", true);
   s.bodies = {Ground(Real(0.5), 0), Ball({0, Real(0.6)}, Real(0.5), 1, Real(0.5), 0)};
   s.bodies[1].angularVelocity = -6;
   Run q("quadrant", s), b("box2d", s);
@@ -462,7 +443,7 @@ ValidationResult BoxSlidesToStop() {
   ValidationResult r;
   r.description = "1 m box on the ground sliding at 4 m/s, friction 0.4: it stops after v^2 / (2 mu g) = 2 m in "
                   "v / (mu g) = 1 s (read after 2 s).";
-  Scene s = Base("box_slides_to_stop", true);
+  Scene s = ValidationWorld("box_slides_to_stop", true);
   s.effects.restitution = false;
   s.bodies = {Ground(Real(0.4), 0), Box({0, Real(0.5)}, Real(0.5), Real(0.5), 0, true, Real(0.4), 0)};
   s.bodies[1].velocity = {4, 0};
@@ -491,7 +472,7 @@ ValidationResult RestingBox() {
   ValidationResult r;
   r.description = "1 m box (1 kg) placed at rest on the ground, friction 0.6, restitution 0; after 1 s: height, "
                   "contact normal and points, normal impulse per step (m g dt, half per point), tangent impulse 0.";
-  Scene s = Base("resting_box", true);
+  Scene s = ValidationWorld("resting_box", true);
   s.effects.restitution = false;
   s.bodies = {Ground(Real(0.6), 0), Box({0, Real(0.5)}, Real(0.5), Real(0.5), 0, true, Real(0.6), 0)};
   Run q("quadrant", s), b("box2d", s);
@@ -520,7 +501,7 @@ ValidationResult TwoBoxStack() {
   ValidationResult r;
   r.description = "two 1 m boxes (1 kg each) stacked at rest on the ground, friction 0.6; after 2 s: heights and "
                   "the normal impulse per step of each contact (lower: 2 m g dt, upper: m g dt).";
-  Scene s = Base("two_box_stack", true);
+  Scene s = ValidationWorld("two_box_stack", true);
   s.effects.restitution = false;
   s.bodies = {Ground(Real(0.6), 0), Box({0, Real(0.5)}, Real(0.5), Real(0.5), 0, true, Real(0.6), 0),
               Box({0, Real(1.5)}, Real(0.5), Real(0.5), 0, true, Real(0.6), 0)};
@@ -549,7 +530,7 @@ ValidationResult FastHeadOn() {
                   "restitution 1, zero gravity. 15 m/s x dt rounds to exactly 0.25 m in float32, so they touch "
                   "exactly at the end of step 4 and no engine sees an overlap; after 10 steps each is back at "
                   "2 m from the origin with its velocity reversed.";
-  Scene s = Base("fast_head_on", false);
+  Scene s = ValidationWorld("fast_head_on", false);
   s.effects.friction = false;
   s.bodies = {Ball({Real(-1.5), 0}, Real(0.5), 1, 0, 1), Ball({Real(1.5), 0}, Real(0.5), 1, 0, 1)};
   s.bodies[0].velocity = {15, 0};
@@ -596,6 +577,28 @@ std::vector<Entry> Entries() {
 }
 
 }  // namespace
+
+// The canonical cases' world (also the random campaign's): dt 1/60, 8 velocity and 3 position
+// iterations, friction, restitution, rotation and warm starting on, no sleep or damping.
+Scene ValidationWorld(const char* name, bool gravity) {
+  Scene s;
+  s.name = name;
+  s.gravity = gravity ? Vec2{0, Real(-kG)} : Vec2{0, 0};
+  s.timeStep = Real(kDt);
+  s.subSteps = 1;
+  s.velocityIterations = 8;
+  s.positionIterations = 3;
+  s.restitutionThreshold = 0;
+  s.effects.gravity = gravity;
+  s.effects.friction = true;
+  s.effects.restitution = true;
+  s.effects.rotation = true;
+  s.effects.warmStarting = true;
+  s.effects.sleep = false;
+  s.effects.continuous = false;
+  s.effects.damping = false;
+  return s;
+}
 
 const ValidationQuantity& ValidationResult::Get(std::string_view quantity) const {
   for (const ValidationQuantity& q : quantities) {

@@ -22,6 +22,8 @@
 #include <string_view>
 #include <vector>
 
+#include "scene.h"
+
 namespace quadrant::scene {
 
 struct ValidationQuantity {
@@ -45,6 +47,11 @@ struct ValidationResult {
 };
 
 /// Names of the canonical cases, in report order.
+/// The world every canonical case and the random campaign run in: dt 1/60, 8 / 3 iterations,
+/// friction, restitution, rotation and warm starting on, no sleep, damping or continuous
+/// collision, restitution threshold 0; gravity (0, -10 m/s^2) on when asked. No bodies.
+Scene ValidationWorld(const char* name, bool gravity);
+
 std::vector<std::string> ValidationCaseNames();
 
 /// Runs one case on Quadrant and Box2D. Throws quadrant::Error for an unknown name.
