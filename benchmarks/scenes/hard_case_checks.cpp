@@ -659,14 +659,6 @@ double HardCaseResult::Get(std::string_view figure) const {
   throw Error("hard case " + name + ": no measured figure '" + std::string(figure) + "'");
 }
 
-// Issue #13's three cases are reported on every engine but not yet required of the default
-// engine: at its default budget pgs topples the 30-box stack (top moves 15.8 m) and lets the
-// 1000 kg box sink 0.197 m into its supports, and soft_step's top moves 0.089 m (limit 0.05 m).
-// quadrant:soft_step+relax2+ratio10 holds all three (hard_cases_test.cpp), but fails `confined`.
-bool RequiredOfDefaultEngine(std::string_view name) {
-  return name != "heavy_on_slab" && name != "tall_stack" && name != "heavy_on_supports";
-}
-
 std::vector<std::string> HardCaseNames() {
   std::vector<std::string> names;
   for (const CaseEntry& c : kCases) names.push_back(c.name);

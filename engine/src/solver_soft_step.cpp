@@ -118,7 +118,7 @@ class SoftStepSolver final : public ContactSolverBase {
     const bool simd = def.softSimd;
     for (int sub = 0; sub < n; ++sub) {
       ti = Clock::now();
-      IntegrateStateVelocities(run, bodies, def, h);
+      IntegrateStateVelocities(run, bodies, def, h, sub == 0 ? ctx.dt : Real(0));
       integrateMs += Ms(ti, Clock::now());
       if (def.effects.warmStarting) {
         ForEachGroup(run, simd, [&](auto lanes, SoftRowGroup& g, int lane) {
@@ -402,16 +402,20 @@ class SoftStepSolver final : public ContactSolverBase {
     });
   }
 
-  // Gravity and damping over a sub-step, as IntegrateVelocities does on the bodies: for bodies
-  // with an inverse mass (dynamic and awake; a sleeping body has inverse mass 0).
-  void IntegrateStateVelocities(StageRunner& run, const Bodies& bodies, const WorldDef& def, Real h) {
+  // Gravity over a sub-step, as IntegrateVelocities does on the bodies: for bodies with an inverse
+  // mass (dynamic and awake; a sleeping body has inverse mass 0). Damping acts once per world step
+  // (dampDt, 0 in the later sub-steps) with the step's factor 1 / (1 + dt c), the law every solver
+  // and the scene description share (per sub-step the factor over a step was 1 / (1 + h c)^n:
+  // 0.3 % more speed left after 60 steps at c = 0.7).
+  void IntegrateStateVelocities(StageRunner& run, const Bodies& bodies, const WorldDef& def, Real h, Real dampDt) {
     const Effects& fx = def.effects;
-    if (!fx.gravity && !fx.damping) return;
+    const bool damp = fx.damping && dampDt > 0;
+    if (!fx.gravity && !damp) return;
     const Vec2 dv = fx.gravity ? h * def.gravity : Vec2{};
 #if QUADRANT_SOFT_SIMD
     // Gravity alone: one four-wide add per body of (dv.x, dv.y, -0, -0), which leaves w and the
     // pad word exactly as they are (x + -0 is x for every x, signed zeros included).
-    if (!fx.damping && def.softSimd) {
+    if (!damp && def.softSimd) {
       const __m128 add = _mm_set_ps(-0.0f, -0.0f, dv.y, dv.x);
       run.For(Stage::kIntegrate, bodies.Count(), run.MinItems(), [&](int b, int e, int) {
         for (int i = b; i < e; ++i) {
@@ -428,9 +432,9 @@ class SoftStepSolver final : public ContactSolverBase {
         if (bodies.inv[i].invMass == 0) continue;
         SolverBody& st = states_[i];
         st.v += dv;
-        if (fx.damping) {
-          st.v = (Real(1) / (Real(1) + h * bodies.linearDamping[i])) * st.v;
-          st.w *= Real(1) / (Real(1) + h * bodies.angularDamping[i]);
+        if (damp) {
+          st.v = (Real(1) / (Real(1) + dampDt * bodies.linearDamping[i])) * st.v;
+          st.w *= Real(1) / (Real(1) + dampDt * bodies.angularDamping[i]);
         }
       }
     });

@@ -255,6 +255,8 @@ struct ContactInfo {
   int pointCount = 0;
   Vec2 points[2];
   Real separations[2] = {0, 0};
+  /// The solver's accumulated impulses (N s): pgs the step's; soft_step its last sub-step's (a
+  /// resting load's share of one sub-step, dt / softSubSteps of its weight).
   Real normalImpulses[2] = {0, 0};
   Real tangentImpulses[2] = {0, 0};
 };
