@@ -18,9 +18,9 @@ namespace {
 
 // The cases compare Box2D 2.4.1 with Quadrant's solver of the same method (pgs: 8 velocity and 3
 // position iterations, identical settings), so each difference is a design difference the tolerance
-// reasons name. The default engine (soft_step since issue #13) is another method: its contact
-// impulses are read back per sub-step, and on 6 of the 15 cases it differs from the analytic
-// answer by more than these tolerances (README "validation").
+// reasons name. The default engine (soft_step since issue #13) is another method: run here it
+// fails 6 cases, 4 only because its contact impulses are read back per sub-step, 2 in the impact
+// (box_lands_on_edge, spinning_circle_lands; README "Correctness evidence").
 constexpr const char* kQuadrant = "quadrant:pgs";
 constexpr double kDt = 1.0 / 60.0;
 constexpr double kG = 10;
