@@ -345,11 +345,8 @@ class SoftStepSolver final : public ContactSolverBase {
   void ApplyStateBounceShifts(int begin, int end) {
     for (int c = begin; c < end; ++c) {
       const ContactConstraint& cc = constraints_[c];
-      Real shift = 0;
-      for (int k = 0; k < cc.pointCount; ++k) shift = std::max(shift, cc.points[k].bounceShift);
-      const Real sum = cc.invMassA + cc.invMassB;
-      if (shift == 0 || sum == 0) continue;
-      const Vec2 d = (shift / sum) * cc.normal;
+      Vec2 d;
+      if (!BounceShift(cc, d)) continue;
       if (cc.invMassA > 0) states_[cc.a].dp += cc.invMassA * d;
       if (cc.invMassB > 0) states_[cc.b].dp -= cc.invMassB * d;
     }
