@@ -134,10 +134,20 @@ class SoftStepSolver final : public ContactSolverBase {
       // instead of 47 at 4 sub-steps), and spinning triangles of the soak left the box.
       IntegrateStatePositions(run, bodies, def, h, ctx.dt);
       integrateMs += Ms(ti, Clock::now());
+      // Friction only in the last relax pass: the earlier ones settle the normal impulses that
+      // bound it. Base-100 pyramid: 44.7M -> 43.2M instructions a step, and the 16 hard cases hold
+      // as with friction in both (tall_stack top 0.034 m; with friction in the first pass only
+      // 0.051 m, which fails).
       for (int it = 0; it < def.softRelaxIterations; ++it) {
-        ForEachGroup(run, simd, [&](auto lanes, SoftRowGroup& g, int lane) {
-          SolveRows<decltype(lanes), kRotation, kFriction, false>(states_.data(), g, lane, prm);
-        });
+        if (it == def.softRelaxIterations - 1) {
+          ForEachGroup(run, simd, [&](auto lanes, SoftRowGroup& g, int lane) {
+            SolveRows<decltype(lanes), kRotation, kFriction, false>(states_.data(), g, lane, prm);
+          });
+        } else {
+          ForEachGroup(run, simd, [&](auto lanes, SoftRowGroup& g, int lane) {
+            SolveRows<decltype(lanes), kRotation, false, false>(states_.data(), g, lane, prm);
+          });
+        }
       }
     }
     if (def.effects.restitution && m > 0) ForEachColor(run, [&](int b, int e) { ApplyStateBounceShifts(b, e); });

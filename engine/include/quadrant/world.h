@@ -135,7 +135,7 @@ struct WorldDef {
   Vec2 gravity{0, Real(-10)};           ///< m/s^2
   /// The default is soft_step with two relax passes and a mass-ratio limit of 10 (below), chosen
   /// by measurement (issue #13; README "solver"): it holds all 16 hard cases at the default budget,
-  /// pgs 13, and the base-100 pyramid costs it 44.0M instructions a step against pgs's 58.4M.
+  /// pgs 13, and the base-100 pyramid costs it 43.2M instructions a step against pgs's 58.4M.
   SolverType solver = SolverType::kSoftStep;
   BroadPhaseType broadPhase = BroadPhaseType::kUniformGrid;
   int velocityIterations = 8;           ///< pgs, >= 1 (Box2D 2.4 default 8)
@@ -163,7 +163,8 @@ struct WorldDef {
   bool softSimd = true;
   /// soft_step: relax passes per sub-step, >= 1 (Box2D 3: 1). The second one holds the 30-box tall
   /// stack at 4 sub-steps (top 0.035 m; with one 0.083 m, 0.05 allowed; docs/soft_step.md), at the
-  /// cost of one pass over the rows per sub-step (base-100 pyramid: +6.1M instructions a step).
+  /// cost of one pass over the rows per sub-step (friction is solved in the last one only; base-100
+  /// pyramid: +4.3M instructions a step).
   int softRelaxIterations = 2;
   /// soft_step: 0 (off) or the largest mass ratio a contact between two dynamic bodies sees, >= 1.
   /// Where two bodies' masses differ by more, the lighter one takes part in their contact as if it
