@@ -59,12 +59,12 @@ class QuadrantAdapter final : public Adapter {
     ids_ = std::move(ids);
     scene_ = &scene;
     dt_ = scene.timeStep;
-    subSteps_ = scene.subSteps;
+    pipelineRepeats_ = scene.pipelineRepeats;
     totals_ = Profile{};
   }
 
   void DoStep() override {
-    world_->Step(dt_, subSteps_);
+    world_->StepRepeated(dt_, pipelineRepeats_);
     const Profile& p = world_->GetProfile();
     totals_.broadPhase += p.broadPhase;
     totals_.narrowPhase += p.narrowPhase;
@@ -153,7 +153,7 @@ class QuadrantAdapter final : public Adapter {
   std::vector<BodyId> ids_;
   const Scene* scene_ = nullptr;
   Real dt_ = Real(1.0 / 60.0);
-  int subSteps_ = 1;
+  int pipelineRepeats_ = 1;
   Profile totals_;
 };
 

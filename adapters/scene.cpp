@@ -76,8 +76,8 @@ void ValidateScene(const Scene& scene) {
   RequireFinite(IsFinite(scene.restitutionThreshold), "restitution threshold");
   if (scene.timeStep <= 0) throw Error("scene time step must be > 0");
   if (scene.timeStep > kMaxTimeStep) throw Error("scene time step must be <= 1 s");
-  if (scene.subSteps < 1) throw Error("scene sub-steps must be >= 1");
-  if (scene.subSteps > kMaxIterations) throw Error("scene sub-steps must be <= 1000");
+  if (scene.pipelineRepeats < 1) throw Error("scene pipelineRepeats must be >= 1");
+  if (scene.pipelineRepeats > kMaxIterations) throw Error("scene pipelineRepeats must be <= 1000");
   if (scene.velocityIterations > kMaxIterations) throw Error("scene velocity iterations must be <= 1000");
   if (scene.positionIterations > kMaxIterations) throw Error("scene position iterations must be <= 1000");
   if (scene.velocityIterations < 1) throw Error("scene velocity iterations must be >= 1");

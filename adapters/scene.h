@@ -65,7 +65,7 @@ struct Scene {
   std::string name;
   Vec2 gravity{0, Real(-10)};
   Real timeStep = Real(1.0 / 60.0);   ///< s, fixed
-  int subSteps = 1;                   ///< Quadrant sub-steps per step
+  int pipelineRepeats = 1;            ///< Quadrant: whole-pipeline repeats per step (World::StepRepeated)
   int velocityIterations = 8;         ///< Box2D 2.4 and Quadrant pgs
   int positionIterations = 3;
   Real restitutionThreshold = Real(1);///< m/s; approach speeds below it do not bounce

@@ -118,7 +118,7 @@ std::vector<Row> Rows() {
       {"time step 2 s", [](Scene& s) { s.timeStep = 2; }, "scene time step must be <= 1 s"},
       {"time step NaN", [](Scene& s) { s.timeStep = kNaN; }, "scene time step is not finite"},
       {"time step inf", [](Scene& s) { s.timeStep = kInf; }, "scene time step is not finite"},
-      {"sub-steps 0", [](Scene& s) { s.subSteps = 0; }, "scene sub-steps must be >= 1"},
+      {"pipelineRepeats 0", [](Scene& s) { s.pipelineRepeats = 0; }, "scene pipelineRepeats must be >= 1"},
       {"velocity iterations 0", [](Scene& s) { s.velocityIterations = 0; }, "scene velocity iterations must be >= 1"},
       {"position iterations -1", [](Scene& s) { s.positionIterations = -1; }, "scene position iterations must be >= 0"},
       {"gravity NaN", [](Scene& s) { s.gravity.y = kNaN; }, "scene gravity is not finite"},
@@ -146,8 +146,8 @@ void ExpectMessage(const std::function<void()>& call, const std::string& message
 
 TEST(BadInputScene, IterationAndSubStepLimits) {
   Scene bad = Good();
-  bad.subSteps = 1001;
-  ExpectMessage([&] { ValidateScene(bad); }, "sub-steps must be <= 1000", "scene sub-steps 1001");
+  bad.pipelineRepeats = 1001;
+  ExpectMessage([&] { ValidateScene(bad); }, "pipelineRepeats must be <= 1000", "scene pipelineRepeats 1001");
   bad = Good();
   bad.velocityIterations = 1000000000;
   ExpectMessage([&] { ValidateScene(bad); }, "velocity iterations must be <= 1000", "scene velocity its 1e9");
