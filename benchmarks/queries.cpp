@@ -57,14 +57,7 @@ Probe MakeProbe(const Scene& scene) {
 
 std::unique_ptr<World> LoadQuadrant(const Scene& scene) {
   auto world = std::make_unique<World>();
-  for (const BodyDesc& d : scene.bodies) {
-    BodyDef def;
-    def.type = d.dynamic ? BodyType::kDynamic : BodyType::kStatic;
-    def.position = d.position;
-    def.angle = d.angle;
-    def.shape = d.shape == ShapeKind::kCircle ? ShapeDef::MakeCircle(d.radius) : ShapeDef::FromPolygon(MakePolygon(d.vertices));
-    world->CreateBody(def);
-  }
+  for (const BodyDesc& d : scene.bodies) world->CreateBody(ToBodyDef(d));
   return world;
 }
 

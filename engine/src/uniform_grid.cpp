@@ -202,7 +202,9 @@ class UniformGrid final : public BroadPhase {
   // between the cores' caches; reading the bodies' cell numbers (4 bytes each) once per range is
   // cheaper (circle stress, N = 16000, 2 threads: the bucket passes went from about 19 % to
   // about 12 % of perf's samples of the step).
-  void Bucket(std::span<const AABB> aabbs, StageRunner& run) {
+  // Inlined by force: with two callers (FindPairs, BuildForQueries) GCC 12 stopped inlining it
+  // into FindPairs, which cost 0.16 % more instructions on circle stress (icount, 1000 bodies).
+  [[gnu::always_inline]] inline void Bucket(std::span<const AABB> aabbs, StageRunner& run) {
     const int n = static_cast<int>(aabbs.size());
     const int cells = cols_ * rows_;
     cellOf_.resize(n);

@@ -164,16 +164,7 @@ BodyId World::CreateBody(const BodyDef& def) {
       boundRadius = std::max(boundRadius, Length(shape.polygon.vertices[k] - md.center));
     }
   }
-  const bool dynamic = def.type == BodyType::kDynamic;
-  // Density times area can overflow (or underflow) float: a mass or inertia that is not a
-  // positive finite number would poison the solver, so the body is refused.
-  // Subnormal values count as underflow: they lose precision and make 1/m overflow.
-  constexpr Real kSmallest = std::numeric_limits<Real>::min();
-  Require(!dynamic || (IsFinite(md.mass) && md.mass >= kSmallest && IsFinite(md.rotationalInertia) &&
-                       md.rotationalInertia >= kSmallest && IsFinite(Real(1) / md.mass) &&
-                       IsFinite(Real(1) / md.rotationalInertia)),
-          "the body's mass or rotational inertia is not a positive finite number (density " +
-              DensityText(shape.density) + ")");
+  const bool dynamic = def.type == BodyType::kDynamic;  // its mass was checked by ValidateBodyDef
 
   uint32_t slot;
   if (!w.freeSlots.empty()) {
@@ -307,7 +298,21 @@ void World::Impl::UpdateContactEvents() {
     if (b.index < a.index) std::swap(a, b);
     touching.push_back({a, b});
   }
+  if (def.effects.sleep) {
+    // Sleeping bodies get no pairs (among themselves or with statics), so their contacts are not
+    // in `contacts`; a pile that falls asleep has not stopped touching. A pair of bodies that are
+    // both still there and neither simulated (asleep or static) keeps its touch from last step.
+    auto idle = [&](BodyId id) {
+      if (id.index >= generation.size() || generation[id.index] != id.generation || denseOf[id.index] < 0) return false;
+      return bodies.awake[denseOf[id.index]] == 0;
+    };
+    for (const ContactEvent& e : touchingBefore) {
+      if (idle(e.bodyA) && idle(e.bodyB)) touching.push_back(e);
+    }
+  }
   std::sort(touching.begin(), touching.end(), EventLess);
+  // The step an island falls asleep its pairs are both in `contacts` and carried over: once each.
+  touching.erase(std::unique(touching.begin(), touching.end()), touching.end());
   beginEvents.clear();
   endEvents.clear();
   std::set_difference(touching.begin(), touching.end(), touchingBefore.begin(), touchingBefore.end(),

@@ -138,6 +138,36 @@ TEST(ContactEventsTest, BeginOnLandingEndOnLeaving) {
   EXPECT_TRUE(world.GetContactBeginEvents().empty());
 }
 
+TEST(ContactEventsTest, FallingAsleepIsNotAnEnd) {
+  // A sleeping island's contacts are not recomputed, but its bodies still touch: no end event
+  // when it falls asleep, no second begin when it wakes.
+  WorldDef def;
+  def.contactEvents = true;
+  def.effects.sleep = true;
+  World world(def);
+  AddGround(world);
+  const BodyId box = AddBox(world, {0, 2});
+  int begins = 0, ends = 0;
+  bool slept = false;
+  for (int s = 0; s < 240; ++s) {
+    world.Step(kDt);
+    begins += int(world.GetContactBeginEvents().size());
+    ends += int(world.GetContactEndEvents().size());
+    slept = slept || !world.IsAwake(box);
+  }
+  ASSERT_TRUE(slept);  // the case is really asleep
+  EXPECT_EQ(begins, 1);
+  EXPECT_EQ(ends, 0);
+  world.SetAwake(box, true);
+  for (int s = 0; s < 5; ++s) {
+    world.Step(kDt);
+    begins += int(world.GetContactBeginEvents().size());
+    ends += int(world.GetContactEndEvents().size());
+  }
+  EXPECT_EQ(begins, 1);
+  EXPECT_EQ(ends, 0);
+}
+
 TEST(ContactEventsTest, OffByDefaultAndReadingThemIsRefused) {
   World world;
   AddGround(world);

@@ -93,6 +93,13 @@ struct BodyDef {
   uint64_t userData = 0;
 };
 
+/// Throws quadrant::Error, with the message CreateBody would give, for a definition that
+/// World::CreateBody refuses whatever the world (bad numbers, shapes, densities, a mass that
+/// overflows). What depends on the world is not checked (a non-default filter under
+/// ParallelScheme::kQuadrants). For tools that check a description before they have a World:
+/// the scene API's ValidateScene runs every scene body through it.
+void CheckBodyDef(const BodyDef& def);
+
 enum class SolverType : uint8_t {
   kThesis,  ///< the 2013 thesis: mass-ratio separation + one impulse per contact, no iterations
   kPgs,     ///< sequential impulses, warm starting, velocity iterations, position pass (Box2D 2.4)
@@ -250,6 +257,17 @@ struct Profile {
   double integrate = 0;    ///< velocities and positions
   double total = 0;        ///< the whole Step
   std::array<StageBalance, kStageCount> balance{};  ///< per stage, indexed by Stage
+
+  /// Adds another profile field by field (totals over several steps).
+  Profile& operator+=(const Profile& o) {
+    broadPhase += o.broadPhase, narrowPhase += o.narrowPhase, persistence += o.persistence;
+    solve += o.solve, integrate += o.integrate, total += o.total;
+    for (size_t k = 0; k < kStageCount; ++k) {
+      balance[k].workMs += o.balance[k].workMs;
+      balance[k].criticalMs += o.balance[k].criticalMs;
+    }
+    return *this;
+  }
 };
 
 /// Counts from the last Step.
@@ -404,7 +422,9 @@ class World {
 
   /// Pairs of bodies touching (a contact point at separation <= 0, as Counters::touchingContacts)
   /// after the last Step that did not touch after the Step before it (begin), and the other way
-  /// round (end), sorted by (bodyA.index, bodyB.index). Same for any thread count under the
+  /// round (end), sorted by (bodyA.index, bodyB.index). Two bodies that touched when their island
+  /// fell asleep still touch while it sleeps (no end event, and none begins when it wakes).
+  /// Same for any thread count under the
   /// deterministic scheme. An end event may name a body destroyed since (IsValid is then false).
   /// Valid until the next Step. Throw quadrant::Error unless WorldDef::contactEvents is on.
   std::span<const ContactEvent> GetContactBeginEvents() const;
