@@ -36,10 +36,10 @@ std::string Fixed(double v, int digits) {
 std::string SettingsText(const Scene& s) {
   char buffer[320];
   std::snprintf(buffer, sizeof buffer,
-                "dt %.5g s, %d velocity + %d position iterations, %d sub-step%s, gravity %s, restitution "
+                "dt %.5g s, %d velocity + %d position iterations, %d pipeline repeat%s, gravity %s, restitution "
                 "threshold %g m/s, continuous %s, warm starting %s, sleep %s",
-                double(s.timeStep), s.velocityIterations, s.positionIterations, s.subSteps,
-                s.subSteps == 1 ? "" : "s", s.effects.gravity ? "(0, -10)" : "off", double(s.restitutionThreshold),
+                double(s.timeStep), s.velocityIterations, s.positionIterations, s.pipelineRepeats,
+                s.pipelineRepeats == 1 ? "" : "s", s.effects.gravity ? "(0, -10)" : "off", double(s.restitutionThreshold),
                 s.effects.continuous ? "on" : "off", s.effects.warmStarting ? "on" : "off",
                 s.effects.sleep ? "on" : "off");
   return buffer;

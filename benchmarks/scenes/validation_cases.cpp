@@ -591,7 +591,7 @@ Scene ValidationWorld(const char* name, bool gravity) {
   s.name = name;
   s.gravity = gravity ? Vec2{0, Real(-kG)} : Vec2{0, 0};
   s.timeStep = Real(kDt);
-  s.subSteps = 1;
+  s.pipelineRepeats = 1;
   s.velocityIterations = 8;
   s.positionIterations = 3;
   s.restitutionThreshold = 0;
