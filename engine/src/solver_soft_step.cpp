@@ -694,7 +694,7 @@ class SoftStepSolver final : public ContactSolverBase {
   // moves the four one by one. Why: MoveFree was the largest of the per-body passes on the sparse
   // stress scenes (circle stress N = 4000: 7.9M of the 57.3M instructions of 20 steps).
   bool MoveFour(Bodies& bodies, const FreeMotion& fm, int i) {
-    const BodyVelocity* vel = &bodies.vel[i];
+    const BodyVelocity* vel = bodies.vel.data() + i;
     F4 ux{_mm_setr_ps(vel[0].v.x, vel[1].v.x, vel[2].v.x, vel[3].v.x)};
     F4 uy{_mm_setr_ps(vel[0].v.y, vel[1].v.y, vel[2].v.y, vel[3].v.y)};
     F4 w{_mm_setr_ps(vel[0].w, vel[1].w, vel[2].w, vel[3].w)};
@@ -702,12 +702,10 @@ class SoftStepSolver final : public ContactSolverBase {
     uy = uy + Splat(fm.hg.y, F4{});
     if (fm.damping) {
       const F4 one = Splat(Real(1), F4{}), dt = Splat(fm.dt, F4{});
-      const Real* ld = &bodies.linearDamping[i];
-      const Real* ad = &bodies.angularDamping[i];
-      const F4 fl = Div(one, one + dt * F4{_mm_loadu_ps(ld)});
+      const F4 fl = Div(one, one + dt * F4{_mm_loadu_ps(bodies.linearDamping.data() + i)});
       ux = fl * ux;
       uy = fl * uy;
-      w = w * Div(one, one + dt * F4{_mm_loadu_ps(ad)});
+      w = w * Div(one, one + dt * F4{_mm_loadu_ps(bodies.angularDamping.data() + i)});
     }
     const Vec2 rest = fm.nMinus1 * fm.hg;
     const F4 ex = ux + Splat(rest.x, F4{}), ey = uy + Splat(rest.y, F4{});
@@ -715,44 +713,51 @@ class SoftStepSolver final : public ContactSolverBase {
     w = Min(Max(w, Neg(maxW)), maxW);
     const F4 max2 = Splat(fm.maxSpeed2, F4{});
     if (Any(Greater(ux * ux + uy * uy, max2)) || Any(Greater(ex * ex + ey * ey, max2))) return false;
-    Rot q[kLanes];
-    for (int k = 0; k < kLanes; ++k) q[k] = bodies.xf[i + k].q;
-    bool turned = false;
+    // The transforms (p, q: 16 bytes each), four of them transposed into px, py, qc, qs.
+    float* xf = &bodies.xf[i].p.x;
+    static_assert(sizeof(Transform) == 4 * sizeof(Real));
+    __m128 t0 = _mm_loadu_ps(xf), t1 = _mm_loadu_ps(xf + 4), t2 = _mm_loadu_ps(xf + 8), t3 = _mm_loadu_ps(xf + 12);
+    _MM_TRANSPOSE4_PS(t0, t1, t2, t3);
+    F4 qc{t2}, qs{t3};
     if (fm.rotation) {
       const M4 turns = {_mm_cmpneq_ps(w.v, _mm_setzero_ps())};
       if (Any(turns)) {
         const F4 turn = Splat(fm.dt, F4{}) * w;
         if (Any(GreaterEqual(Max(turn, Neg(turn)), Splat(Real(0.5), F4{})))) return false;
-        const Rot* r0 = &rot0_[i];
-        F4 c{_mm_setr_ps(r0[0].c, r0[1].c, r0[2].c, r0[3].c)};
-        F4 sn{_mm_setr_ps(r0[0].s, r0[1].s, r0[2].s, r0[3].s)};
+        const float* r0 = &rot0_[i].c;
+        const __m128 ra = _mm_loadu_ps(r0), rb = _mm_loadu_ps(r0 + 4);  // c0 s0 c1 s1, c2 s2 c3 s3
+        F4 c{_mm_shuffle_ps(ra, rb, _MM_SHUFFLE(2, 0, 2, 0))}, sn{_mm_shuffle_ps(ra, rb, _MM_SHUFFLE(3, 1, 3, 1))};
         TurnBy(c, sn, turn);
-        alignas(16) Real cs[kLanes], ss[kLanes], ws[kLanes];
-        _mm_store_ps(cs, c.v);
-        _mm_store_ps(ss, sn.v);
-        _mm_store_ps(ws, w.v);
-        for (int k = 0; k < kLanes; ++k) {
-          if (ws[k] != 0) q[k] = {cs[k], ss[k]};
-        }
-        turned = true;
+        qc = Select(turns, c, qc);
+        qs = Select(turns, sn, qs);
       }
     }
+    // Centres (8 bytes each): x0 y0 x1 y1 and x2 y2 x3 y3, split into xs and ys.
+    const float* c0 = &center0_[i].x;
+    const __m128 ca = _mm_loadu_ps(c0), cb = _mm_loadu_ps(c0 + 4);
     const F4 nh = Splat(fm.nh, F4{});
-    const Vec2* c0 = &center0_[i];
-    const F4 cx = F4{_mm_setr_ps(c0[0].x, c0[1].x, c0[2].x, c0[3].x)} + (nh * ux + Splat(fm.dpGravity.x, F4{}));
-    const F4 cy = F4{_mm_setr_ps(c0[0].y, c0[1].y, c0[2].y, c0[3].y)} + (nh * uy + Splat(fm.dpGravity.y, F4{}));
-    alignas(16) Real vxs[kLanes], vys[kLanes], ws[kLanes], cxs[kLanes], cys[kLanes];
+    const F4 cx = F4{_mm_shuffle_ps(ca, cb, _MM_SHUFFLE(2, 0, 2, 0))} + (nh * ux + Splat(fm.dpGravity.x, F4{}));
+    const F4 cy = F4{_mm_shuffle_ps(ca, cb, _MM_SHUFFLE(3, 1, 3, 1))} + (nh * uy + Splat(fm.dpGravity.y, F4{}));
+    // SyncTransform: p = centre - Rotate(q, localCenter).
+    const float* lc = &bodies.localCenter[i].x;
+    const __m128 la = _mm_loadu_ps(lc), lb = _mm_loadu_ps(lc + 4);
+    const F4 lx{_mm_shuffle_ps(la, lb, _MM_SHUFFLE(2, 0, 2, 0))}, ly{_mm_shuffle_ps(la, lb, _MM_SHUFFLE(3, 1, 3, 1))};
+    const F4 px = cx - (qc * lx - qs * ly), py = cy - (qs * lx + qc * ly);
+    t0 = px.v, t1 = py.v, t2 = qc.v, t3 = qs.v;
+    _MM_TRANSPOSE4_PS(t0, t1, t2, t3);
+    _mm_storeu_ps(xf, t0);
+    _mm_storeu_ps(xf + 4, t1);
+    _mm_storeu_ps(xf + 8, t2);
+    _mm_storeu_ps(xf + 12, t3);
+    float* center = &bodies.center[i].x;
+    _mm_storeu_ps(center, _mm_unpacklo_ps(cx.v, cy.v));
+    _mm_storeu_ps(center + 4, _mm_unpackhi_ps(cx.v, cy.v));
+    alignas(16) Real vxs[kLanes], vys[kLanes], ws[kLanes];
     _mm_store_ps(vxs, ex.v);
     _mm_store_ps(vys, ey.v);
     _mm_store_ps(ws, w.v);
-    _mm_store_ps(cxs, cx.v);
-    _mm_store_ps(cys, cy.v);
-    for (int k = 0; k < kLanes; ++k) {
-      bodies.vel[i + k] = BodyVelocity{{vxs[k], vys[k]}, ws[k]};
-      bodies.center[i + k] = {cxs[k], cys[k]};
-      if (turned) bodies.xf[i + k].q = q[k];
-      SyncTransform(bodies, i + k);
-    }
+    BodyVelocity* out = bodies.vel.data() + i;
+    for (int k = 0; k < kLanes; ++k) out[k] = BodyVelocity{{vxs[k], vys[k]}, ws[k]};
     return true;
   }
 #endif
