@@ -593,17 +593,14 @@ class SoftStepSolver final : public ContactSolverBase {
     run.For(Stage::kIntegrate, bodies.Count(), run.MinItems(), [&](int b, int e, int) {
       int i = b;
 #if QUADRANT_SOFT_SIMD
-      // Four free bodies at a time where four in a row are (MoveFour), the rest one by one.
+      // Four consecutive bodies at a time (MoveFour), writing the free ones among them.
       if (def.softSimd && fm.maxAngularSpeed > 0) {
         for (; i + kLanes <= e; i += kLanes) {
-          uint32_t four;
-          std::memcpy(&four, &inRows_[i], sizeof four);
-          if (four == 0 && Moves(bodies, i, sleep) && Moves(bodies, i + 1, sleep) && Moves(bodies, i + 2, sleep) &&
-              Moves(bodies, i + 3, sleep) && MoveFour(bodies, fm, i)) {
-            continue;
-          }
-          for (int k = i; k < i + kLanes; ++k) {
-            if (Moves(bodies, k, sleep) && !inRows_[k]) MoveFree(bodies, fm, k);
+          int mask = 0;
+          for (int k = 0; k < kLanes; ++k) mask |= int(Moves(bodies, i + k, sleep) && !inRows_[i + k]) << k;
+          if (mask == 0 || MoveFour(bodies, fm, i, mask)) continue;
+          for (int k = 0; k < kLanes; ++k) {
+            if (mask >> k & 1) MoveFree(bodies, fm, i + k);
           }
         }
       }
@@ -696,14 +693,14 @@ class SoftStepSolver final : public ContactSolverBase {
   }
 
 #if QUADRANT_SOFT_SIMD
-  // MoveFree for the free bodies i..i+3 at once, with the same operations per body in the same
+  // MoveFree for the free ones among bodies i..i+3 (mask) at once, with the same operations per body in the same
   // order (so the same bits): the velocity read from the bodies (a free body's state is its
   // velocity unchanged), std::clamp as max then min (the same for a nonzero limit, which the caller
   // checks), IntegrateRot's small-angle branch as TurnBy. Returns false, having written nothing,
   // when a body needs the speed limit or turns by 0.5 rad or more in the step: the caller then
   // moves the four one by one. Why: MoveFree was the largest of the per-body passes on the sparse
   // stress scenes (circle stress N = 4000: 7.9M of the 57.3M instructions of 20 steps).
-  bool MoveFour(Bodies& bodies, const FreeMotion& fm, int i) {
+  bool MoveFour(Bodies& bodies, const FreeMotion& fm, int i, int mask) {
     const BodyVelocity* vel = bodies.vel.data() + i;
     F4 ux{_mm_setr_ps(vel[0].v.x, vel[1].v.x, vel[2].v.x, vel[3].v.x)};
     F4 uy{_mm_setr_ps(vel[0].v.y, vel[1].v.y, vel[2].v.y, vel[3].v.y)};
@@ -755,19 +752,35 @@ class SoftStepSolver final : public ContactSolverBase {
     const F4 px = cx - (qc * lx - qs * ly), py = cy - (qs * lx + qc * ly);
     t0 = px.v, t1 = py.v, t2 = qc.v, t3 = qs.v;
     _MM_TRANSPOSE4_PS(t0, t1, t2, t3);
-    _mm_storeu_ps(xf, t0);
-    _mm_storeu_ps(xf + 4, t1);
-    _mm_storeu_ps(xf + 8, t2);
-    _mm_storeu_ps(xf + 12, t3);
+    // Only the free lanes are written (mask bit k: body i + k); the others were computed from
+    // whatever they hold and are dropped.
     float* center = &bodies.center[i].x;
-    _mm_storeu_ps(center, _mm_unpacklo_ps(cx.v, cy.v));
-    _mm_storeu_ps(center + 4, _mm_unpackhi_ps(cx.v, cy.v));
+    const __m128 clo = _mm_unpacklo_ps(cx.v, cy.v), chi = _mm_unpackhi_ps(cx.v, cy.v);
     alignas(16) Real vxs[kLanes], vys[kLanes], ws[kLanes];
     _mm_store_ps(vxs, ex.v);
     _mm_store_ps(vys, ey.v);
     _mm_store_ps(ws, w.v);
     BodyVelocity* out = bodies.vel.data() + i;
-    for (int k = 0; k < kLanes; ++k) out[k] = BodyVelocity{{vxs[k], vys[k]}, ws[k]};
+    if (mask == 0xF) {
+      _mm_storeu_ps(xf, t0);
+      _mm_storeu_ps(xf + 4, t1);
+      _mm_storeu_ps(xf + 8, t2);
+      _mm_storeu_ps(xf + 12, t3);
+      _mm_storeu_ps(center, clo);
+      _mm_storeu_ps(center + 4, chi);
+      for (int k = 0; k < kLanes; ++k) out[k] = BodyVelocity{{vxs[k], vys[k]}, ws[k]};
+      return true;
+    }
+    const __m128 ts[kLanes] = {t0, t1, t2, t3};
+    for (int k = 0; k < kLanes; ++k) {
+      if (!(mask >> k & 1)) continue;
+      _mm_storeu_ps(xf + 4 * k, ts[k]);
+      out[k] = BodyVelocity{{vxs[k], vys[k]}, ws[k]};
+    }
+    if (mask & 1) _mm_storel_pi(reinterpret_cast<__m64*>(center), clo);
+    if (mask & 2) _mm_storeh_pi(reinterpret_cast<__m64*>(center + 2), clo);
+    if (mask & 4) _mm_storel_pi(reinterpret_cast<__m64*>(center + 4), chi);
+    if (mask & 8) _mm_storeh_pi(reinterpret_cast<__m64*>(center + 6), chi);
     return true;
   }
 #endif
