@@ -607,9 +607,15 @@ class SoftStepSolver final : public ContactSolverBase {
 #if QUADRANT_SOFT_SIMD
       // Four consecutive bodies at a time (MoveFour), writing the free ones among them.
       if (def.softSimd && fm.maxAngularSpeed > 0) {
+        const uint8_t* awake = bodies.awake.data();
+        const BodyType* type = bodies.type.data();
+        const uint8_t* inRows = inRows_.data();
         for (; i + kLanes <= e; i += kLanes) {
-          int mask = 0;
-          for (int k = 0; k < kLanes; ++k) mask |= int(Moves(bodies, i + k, sleep) && !inRows_[i + k]) << k;
+          int mask = 0;  // bit k: body i + k is free (Moves() and not in rows)
+          for (int k = 0; k < kLanes; ++k) {
+            const bool moves = sleep ? awake[i + k] != 0 : type[i + k] != BodyType::kStatic;
+            mask |= int(moves & (inRows[i + k] == 0)) << k;
+          }
           if (mask == 0 || MoveFour(bodies, fm, i, mask)) continue;
           for (int k = 0; k < kLanes; ++k) {
             if (mask >> k & 1) MoveFree(bodies, fm, i + k);
