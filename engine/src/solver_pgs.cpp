@@ -167,6 +167,7 @@ std::unique_ptr<Solver> MakeSolver(SolverType type) {
     case SolverType::kThesis: return MakeThesisSolver();
     case SolverType::kPgs: return MakePgsSolver();
     case SolverType::kSoftStep: return MakeSoftStepSolver();
+    case SolverType::kJacobi: return MakeJacobiSolver();
   }
   return MakePgsSolver();
 }

@@ -10,7 +10,8 @@ namespace quadrant {
 
 void ValidateWorldDef(const WorldDef& d) {
   Require(IsFinite(d.gravity), "WorldDef.gravity is not finite");
-  Require(d.solver == SolverType::kThesis || d.solver == SolverType::kPgs || d.solver == SolverType::kSoftStep,
+  Require(d.solver == SolverType::kThesis || d.solver == SolverType::kPgs || d.solver == SolverType::kSoftStep ||
+              d.solver == SolverType::kJacobi,
           "WorldDef.solver is unknown");
   Require(d.softSubSteps >= 1, "WorldDef.softSubSteps must be >= 1");
   Require(d.softSubSteps <= kMaxIterations, "WorldDef.softSubSteps must be <= 1000");
@@ -54,6 +55,9 @@ void ValidateWorldDef(const WorldDef& d) {
   Require(d.minParallelItems >= 1, "WorldDef.minParallelItems must be >= 1");
   Require(d.scheme == ParallelScheme::kDeterministic || d.scheme == ParallelScheme::kQuadrants,
           "WorldDef.scheme is unknown");
+  // The quadrants scheme runs the thesis or pgs kernels on its private body copies.
+  Require(d.solver != SolverType::kJacobi || d.scheme == ParallelScheme::kDeterministic,
+          "WorldDef.solver = kJacobi is not supported with ParallelScheme::kQuadrants (use kDeterministic)");
   Require(IsFinite(d.linearSleepTolerance) && d.linearSleepTolerance >= 0,
           "WorldDef.linearSleepTolerance must be finite and >= 0");
   Require(IsFinite(d.angularSleepTolerance) && d.angularSleepTolerance >= 0,

@@ -72,6 +72,14 @@ struct Contact {
 
 struct CandidatePair;
 
+/// Validates `def` (throws quadrant::Error and adds nothing on bad input), computes its mass
+/// data and appends the body to `bodies` with id slot `slot`; returns its dense index. The one
+/// place a body row is made: World::CreateBody and the distributed world both use it.
+int AppendBody(Bodies& bodies, const BodyDef& def, const WorldDef& worldDef, uint32_t slot);
+
+/// The broad-phase box of body i for a (sub-)step of dt (world.cpp says what it holds).
+AABB BroadPhaseBox(const Bodies& bodies, int i, const WorldDef& def, Real dt);
+
 /// Narrow phase for a list of pairs: manifolds with material mixing, speculative points kept
 /// only where the gap can close within the step. Appends to `out` in pair order.
 void CollidePairs(const Bodies& bodies, const WorldDef& def, Real dt, std::span<const CandidatePair> pairs,

@@ -77,6 +77,13 @@ enum class SolverType : uint8_t {
   kThesis,  ///< the 2013 thesis: mass-ratio separation + one impulse per contact, no iterations
   kPgs,     ///< sequential impulses, warm starting, velocity iterations, position pass (Box2D 2.4)
   kSoftStep,  ///< sub-steps with soft contacts and a relax pass (Box2D 3)
+  /// Jacobi velocity iterations with mass splitting (engine/src/jacobi_solve.h): every contact
+  /// solved from the velocities at the start of the iteration, each body's changes summed in
+  /// contact-key order, penetration removed by a Baumgarte velocity bias (no position pass),
+  /// restitution as kBox2d's velocity bias. Its result does not depend on how bodies are split
+  /// among processes: it is the solver of quadrant::DistributedWorld, whose state equals a
+  /// World's with this solver. Softer than pgs on stacks (README "More than one machine").
+  kJacobi,
 };
 
 enum class BroadPhaseType : uint8_t {
