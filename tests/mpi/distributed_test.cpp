@@ -1,0 +1,280 @@
+// The distributed world under mpirun (tests/CMakeLists.txt runs this with 1, 2, 3 and 4 ranks).
+//
+// Every test is collective: all ranks run the same steps and every checked value is one all
+// ranks share (a gathered state, a reduced count), so a failure fails on every rank and no rank
+// is left waiting in a collective. Rank 0 runs the single-process World for the comparison and
+// broadcasts its hashes.
+//
+// Special mode (tests/CMakeLists.txt, mpi_bad_input_exit): `--bad-scene-exit` loads a scene that
+// differs between ranks and lets the error end the program: every rank must print it and the
+// job must exit non-zero.
+#include <gtest/gtest.h>
+#include <mpi.h>
+
+#include <array>
+#include <cmath>
+#include <functional>
+#include <memory>
+#include <cstdio>
+#include <cstring>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "quadrant/distributed_world.h"
+#include "quadrant/error.h"
+#include "quadrant/world.h"
+#include "scenes.h"
+
+namespace quadrant {
+namespace {
+
+int Rank() {
+  int r = 0;
+  MPI_Comm_rank(MPI_COMM_WORLD, &r);
+  return r;
+}
+int Size() {
+  int s = 1;
+  MPI_Comm_size(MPI_COMM_WORLD, &s);
+  return s;
+}
+
+std::vector<BodyDef> ToBodyDefs(const scene::Scene& s) {
+  std::vector<BodyDef> out;
+  for (const scene::BodyDesc& b : s.bodies) {
+    BodyDef bd;
+    bd.type = b.dynamic ? BodyType::kDynamic : b.kinematic ? BodyType::kKinematic : BodyType::kStatic;
+    bd.position = b.position;
+    bd.angle = b.angle;
+    bd.linearVelocity = b.velocity;
+    bd.angularVelocity = b.angularVelocity;
+    bd.shape = b.shape == scene::ShapeKind::kCircle ? ShapeDef::MakeCircle(b.radius)
+                                                    : ShapeDef::FromPolygon(MakePolygon(b.vertices));
+    bd.shape.density = b.density;
+    bd.shape.friction = b.friction;
+    bd.shape.restitution = b.restitution;
+    out.push_back(bd);
+  }
+  return out;
+}
+
+WorldDef JacobiDef(const scene::Scene& s) {
+  WorldDef def;
+  def.gravity = s.gravity;
+  def.solver = SolverType::kJacobi;
+  def.velocityIterations = s.velocityIterations;
+  def.restitutionThreshold = s.restitutionThreshold;
+  def.effects = s.effects;
+  return def;
+}
+
+// Steps a World (rank 0 only) and the distributed world side by side; compares their state
+// hashes every `every` steps. Returns the distributed world's migrations summed over steps and
+// ranks.
+int64_t CompareWithWorld(const WorldDef& def, const DistributedDef& dist, const std::vector<BodyDef>& bodies,
+                         Real dt, int steps, int every) {
+  std::unique_ptr<World> world;
+  if (Rank() == 0) {
+    world = std::make_unique<World>(def);
+    for (const BodyDef& b : bodies) world->CreateBody(b);
+  }
+  DistributedWorld dw(def, dist, MPI_COMM_WORLD);
+  dw.Load(bodies);
+  int64_t migrated = 0;
+  for (int step = 1; step <= steps; ++step) {
+    if (world) world->Step(dt);
+    dw.Step(dt);
+    migrated += dw.GetStats().migratedIn;
+    if (step % every == 0 || step == steps) {
+      uint64_t expected = world ? world->StateHash() : 0;
+      MPI_Bcast(&expected, 1, MPI_UINT64_T, 0, MPI_COMM_WORLD);
+      const uint64_t got = dw.StateHash();
+      EXPECT_EQ(got, expected) << "step " << step << " at " << Size() << " ranks";
+      if (got != expected) break;  // every rank sees the same values, so every rank stops here
+    }
+  }
+  int64_t total = 0;
+  MPI_Allreduce(&migrated, &total, 1, MPI_INT64_T, MPI_SUM, MPI_COMM_WORLD);
+  return total;
+}
+
+// Circle stress (the thesis's Figure 14 scene, elastic, no gravity, closed box) on 4 x 4 tiles:
+// every body crosses tiles, the hashes equal the World's all the way.
+TEST(Distributed, CircleStressMatchesWorld) {
+  scene::StressParams p;
+  p.count = 1000;
+  const scene::Scene s = scene::MakeStressScene(p);
+  DistributedDef dist;
+  dist.bounds = s.bounds;
+  dist.tilesX = dist.tilesY = 4;
+  const int64_t migrated = CompareWithWorld(JacobiDef(s), dist, ToBodyDefs(s), s.timeStep, 200, 50);
+  // Heavy migration: with more than one rank, bodies changed owner hundreds of times.
+  if (Size() > 1) {
+    EXPECT_GT(migrated, 100);
+  }
+  if (Rank() == 0) std::printf("[ info ] circle stress 1000, 200 steps, %d ranks: %lld migrations\n", Size(), (long long)migrated);
+}
+
+// A base-10 pyramid whose centre is the corner of four tiles: contacts across every boundary.
+TEST(Distributed, PyramidAcrossTilesMatchesWorld) {
+  const scene::Scene s = scene::MakePyramid(10);
+  const std::vector<BodyDef> bodies = ToBodyDefs(s);
+  // The pyramid's middle (its boxes' centres, the ground left out).
+  Real lo = 1e9, hi = -1e9, top = -1e9, bottom = 1e9;
+  for (const BodyDef& b : bodies) {
+    if (b.type != BodyType::kDynamic) continue;
+    lo = std::min(lo, b.position.x), hi = std::max(hi, b.position.x);
+    top = std::max(top, b.position.y), bottom = std::min(bottom, b.position.y);
+  }
+  const Vec2 mid{(lo + hi) / 2, (bottom + top) / 2};
+  DistributedDef dist;
+  dist.bounds = AABB{mid - Vec2{20, 20}, mid + Vec2{20, 20}};
+  dist.tilesX = dist.tilesY = 2;
+  CompareWithWorld(JacobiDef(s), dist, bodies, s.timeStep, 120, 40);
+}
+
+// Zero gravity, restitution 1, no walls: a cloud of circles colliding in open space. Linear
+// momentum is exact in every contact (equal and opposite impulses); only rounding moves it.
+TEST(Distributed, MomentumConservedWithoutGravity) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> jitter(-0.2f, 0.2f), speed(-4.0f, 4.0f);
+  std::vector<BodyDef> bodies;
+  for (int y = 0; y < 20; ++y) {
+    for (int x = 0; x < 20; ++x) {
+      BodyDef b;
+      b.type = BodyType::kDynamic;
+      b.position = {Real(x) * 1.5f + jitter(rng) - 15, Real(y) * 1.5f + jitter(rng) - 15};
+      b.linearVelocity = {speed(rng), speed(rng)};
+      b.shape = ShapeDef::MakeCircle(0.5f);
+      b.shape.restitution = 1;
+      b.shape.friction = 0;
+      bodies.push_back(b);
+    }
+  }
+  WorldDef def;
+  def.solver = SolverType::kJacobi;
+  def.effects.gravity = false;
+  DistributedDef dist;
+  dist.bounds = AABB{{-20, -20}, {20, 20}};
+  dist.tilesX = dist.tilesY = 4;
+  DistributedWorld dw(def, dist, MPI_COMM_WORLD);
+  dw.Load(bodies);
+  auto momentum = [&](double& scale) {
+    double px = 0, py = 0;
+    scale = 0;
+    for (const BodyState& b : dw.GatherStates()) {
+      px += double(b.mass) * b.linearVelocity.x;
+      py += double(b.mass) * b.linearVelocity.y;
+      scale += double(b.mass) * std::hypot(double(b.linearVelocity.x), double(b.linearVelocity.y));
+    }
+    return std::array<double, 2>{px, py};
+  };
+  double scale0 = 0, scale1 = 0;
+  const auto p0 = momentum(scale0);
+  int64_t contacts = 0;
+  for (int step = 0; step < 200; ++step) {
+    dw.Step(Real(1.0 / 60.0));
+    contacts += dw.GetStats().contacts;
+  }
+  const auto p1 = momentum(scale1);
+  // Relative to the sum of |m v| (the net momentum of random velocities is near zero).
+  const double error = std::hypot(p1[0] - p0[0], p1[1] - p0[1]) / scale0;
+  EXPECT_LT(error, 1e-5);
+  int64_t total = 0;
+  MPI_Allreduce(&contacts, &total, 1, MPI_INT64_T, MPI_SUM, MPI_COMM_WORLD);
+  EXPECT_GT(total, 1000);  // the bodies did collide
+  if (Rank() == 0) std::printf("[ info ] momentum: relative change %.3g over 200 steps (%lld contacts)\n", error, (long long)total);
+}
+
+// Every rank must have caught the same error: the count of ranks that did is reduced.
+void ExpectErrorOnEveryRank(const std::function<void()>& fn, const std::string& expected) {
+  int caught = 0;
+  try {
+    fn();
+  } catch (const Error& e) {
+    caught = std::string(e.what()).find(expected) != std::string::npos ? 1 : 0;
+    if (!caught) ADD_FAILURE() << "unexpected message: " << e.what();
+  }
+  int total = 0;
+  MPI_Allreduce(&caught, &total, 1, MPI_INT, MPI_SUM, MPI_COMM_WORLD);
+  EXPECT_EQ(total, Size()) << "expected '" << expected << "' on every rank";
+}
+
+std::vector<BodyDef> SmallScene(Real shift) {
+  std::vector<BodyDef> bodies;
+  for (int i = 0; i < 10; ++i) {
+    BodyDef b;
+    b.type = BodyType::kDynamic;
+    b.position = {Real(i) * 2 - 9 + shift, 0};
+    b.shape = ShapeDef::MakeCircle(0.5f);
+    bodies.push_back(b);
+  }
+  return bodies;
+}
+
+TEST(DistributedBadInput, ScenesDifferBetweenRanks) {
+  if (Size() < 2) GTEST_SKIP() << "needs two ranks";
+  WorldDef def;
+  def.solver = SolverType::kJacobi;
+  DistributedDef dist;
+  DistributedWorld dw(def, dist, MPI_COMM_WORLD);
+  ExpectErrorOnEveryRank([&] { dw.Load(SmallScene(Rank() == 1 ? Real(0.25) : Real(0))); }, "differs between ranks");
+  // Nothing was loaded: stepping is refused, on every rank alike.
+  ExpectErrorOnEveryRank([&] { dw.Step(Real(1.0 / 60.0)); }, "Load a scene first");
+}
+
+TEST(DistributedBadInput, BodyLargerThanARegion) {
+  WorldDef def;
+  def.solver = SolverType::kJacobi;
+  DistributedDef dist;
+  dist.bounds = AABB{{-10, -10}, {10, 10}};
+  dist.tilesX = dist.tilesY = 4;  // 5 m tiles: a body may reach 2.5 m from its centre
+  std::vector<BodyDef> bodies = SmallScene(0);
+  bodies[3].shape = ShapeDef::MakeCircle(3);
+  DistributedWorld dw(def, dist, MPI_COMM_WORLD);
+  dw.Load(bodies);
+  ExpectErrorOnEveryRank([&] { dw.Step(Real(1.0 / 60.0)); }, "more than half a tile");
+}
+
+TEST(DistributedBadInput, MoreRanksThanTiles) {
+  if (Size() < 2) GTEST_SKIP() << "needs two ranks";
+  WorldDef def;
+  def.solver = SolverType::kJacobi;
+  DistributedDef dist;
+  dist.tilesX = dist.tilesY = 1;
+  ExpectErrorOnEveryRank([&] { DistributedWorld dw(def, dist, MPI_COMM_WORLD); }, "every rank needs at least one tile");
+}
+
+TEST(DistributedBadInput, GaussSeidelSolverRefused) {
+  WorldDef def;  // pgs
+  ExpectErrorOnEveryRank([&] { DistributedWorld dw(def, DistributedDef{}, MPI_COMM_WORLD); }, "must be SolverType::kJacobi");
+}
+
+}  // namespace
+}  // namespace quadrant
+
+int main(int argc, char** argv) {
+  MPI_Init(&argc, &argv);
+  if (argc > 1 && std::strcmp(argv[1], "--bad-scene-exit") == 0) {
+    // Uncaught by any test: the program's own error path, as a user's program would have it.
+    int code = 0;
+    try {
+      quadrant::WorldDef def;
+      def.solver = quadrant::SolverType::kJacobi;
+      quadrant::DistributedWorld dw(def, quadrant::DistributedDef{}, MPI_COMM_WORLD);
+      dw.Load(quadrant::SmallScene(quadrant::Rank() == 1 ? quadrant::Real(0.25) : quadrant::Real(0)));
+    } catch (const quadrant::Error& e) {
+      std::fprintf(stderr, "rank %d: error: %s\n", quadrant::Rank(), e.what());
+      code = 1;
+    }
+    MPI_Finalize();
+    return code;
+  }
+  ::testing::InitGoogleTest(&argc, argv);
+  const int failed = RUN_ALL_TESTS();
+  int any = 0;
+  MPI_Allreduce(&failed, &any, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+  MPI_Finalize();
+  return any;
+}
