@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <string>
 #include <type_traits>
@@ -665,6 +666,152 @@ uint64_t DistributedWorld::StateHash() const {
     h.Mix(s.angularVelocity);
   }
   return h.Value();
+}
+
+// ---- checkpoints ------------------------------------------------------------------------------
+//
+// Layout: magic, sizeof(Real), sizeof(Record), sizeof(CacheEntry), body count, entry count, the
+// records in id order, the entries in key order, then FNV-1a of everything before it. Warm-start
+// entries are written once per contact (two ranks hold equal copies of a boundary contact's).
+
+namespace {
+
+constexpr char kCheckpointMagic[8] = {'Q', 'D', 'C', 'K', 'P', 'T', '0', '1'};
+
+uint64_t Fnv(const char* data, size_t n) {
+  uint64_t h = 0xcbf29ce484222325ull;
+  for (size_t i = 0; i < n; ++i) {
+    h ^= static_cast<unsigned char>(data[i]);
+    h *= 0x100000001b3ull;
+  }
+  return h;
+}
+
+// All ranks' bytes on rank 0, in rank order.
+std::vector<char> GatherBytes(const std::vector<char>& mine, int rank, int size, MPI_Comm comm) {
+  const int bytes = static_cast<int>(mine.size());
+  std::vector<int> counts(size_t(size), 0), displs(size_t(size), 0);
+  MPI_Gather(&bytes, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, comm);
+  int total = 0;
+  for (int r = 0; r < size; ++r) {
+    displs[size_t(r)] = total;
+    total += counts[size_t(r)];
+  }
+  std::vector<char> all(rank == 0 ? size_t(total) : 0);
+  MPI_Gatherv(mine.data(), bytes, MPI_BYTE, all.data(), counts.data(), displs.data(), MPI_BYTE, 0, comm);
+  return all;
+}
+
+}  // namespace
+
+void DistributedWorld::WriteCheckpoint(const std::string& path) const {
+  const Impl& w = *impl_;
+  Require(w.loaded, "DistributedWorld::WriteCheckpoint: Load a scene first");
+  std::vector<char> mine;
+  for (const Record& r : w.owned) Put(mine, r);
+  const std::vector<char> records = GatherBytes(mine, w.rank, w.size, w.comm);
+  mine.clear();
+  for (const CacheEntry& e : w.cache) Put(mine, e);
+  const std::vector<char> entries = GatherBytes(mine, w.rank, w.size, w.comm);
+  int ok = 1;
+  if (w.rank == 0) {
+    std::vector<Record> bodies(w.statics);
+    for (size_t at = 0; at < records.size();) bodies.push_back(Take<Record>(records, at));
+    std::sort(bodies.begin(), bodies.end(), [](const Record& a, const Record& b) { return a.id < b.id; });
+    std::vector<CacheEntry> cache;
+    for (size_t at = 0; at < entries.size();) cache.push_back(Take<CacheEntry>(entries, at));
+    std::stable_sort(cache.begin(), cache.end(), [](const CacheEntry& a, const CacheEntry& b) { return a.key < b.key; });
+    cache.erase(std::unique(cache.begin(), cache.end(), [](const CacheEntry& a, const CacheEntry& b) { return a.key == b.key; }),
+                cache.end());
+    std::vector<char> file(kCheckpointMagic, kCheckpointMagic + sizeof kCheckpointMagic);
+    Put(file, uint32_t(sizeof(Real)));
+    Put(file, uint32_t(sizeof(Record)));
+    Put(file, uint32_t(sizeof(CacheEntry)));
+    Put(file, uint64_t(bodies.size()));
+    Put(file, uint64_t(cache.size()));
+    for (const Record& r : bodies) Put(file, r);
+    for (const CacheEntry& e : cache) Put(file, e);
+    Put(file, Fnv(file.data(), file.size()));
+    std::FILE* f = std::fopen(path.c_str(), "wb");
+    ok = f != nullptr && std::fwrite(file.data(), 1, file.size(), f) == file.size();
+    if (f != nullptr) ok = (std::fclose(f) == 0) && ok;
+  }
+  MPI_Bcast(&ok, 1, MPI_INT, 0, w.comm);
+  Require(ok != 0, "DistributedWorld::WriteCheckpoint: cannot write '" + path + "'");
+}
+
+void DistributedWorld::ReadCheckpoint(const std::string& path) {
+  Impl& w = *impl_;
+  // Every rank reads and checks the file itself; the verdicts are reduced so all ranks agree.
+  std::string error;
+  std::vector<char> file;
+  if (std::FILE* f = std::fopen(path.c_str(), "rb")) {
+    char chunk[65536];
+    size_t n;
+    while ((n = std::fread(chunk, 1, sizeof chunk, f)) > 0) file.insert(file.end(), chunk, chunk + n);
+    std::fclose(f);
+  } else {
+    error = "cannot open '" + path + "'";
+  }
+  std::vector<Record> statics, owned;
+  std::vector<CacheEntry> cache;
+  uint64_t count = 0, checksum = 0;
+  const size_t header = sizeof kCheckpointMagic + 3 * sizeof(uint32_t) + 2 * sizeof(uint64_t);
+  if (error.empty()) {
+    if (file.size() < header + sizeof(uint64_t) || std::memcmp(file.data(), kCheckpointMagic, sizeof kCheckpointMagic) != 0) {
+      error = "'" + path + "' is not a Quadrant checkpoint (or is truncated before its header ends)";
+    }
+  }
+  if (error.empty()) {
+    size_t at = sizeof kCheckpointMagic;
+    const uint32_t realSize = Take<uint32_t>(file, at), recordSize = Take<uint32_t>(file, at),
+                   entrySize = Take<uint32_t>(file, at);
+    const uint64_t bodies = Take<uint64_t>(file, at), entries = Take<uint64_t>(file, at);
+    if (realSize != sizeof(Real) || recordSize != sizeof(Record) || entrySize != sizeof(CacheEntry)) {
+      error = "'" + path + "' was written by another build (record sizes differ)";
+    } else if (bodies > (uint64_t(1) << 31) || entries > (uint64_t(1) << 40) ||
+               file.size() != header + bodies * sizeof(Record) + entries * sizeof(CacheEntry) + sizeof(uint64_t)) {
+      error = "'" + path + "' is truncated or has trailing bytes (size " + std::to_string(file.size()) + ")";
+    } else {
+      size_t end = file.size() - sizeof(uint64_t);
+      const uint64_t stored = Take<uint64_t>(file, end);
+      if (stored != Fnv(file.data(), file.size() - sizeof(uint64_t))) {
+        error = "'" + path + "' is corrupt (checksum mismatch)";
+      } else {
+        for (uint64_t i = 0; i < bodies && error.empty(); ++i) {
+          const Record r = Take<Record>(file, at);
+          if (r.id != i || !IsFinite(r.center) || !IsFinite(r.vel.v)) error = "'" + path + "' holds a malformed body";
+          if (r.type == BodyType::kStatic) {
+            statics.push_back(r);
+          } else {
+            ++count;
+            checksum += MixId(r.id);
+            if (w.OwnerOf(r.center) == w.rank) owned.push_back(r);
+          }
+        }
+        for (uint64_t i = 0; i < entries; ++i) cache.push_back(Take<CacheEntry>(file, at));
+      }
+    }
+  }
+  // Only the entries of this rank's contacts: those touching an owned body.
+  std::vector<uint32_t> ids;
+  for (const Record& r : owned) ids.push_back(r.id);
+  std::erase_if(cache, [&](const CacheEntry& e) {
+    return !std::binary_search(ids.begin(), ids.end(), uint32_t(e.key >> 32)) &&
+           !std::binary_search(ids.begin(), ids.end(), uint32_t(e.key));
+  });
+  const int bad = error.empty() ? 0 : 1;
+  int anyBad = 0;
+  MPI_Allreduce(&bad, &anyBad, 1, MPI_INT, MPI_MAX, w.comm);
+  Require(anyBad == 0, "DistributedWorld::ReadCheckpoint: " +
+                           (error.empty() ? std::string("another rank could not read the checkpoint") : error));
+  w.statics.swap(statics);
+  w.owned.swap(owned);
+  w.cache.swap(cache);
+  w.expectedCount = count;
+  w.expectedChecksum = checksum;
+  w.loaded = true;
+  w.CheckCounts();
 }
 
 int DistributedWorld::Rank() const { return impl_->rank; }

@@ -17,6 +17,8 @@
 #include <memory>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
+#include <unistd.h>
 #include <random>
 #include <string>
 #include <vector>
@@ -113,6 +115,30 @@ TEST(Distributed, CircleStressMatchesWorld) {
     EXPECT_GT(migrated, 0);  // bodies crossed between ranks (the 2000-step test below moves many more)
   }
   if (Rank() == 0) std::printf("[ info ] circle stress 1000, 200 steps, %d ranks: %lld migrations\n", Size(), (long long)migrated);
+}
+
+// The stress scene's circles falling under gravity with friction and no bounce into a pile: many
+// lasting contacts whose bodies change owner while they carry warm-start impulses (the entries
+// must travel with a migrating body, or the next step starts from other impulses).
+TEST(Distributed, GranularPileMatchesWorld) {
+  scene::StressParams p;
+  p.count = 600;
+  scene::Scene s = scene::MakeStressScene(p);
+  for (scene::BodyDesc& b : s.bodies) {
+    b.restitution = 0;
+    b.friction = Real(0.6);
+  }
+  WorldDef def = JacobiDef(s);
+  def.gravity = {0, -10};
+  def.effects.gravity = true;
+  def.effects.friction = true;
+  DistributedDef dist;
+  dist.bounds = s.bounds;
+  dist.tilesX = dist.tilesY = 4;
+  const int64_t migrated = CompareWithWorld(def, dist, ToBodyDefs(s), s.timeStep, 150, 25);
+  if (Size() > 1) {
+    EXPECT_GT(migrated, 0);
+  }
 }
 
 // A base-10 pyramid whose centre is the corner of four tiles: contacts across every boundary.
@@ -273,6 +299,13 @@ std::vector<BodyDef> SmallScene(Real shift) {
   return bodies;
 }
 
+// A file name unique to this job (rank 0's process id) in the temporary directory.
+std::string CheckpointPath(const std::string& name) {
+  int pid = Rank() == 0 ? static_cast<int>(getpid()) : 0;
+  MPI_Bcast(&pid, 1, MPI_INT, 0, MPI_COMM_WORLD);
+  return (std::filesystem::temp_directory_path() / ("quadrant_" + name + "_" + std::to_string(pid) + ".ckpt")).string();
+}
+
 TEST(DistributedBadInput, ScenesDifferBetweenRanks) {
   if (Size() < 2) GTEST_SKIP() << "needs two ranks";
   WorldDef def;
@@ -309,6 +342,79 @@ TEST(DistributedBadInput, MoreRanksThanTiles) {
 TEST(DistributedBadInput, GaussSeidelSolverRefused) {
   WorldDef def;  // pgs
   ExpectErrorOnEveryRank([&] { DistributedWorld dw(def, DistributedDef{}, MPI_COMM_WORLD); }, "must be SolverType::kJacobi");
+}
+
+// Checkpoint on about half the ranks, restart on all of them (1 -> 1, 1 -> 2, 2 -> 3, 2 -> 4):
+// the restarted world continues with the hashes of the one that wrote the file.
+TEST(DistributedCheckpoint, RestartOnAnotherRankCountKeepsHashes) {
+  scene::StressParams p;
+  p.count = 600;
+  const scene::Scene s = scene::MakeStressScene(p);
+  DistributedDef dist;
+  dist.bounds = s.bounds;
+  dist.tilesX = dist.tilesY = 4;
+  const WorldDef def = JacobiDef(s);
+  const std::string path = CheckpointPath("restart");
+  const int writers = std::max(1, (Size() + 1) / 2);
+  MPI_Comm half;
+  MPI_Comm_split(MPI_COMM_WORLD, Rank() < writers ? 0 : MPI_UNDEFINED, Rank(), &half);
+  uint64_t written[3] = {0, 0, 0};  // hashes 20, 40 and 60 steps after the checkpoint
+  if (half != MPI_COMM_NULL) {
+    DistributedWorld dw(def, dist, half);
+    dw.Load(ToBodyDefs(s));
+    for (int step = 0; step < 50; ++step) dw.Step(s.timeStep);
+    dw.WriteCheckpoint(path);
+    for (int k = 0; k < 3; ++k) {
+      for (int step = 0; step < 20; ++step) dw.Step(s.timeStep);
+      written[k] = dw.StateHash();
+    }
+    MPI_Comm_free(&half);
+  }
+  MPI_Bcast(written, 3, MPI_UINT64_T, 0, MPI_COMM_WORLD);
+  DistributedWorld restarted(def, dist, MPI_COMM_WORLD);
+  restarted.ReadCheckpoint(path);
+  for (int k = 0; k < 3; ++k) {
+    for (int step = 0; step < 20; ++step) restarted.Step(s.timeStep);
+    EXPECT_EQ(restarted.StateHash(), written[k]) << "written on " << writers << " ranks, read on " << Size();
+  }
+  MPI_Barrier(MPI_COMM_WORLD);
+  if (Rank() == 0) std::remove(path.c_str());
+}
+
+// A missing, truncated or corrupt checkpoint: the same error on every rank, the world unchanged.
+TEST(DistributedCheckpoint, BadFilesRefusedOnEveryRank) {
+  WorldDef def;
+  def.solver = SolverType::kJacobi;
+  DistributedWorld dw(def, DistributedDef{}, MPI_COMM_WORLD);
+  dw.Load(SmallScene(0));
+  const uint64_t before = dw.StateHash();
+  const std::string good = CheckpointPath("good"), truncated = CheckpointPath("truncated"),
+                    corrupt = CheckpointPath("corrupt");
+  dw.WriteCheckpoint(good);
+  if (Rank() == 0) {
+    std::FILE* f = std::fopen(good.c_str(), "rb");
+    std::vector<char> bytes(1 << 20);
+    bytes.resize(std::fread(bytes.data(), 1, bytes.size(), f));
+    std::fclose(f);
+    f = std::fopen(truncated.c_str(), "wb");
+    std::fwrite(bytes.data(), 1, bytes.size() - 100, f);
+    std::fclose(f);
+    bytes[bytes.size() / 2] ^= 0x20;
+    f = std::fopen(corrupt.c_str(), "wb");
+    std::fwrite(bytes.data(), 1, bytes.size(), f);
+    std::fclose(f);
+  }
+  MPI_Barrier(MPI_COMM_WORLD);
+  ExpectErrorOnEveryRank([&] { dw.ReadCheckpoint(truncated); }, "is truncated");
+  ExpectErrorOnEveryRank([&] { dw.ReadCheckpoint(corrupt); }, "is corrupt");
+  ExpectErrorOnEveryRank([&] { dw.ReadCheckpoint(good + ".missing"); }, "cannot open");
+  EXPECT_EQ(dw.StateHash(), before);
+  MPI_Barrier(MPI_COMM_WORLD);
+  if (Rank() == 0) {
+    std::remove(good.c_str());
+    std::remove(truncated.c_str());
+    std::remove(corrupt.c_str());
+  }
 }
 
 }  // namespace

@@ -44,6 +44,7 @@
 #include <cstdint>
 #include <memory>
 #include <span>
+#include <string>
 #include <vector>
 
 #include "quadrant/world.h"
@@ -104,6 +105,17 @@ class DistributedWorld {
   std::vector<BodyState> GatherStates() const;
   /// Collective: World::StateHash of the gathered states (same fields, same order).
   uint64_t StateHash() const;
+
+  /// Collective: writes the world to `path` (rank 0 writes): every body in id order with its mass
+  /// data, and the warm-start impulses of every contact, followed by a checksum. The file is for
+  /// this build (it records the sizes of its records and of Real and refuses others).
+  /// Throws quadrant::Error on every rank if the file cannot be written.
+  void WriteCheckpoint(const std::string& path) const;
+  /// Collective: replaces this world's bodies and warm-start impulses by the checkpoint's, on this
+  /// world's ranks and tiles (any rank count: bodies go to the rank holding their centre). Stepping
+  /// on then gives the states the written world would have had. Throws quadrant::Error on every
+  /// rank, leaving the world as it was, for a missing, truncated or corrupt file.
+  void ReadCheckpoint(const std::string& path);
 
   int Rank() const;
   int Size() const;
