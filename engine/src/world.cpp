@@ -52,24 +52,6 @@ ShapeDef ShapeDef::FromPolygon(const Polygon& polygon) {
   return s;
 }
 
-// The broad-phase box of a body: its shape's AABB grown by half the speculative distance on
-// every side (so two shapes closer than that distance pair up), and for moving bodies swept
-// by this step's displacement, so a pair that can meet within the step is found before it
-// touches and the speculative contact stops it at the surface. Shared with the distributed
-// world, which must find exactly the World's pairs.
-AABB BroadPhaseBox(const Bodies& bodies, int i, const WorldDef& def, Real dt) {
-  const ShapeDef& s = bodies.shape[i];
-  AABB box = s.type == ShapeType::kCircle ? ComputeAABB(s.circle, bodies.xf[i]) : ComputeAABB(s.polygon, bodies.xf[i]);
-  const BodyVelocity& bv = bodies.vel[i];
-  // Without continuous collision the box is not swept (dt 0 below): only the base margin.
-  const Real sweep = def.effects.continuous ? dt : Real(0);
-  const Real margin = Real(0.5) * def.speculativeDistance + sweep * std::abs(bv.w) * bodies.boundRadius[i];
-  const Vec2 d = sweep * bv.v;
-  box.lower = box.lower + Vec2{std::min(d.x, Real(0)) - margin, std::min(d.y, Real(0)) - margin};
-  box.upper = box.upper + Vec2{std::max(d.x, Real(0)) + margin, std::max(d.y, Real(0)) + margin};
-  return box;
-}
-
 struct World::Impl {
   WorldDef def;
   Bodies bodies;
