@@ -39,7 +39,7 @@ def main():
     context = {"machine": args.machine, "commit": args.commit, "load_before": args.load,
                "solver": "jacobi (SolverType::kJacobi)",
                "ms_per_step": "slowest rank's wall time over the timed steps",
-               "imbalance": "max / mean of owned bodies over ranks, averaged over the steps"}
+               "imbalance": "max / mean over ranks of owned bodies plus their contacts, averaged over the steps"}
     with open(args.json, "w") as f:
         json.dump({"context": context, "runs": runs}, f, indent=1)
         f.write("\n")
@@ -50,7 +50,7 @@ def main():
     out = [f"# The distributed world (MPI)\n",
            f"Machine {args.machine}, commit {args.commit}, load average before the runs {args.load}. "
            "Solver: Jacobi (the distributed world's; the single-process World gives the same state hashes). "
-           "`*`: more ranks than cores (oversubscribed). Imbalance: max / mean of the ranks' owned bodies.\n"]
+           "`*`: more ranks than cores (oversubscribed). Imbalance: max / mean over the ranks of owned bodies plus their contacts (a work count).\n"]
     for (kind, scene), rows in sorted(groups.items(), key=lambda g: (g[0][0] != "weak", g[0][1])):
         rows.sort(key=lambda r: r["ranks"])
         base = rows[0]

@@ -120,6 +120,10 @@ struct DistributedWorld::Impl {
   int rank = 0, size = 1;
   Real tileW = 0, tileH = 0;
   std::vector<int> tileOwner;  // by tile index tx + ty * tilesX
+  std::vector<int> tileOrder;  // tile indices in Morton order (the order ranks get them in)
+  std::vector<int64_t> tileCost;  // this rank's work per tile in the last step (load balance)
+  int64_t stepCount = 0;
+  std::vector<Vec2> stepStartCenters;  // owned bodies' centres when the step began (tile costs)
   std::vector<int> neighbours;  // ascending ranks
   std::vector<int> neighbourSlot;  // rank -> index in neighbours, -1 if not a neighbour
 
@@ -233,6 +237,9 @@ struct DistributedWorld::Impl {
     return box;
   }
 
+  void DealTiles(const std::vector<int64_t>& cost);
+  void FindNeighbours();
+  void Rebalance(bool force);
   void Migrate(Real dt);
   void SendShadows(Real reach, Real dt);
   void BuildLocal(Real dt);
@@ -259,6 +266,9 @@ DistributedWorld::DistributedWorld(const WorldDef& def, const DistributedDef& di
           "DistributedDef.bounds must be finite and non-empty");
   Require(dist.tilesX >= 1 && dist.tilesX <= 1024 && dist.tilesY >= 1 && dist.tilesY <= 1024,
           "DistributedDef.tilesX and tilesY must be in [1, 1024]");
+  Require(dist.rebalanceInterval >= 0, "DistributedDef.rebalanceInterval must be >= 0");
+  Require(IsFinite(dist.rebalanceThreshold) && dist.rebalanceThreshold >= 1,
+          "DistributedDef.rebalanceThreshold must be finite and >= 1");
   const int tiles = dist.tilesX * dist.tilesY;
   Require(w.size <= tiles, "DistributedWorld: " + std::to_string(w.size) + " ranks but only " + std::to_string(tiles) +
                                " tiles (" + std::to_string(dist.tilesX) + " x " + std::to_string(dist.tilesY) +
@@ -269,46 +279,152 @@ DistributedWorld::DistributedWorld(const WorldDef& def, const DistributedDef& di
   w.tileW = (dist.bounds.upper.x - dist.bounds.lower.x) / Real(dist.tilesX);
   w.tileH = (dist.bounds.upper.y - dist.bounds.lower.y) / Real(dist.tilesY);
 
-  // Tiles in Morton order, dealt in contiguous runs: rank r gets positions [r T / P, (r+1) T / P).
-  std::vector<int> order(static_cast<size_t>(tiles));
-  for (int t = 0; t < tiles; ++t) order[t] = t;
-  std::sort(order.begin(), order.end(), [&](int a, int b) {
+  // Tiles in Morton order, dealt in contiguous runs: at first equal numbers of tiles per rank.
+  w.tileOrder.resize(static_cast<size_t>(tiles));
+  for (int t = 0; t < tiles; ++t) w.tileOrder[size_t(t)] = t;
+  std::sort(w.tileOrder.begin(), w.tileOrder.end(), [&](int a, int b) {
     return Morton(uint32_t(a % dist.tilesX), uint32_t(a / dist.tilesX)) <
            Morton(uint32_t(b % dist.tilesX), uint32_t(b / dist.tilesX));
   });
-  w.tileOwner.assign(static_cast<size_t>(tiles), 0);
-  for (int r = 0; r < w.size; ++r) {
-    const int64_t begin = int64_t(r) * tiles / w.size, end = int64_t(r + 1) * tiles / w.size;
-    for (int64_t pos = begin; pos < end; ++pos) w.tileOwner[size_t(order[size_t(pos)])] = r;
+  w.tileCost.assign(static_cast<size_t>(tiles), 0);
+  w.DealTiles(std::vector<int64_t>(static_cast<size_t>(tiles), 1));
+  w.tasks = MakeThreadPool(def.threadCount);
+  w.run = std::make_unique<StageRunner>(*w.tasks, def.minParallelItems);
+  w.broadPhase = MakeBroadPhase(def.broadPhase, def.quadTreeMaxDepth);
+}
+
+// Deals the tiles, in Morton order, to the ranks in contiguous runs of about equal total cost
+// (every rank at least one tile): rank r's run ends at the first tile whose middle passes
+// (r + 1) / P of the total. Equal costs give equal numbers of tiles.
+void DistributedWorld::Impl::DealTiles(const std::vector<int64_t>& cost) {
+  const int tiles = static_cast<int>(tileOrder.size());
+  std::vector<int64_t> prefix(size_t(tiles) + 1, 0);
+  for (int i = 0; i < tiles; ++i) prefix[size_t(i) + 1] = prefix[size_t(i)] + cost[size_t(tileOrder[size_t(i)])];
+  const double total = double(prefix[size_t(tiles)]);
+  tileOwner.assign(size_t(tiles), 0);
+  int start = 0;
+  for (int r = 0; r < size; ++r) {
+    int end = tiles;
+    if (r + 1 < size) {
+      const double target = total * double(r + 1) / double(size);
+      end = start + 1;
+      const int last = tiles - (size - 1 - r);  // leave a tile for every later rank
+      while (end < last && double(prefix[size_t(end)]) + 0.5 * double(cost[size_t(tileOrder[size_t(end)])]) <= target) ++end;
+    }
+    for (int i = start; i < end; ++i) tileOwner[size_t(tileOrder[size_t(i)])] = r;
+    start = end;
   }
-  w.neighbourSlot.assign(static_cast<size_t>(w.size), -1);
+  FindNeighbours();
+}
+
+// The ranks owning a tile next to one of this rank's (8-neighbourhood), ascending.
+void DistributedWorld::Impl::FindNeighbours() {
+  neighbours.clear();
+  neighbourSlot.assign(static_cast<size_t>(size), -1);
+  const int tiles = dist.tilesX * dist.tilesY;
   for (int t = 0; t < tiles; ++t) {
-    if (w.tileOwner[t] != w.rank) continue;
+    if (tileOwner[size_t(t)] != rank) continue;
     const int tx = t % dist.tilesX, ty = t / dist.tilesX;
     for (int dy = -1; dy <= 1; ++dy) {
       for (int dx = -1; dx <= 1; ++dx) {
         const int x = tx + dx, y = ty + dy;
         if (x < 0 || y < 0 || x >= dist.tilesX || y >= dist.tilesY) continue;
-        const int owner = w.tileOwner[size_t(x + y * dist.tilesX)];
-        if (owner != w.rank) w.neighbourSlot[size_t(owner)] = 0;
+        const int owner = tileOwner[size_t(x + y * dist.tilesX)];
+        if (owner != rank) neighbourSlot[size_t(owner)] = 0;
       }
     }
   }
-  for (int r = 0; r < w.size; ++r) {
-    if (w.neighbourSlot[r] == 0) {
-      w.neighbourSlot[r] = static_cast<int>(w.neighbours.size());
-      w.neighbours.push_back(r);
+  for (int r = 0; r < size; ++r) {
+    if (neighbourSlot[size_t(r)] == 0) {
+      neighbourSlot[size_t(r)] = static_cast<int>(neighbours.size());
+      neighbours.push_back(r);
     }
   }
-  const size_t nb = w.neighbours.size();
-  w.out.resize(nb);
-  w.in.resize(nb);
-  w.sentShadows.resize(nb);
-  w.receivedShadows.resize(nb);
-  w.tasks = MakeThreadPool(def.threadCount);
-  w.run = std::make_unique<StageRunner>(*w.tasks, def.minParallelItems);
-  w.broadPhase = MakeBroadPhase(def.broadPhase, def.quadTreeMaxDepth);
-  w.stats.neighbours = static_cast<int>(nb);
+  const size_t nb = neighbours.size();
+  out.assign(nb, {});
+  in.assign(nb, {});
+  sentShadows.assign(nb, {});
+  receivedShadows.assign(nb, {});
+  stats.neighbours = static_cast<int>(nb);
+}
+
+// Load balance: the tiles' costs of the last step (bodies owned plus their contacts: counts, not
+// times, so the new partition is the same on every run) summed over the ranks; if the most loaded
+// rank carries more than threshold times the mean (or `force`), the tiles are dealt again by cost
+// and every body whose tile changed owner moves there with its warm-start entries (one
+// all-to-all: a new owner need not be a neighbour). The arithmetic of a step does not depend on
+// the partition, so the states are the same bits with or without it.
+void DistributedWorld::Impl::Rebalance(bool force) {
+  std::vector<int64_t> cost(tileCost.size(), 0);
+  MPI_Allreduce(tileCost.data(), cost.data(), static_cast<int>(cost.size()), MPI_INT64_T, MPI_SUM, comm);
+  std::vector<double> perRank(size_t(size), 0.0);
+  double total = 0;
+  for (size_t t = 0; t < cost.size(); ++t) {
+    perRank[size_t(tileOwner[t])] += double(cost[t]);
+    total += double(cost[t]);
+  }
+  const double imbalance = total > 0 ? *std::max_element(perRank.begin(), perRank.end()) / (total / size) : 1.0;
+  if (!force && !(imbalance > double(dist.rebalanceThreshold))) return;
+  if (total <= 0) return;
+  DealTiles(cost);
+  ++stats.rebalances;
+
+  std::vector<std::vector<char>> to(static_cast<size_t>(size));
+  std::vector<std::vector<uint32_t>> leaving(static_cast<size_t>(size));
+  std::vector<Record> staying;
+  for (const Record& r : owned) {
+    const int owner = OwnerOf(r.center);
+    if (owner == rank) {
+      staying.push_back(r);
+    } else {
+      leaving[size_t(owner)].push_back(r.id);
+      Put(to[size_t(owner)], r);
+    }
+  }
+  std::vector<char> send;
+  std::vector<int> sendCounts(size_t(size), 0), sendDispls(size_t(size), 0);
+  for (int r = 0; r < size; ++r) {
+    sendDispls[size_t(r)] = static_cast<int>(send.size());
+    Put(send, uint32_t(leaving[size_t(r)].size()));
+    send.insert(send.end(), to[size_t(r)].begin(), to[size_t(r)].end());
+    std::vector<char> entries;
+    uint32_t n = 0;
+    const auto& ids = leaving[size_t(r)];
+    for (const CacheEntry& e : cache) {
+      if (std::binary_search(ids.begin(), ids.end(), uint32_t(e.key >> 32)) ||
+          std::binary_search(ids.begin(), ids.end(), uint32_t(e.key))) {
+        Put(entries, e);
+        ++n;
+      }
+    }
+    Put(send, n);
+    send.insert(send.end(), entries.begin(), entries.end());
+    sendCounts[size_t(r)] = static_cast<int>(send.size()) - sendDispls[size_t(r)];
+  }
+  std::vector<int> recvCounts(size_t(size), 0), recvDispls(size_t(size), 0);
+  MPI_Alltoall(sendCounts.data(), 1, MPI_INT, recvCounts.data(), 1, MPI_INT, comm);
+  int totalRecv = 0;
+  for (int r = 0; r < size; ++r) {
+    recvDispls[size_t(r)] = totalRecv;
+    totalRecv += recvCounts[size_t(r)];
+  }
+  std::vector<char> recv(static_cast<size_t>(totalRecv));
+  MPI_Alltoallv(send.data(), sendCounts.data(), sendDispls.data(), MPI_BYTE, recv.data(), recvCounts.data(),
+                recvDispls.data(), MPI_BYTE, comm);
+  owned.swap(staying);
+  for (int r = 0; r < size; ++r) {
+    const std::vector<char> part(recv.begin() + recvDispls[size_t(r)],
+                                 recv.begin() + recvDispls[size_t(r)] + recvCounts[size_t(r)]);
+    size_t at = 0;
+    const uint32_t bodies = Take<uint32_t>(part, at);
+    for (uint32_t j = 0; j < bodies; ++j) owned.push_back(Take<Record>(part, at));
+    const uint32_t entries = Take<uint32_t>(part, at);
+    for (uint32_t j = 0; j < entries; ++j) cache.push_back(Take<CacheEntry>(part, at));
+  }
+  std::sort(owned.begin(), owned.end(), [](const Record& a, const Record& b) { return a.id < b.id; });
+  std::stable_sort(cache.begin(), cache.end(), [](const CacheEntry& a, const CacheEntry& b) { return a.key < b.key; });
+  cache.erase(std::unique(cache.begin(), cache.end(), [](const CacheEntry& a, const CacheEntry& b) { return a.key == b.key; }),
+              cache.end());
 }
 
 DistributedWorld::~DistributedWorld() {
@@ -345,6 +461,7 @@ void DistributedWorld::Load(std::span<const BodyDef> bodies) {
     if (w.OwnerOf(r.center) == w.rank) w.owned.push_back(r);
   }
   w.loaded = true;
+  std::fill(w.tileCost.begin(), w.tileCost.end(), 0);
   w.CheckCounts();
 }
 
@@ -356,6 +473,10 @@ void DistributedWorld::Step(Real dt) {
   const DistributedStats previous = w.stats;
   w.stats = DistributedStats{};
   w.stats.neighbours = previous.neighbours;
+  if (w.dist.rebalanceInterval > 0 && w.stepCount > 0 && w.stepCount % w.dist.rebalanceInterval == 0) {
+    w.Rebalance(false);
+  }
+  ++w.stepCount;
 
   // The halo: the farthest any moving body's box reaches from its centre this step, over all
   // ranks (a max is exact in any order), and whether any body left its neighbourhood of tiles.
@@ -378,6 +499,8 @@ void DistributedWorld::Step(Real dt) {
   Require(global[1] == 0, "DistributedWorld::Step: a body moved past the tiles next to its own in one step");
 
   w.Migrate(dt);
+  w.stepStartCenters.clear();
+  for (const Record& r : w.owned) w.stepStartCenters.push_back(r.center);
   w.SendShadows(Real(global[0]), dt);
   w.BuildLocal(dt);
   w.FindContacts(dt);
@@ -400,6 +523,15 @@ void DistributedWorld::Step(Real dt) {
   }
   w.stats.ownedBodies = static_cast<int>(w.owned.size());
   w.stats.contacts = static_cast<int>(w.contacts.size());
+  // Work per tile of this step, for load balancing: each owned body and each of its contacts,
+  // booked to the tile its centre was in when the step began.
+  std::fill(w.tileCost.begin(), w.tileCost.end(), 0);
+  const std::vector<int32_t>& counts = w.solve.Counts();
+  for (size_t o = 0; o < w.owned.size(); ++o) {
+    const int i = w.ownedLocal[o];
+    const Vec2 c0 = w.stepStartCenters[o];
+    w.tileCost[size_t(w.TileX(c0.x) + w.TileY(c0.y) * w.dist.tilesX)] += 1 + counts[size_t(i)];
+  }
   w.CheckCounts();
 }
 
@@ -616,10 +748,15 @@ void DistributedWorld::Impl::StoreCache() {
 // Nothing lost, nothing duplicated: the global count of owned bodies and the sum of their mixed
 // ids (exact integer sums, modulo 2^64) against the loaded scene's.
 void DistributedWorld::Impl::CheckCounts() {
-  uint64_t local[2] = {uint64_t(owned.size()), 0};
+  int64_t cost = 0;
+  for (int64_t c : tileCost) cost += c;
+  uint64_t local[3] = {uint64_t(owned.size()), 0, uint64_t(cost)};
   for (const Record& r : owned) local[1] += MixId(r.id);
-  uint64_t global[2] = {0, 0};
-  MPI_Allreduce(local, global, 2, MPI_UINT64_T, MPI_SUM, comm);
+  uint64_t global[3] = {0, 0, 0};
+  MPI_Allreduce(local, global, 3, MPI_UINT64_T, MPI_SUM, comm);
+  int64_t most = 0;
+  MPI_Allreduce(&cost, &most, 1, MPI_INT64_T, MPI_MAX, comm);
+  stats.imbalance = global[2] > 0 ? double(most) / (double(global[2]) / size) : 1.0;
   Require(global[0] == expectedCount && global[1] == expectedChecksum,
           "DistributedWorld: body bookkeeping broken: " + std::to_string(global[0]) + " bodies owned, " +
               std::to_string(expectedCount) + " loaded (or the id checksum differs)");
@@ -811,8 +948,17 @@ void DistributedWorld::ReadCheckpoint(const std::string& path) {
   w.expectedCount = count;
   w.expectedChecksum = checksum;
   w.loaded = true;
+  std::fill(w.tileCost.begin(), w.tileCost.end(), 0);
   w.CheckCounts();
 }
+
+void DistributedWorld::Rebalance() {
+  Require(impl_->loaded, "DistributedWorld::Rebalance: Load a scene first");
+  impl_->Rebalance(true);
+  impl_->CheckCounts();
+}
+
+std::vector<int> DistributedWorld::TileOwners() const { return impl_->tileOwner; }
 
 int DistributedWorld::Rank() const { return impl_->rank; }
 int DistributedWorld::Size() const { return impl_->size; }

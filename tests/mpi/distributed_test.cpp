@@ -220,6 +220,51 @@ TEST(Distributed, HeavyMigrationKeepsEveryBody) {
   if (Rank() == 0) std::printf("[ info ] circle stress 500, 2000 steps, %d ranks: %lld migrations\n", Size(), (long long)total);
 }
 
+// The clumped stress scene (every body in the lower-left quarter of the box): with the tiles
+// dealt equally, one rank holds nearly all the work. Rebalancing every 10 steps re-deals the tiles
+// by work; the imbalance falls and the hashes stay the World's.
+TEST(Distributed, RebalanceClumpedSceneKeepsHashes) {
+  scene::StressParams p;
+  p.count = 800;
+  p.clumped = true;
+  const scene::Scene s = scene::MakeStressScene(p);
+  const WorldDef def = JacobiDef(s);
+  const std::vector<BodyDef> bodies = ToBodyDefs(s);
+  DistributedDef dist;
+  dist.bounds = s.bounds;
+  dist.tilesX = dist.tilesY = 8;
+  dist.rebalanceInterval = 10;
+  dist.rebalanceThreshold = Real(1.2);
+  std::unique_ptr<World> world;
+  if (Rank() == 0) {
+    world = std::make_unique<World>(def);
+    for (const BodyDef& b : bodies) world->CreateBody(b);
+  }
+  DistributedWorld dw(def, dist, MPI_COMM_WORLD);
+  dw.Load(bodies);
+  double first = 0, last = 0;
+  int rebalances = 0;
+  for (int step = 1; step <= 60; ++step) {
+    if (world) world->Step(s.timeStep);
+    dw.Step(s.timeStep);
+    if (step == 1) first = dw.GetStats().imbalance;
+    last = dw.GetStats().imbalance;
+    rebalances += dw.GetStats().rebalances;
+  }
+  uint64_t expected = world ? world->StateHash() : 0;
+  MPI_Bcast(&expected, 1, MPI_UINT64_T, 0, MPI_COMM_WORLD);
+  EXPECT_EQ(dw.StateHash(), expected);
+  if (Size() > 1) {
+    EXPECT_GT(first, 1.8);  // the clump sits in rank 0's tiles
+    EXPECT_LT(last, 1.3);
+    EXPECT_GE(rebalances, 1);
+  }
+  if (Rank() == 0) {
+    std::printf("[ info ] clumped 800, %d ranks: imbalance %.3f at step 1, %.3f at step 60, %d rebalances\n", Size(), first,
+                last, rebalances);
+  }
+}
+
 // Zero gravity, restitution 1, no walls: a cloud of circles colliding in open space. Linear
 // momentum is exact in every contact (equal and opposite impulses); only rounding moves it.
 TEST(Distributed, MomentumConservedWithoutGravity) {

@@ -60,6 +60,11 @@ struct DistributedDef {
   /// migration then only involve adjacent tiles.
   int tilesX = 2;
   int tilesY = 2;
+  /// Load balance: every rebalanceInterval steps (0: never, the default) the ranks' work in the
+  /// last step is compared; if the most loaded rank has more than rebalanceThreshold times the
+  /// mean, the tiles are dealt again by their cost (Rebalance). >= 0.
+  int rebalanceInterval = 0;
+  Real rebalanceThreshold = Real(1.2);  ///< max / mean work that triggers a rebalance, >= 1
 };
 
 /// What this rank did in the last Step.
@@ -71,6 +76,10 @@ struct DistributedStats {
   int rounds = 0;         ///< neighbour rounds (one message to every neighbour each)
   int64_t bytesSent = 0;  ///< payload bytes sent to neighbours
   int neighbours = 0;
+  int rebalances = 0;       ///< tile re-deals at the start of the step (0 or 1)
+  /// Load imbalance of the step: max / mean over ranks of the work (owned bodies plus their
+  /// contacts), the same on every rank.
+  double imbalance = 1;
 };
 
 /// One body's state as gathered from its owner.
@@ -100,6 +109,14 @@ class DistributedWorld {
   /// Collective: one step of dt (validated as World::Step). Throws quadrant::Error on every rank
   /// if a body outgrows the tiles or the body count or id checksum ever disagrees.
   void Step(Real dt);
+
+  /// Collective: deals the tiles again by the last step's work per tile (each owned body and each
+  /// of its contacts, booked to the tile its centre was in), in Morton order, contiguous runs of
+  /// about equal work, and moves every body whose tile changed owner (with its warm-start
+  /// entries). The states stay the same bits: the arithmetic does not depend on the partition.
+  void Rebalance();
+  /// The owner rank of every tile (index tx + ty * tilesX).
+  std::vector<int> TileOwners() const;
 
   /// Collective: every body's state, in id order, on every rank.
   std::vector<BodyState> GatherStates() const;
