@@ -16,12 +16,17 @@
 //   in the same order as one process does;
 // - plain Jacobi overshoots where a body has many contacts, so the effective masses are those of
 //   mass splitting (Tonge, English and Gamble 2012): a body with n contacts is seen by each of
-//   them as n times lighter... as n copies of mass m / n whose velocities are then averaged,
-//   which is the sum above. Linear momentum stays exact (every impulse is applied to both
+//   them as one of n copies of mass m / n, whose velocities are then averaged, which is the sum
+//   above. Linear momentum stays exact (every impulse is applied to both
 //   bodies with opposite signs);
 // - position errors are removed by a velocity bias (Baumgarte) in the normal rows instead of a
-//   Gauss-Seidel position pass, and restitution is the velocity bias of RestitutionPolicy::kBox2d
-//   (pairwise collisions, the pgs default, are sequential too).
+//   Gauss-Seidel position pass, and restitution is a velocity bias as RestitutionPolicy::kBox2d's,
+//   also given to speculative points that close within the step (pairwise collisions, the pgs
+//   default, are sequential too).
+//
+// What it costs (one process, base-10 pyramid, 300 steps, apex drift): Jacobi 0.089 m at 8
+// iterations, 0.030 at 16, 0.013 at 32, 0.006 at 64; pgs 0.013 m at 8. About four times the
+// iterations of pgs for the same hold.
 //
 // The distributed world (distributed_world.cpp) runs the same phases, exchanging the velocities
 // and contact counts of boundary bodies between them; the single-process World runs them back to

@@ -80,7 +80,9 @@ enum class SolverType : uint8_t {
   /// Jacobi velocity iterations with mass splitting (engine/src/jacobi_solve.h): every contact
   /// solved from the velocities at the start of the iteration, each body's changes summed in
   /// contact-key order, penetration removed by a Baumgarte velocity bias (no position pass),
-  /// restitution as kBox2d's velocity bias. Its result does not depend on how bodies are split
+  /// restitution as a velocity bias (kBox2d's, also for speculative points closing within the
+  /// step). velocityIterations applies; positionIterations and restitutionIterations do not.
+  /// Its result does not depend on how bodies are split
   /// among processes: it is the solver of quadrant::DistributedWorld, whose state equals a
   /// World's with this solver. Softer than pgs on stacks (README "More than one machine").
   kJacobi,
