@@ -1,6 +1,7 @@
 // Quadrant's variants and the scene -> WorldDef mapping.
 //
-// Variants ("quadrant:<tokens>", tokens joined by '+'): solver "thesis", "pgs" or "soft_step",
+// Variants ("quadrant:<tokens>", tokens joined by '+'): solver "thesis", "pgs", "soft_step" or
+// "jacobi" (the distributed world's solver, here in one process),
 // broad phase "quadtree" or "grid", parallel scheme "deterministic" or "quadrants", "b2rest" for
 // Box2D 2.4.1's restitution (RestitutionPolicy::kBox2d, pgs only), "b2skin" for its 0.01 m polygon
 // skin (WorldDef::polygonSkin), "coupled" for the thesis solver's coupled impulse
@@ -54,6 +55,8 @@ QuadrantVariant QuadrantVariant::Parse(std::string_view variant) {
       v.solver = SolverType::kPgs;
     } else if (token == "soft_step") {
       v.solver = SolverType::kSoftStep;
+    } else if (token == "jacobi") {
+      v.solver = SolverType::kJacobi;
     } else if (token.size() > 3 && token.starts_with("sub") && ParseCount(token.substr(3), &v.softSubSteps)) {
     } else if (token.size() > 2 && token.starts_with("it") && ParseCount(token.substr(2), &v.iterations)) {
     } else if (token.size() > 3 && token.starts_with("pos") && ParseCount(token.substr(3), &v.positionIterations)) {
@@ -77,7 +80,7 @@ QuadrantVariant QuadrantVariant::Parse(std::string_view variant) {
       v.scheme = ParallelScheme::kQuadrants;
     } else {
       throw Error("unknown quadrant variant '" + std::string(token) +
-                  "' (known: thesis, pgs, soft_step, quadtree, grid, deterministic, quadrants, sub<N>, it<N>, pos<N>, "
+                  "' (known: thesis, pgs, soft_step, jacobi, quadtree, grid, deterministic, quadrants, sub<N>, it<N>, pos<N>, "
                   "relax<N>, ratio<N>, b2rest, b2skin, coupled)");
     }
     if (end == std::string_view::npos) break;
@@ -113,7 +116,10 @@ WorldDef QuadrantVariant::MakeWorldDef(const Scene& scene, int threads) const {
 
 std::string QuadrantVariant::Describe() const {
   return std::string("solver ") +
-         (solver == SolverType::kThesis ? "thesis" : solver == SolverType::kPgs ? "pgs" : "soft_step") +
+         (solver == SolverType::kThesis  ? "thesis"
+          : solver == SolverType::kPgs   ? "pgs"
+          : solver == SolverType::kJacobi ? "jacobi"
+                                          : "soft_step") +
          ", broad phase " + (broadPhase == BroadPhaseType::kQuadTree ? "quad-tree" : "uniform grid");
 }
 

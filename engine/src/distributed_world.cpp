@@ -506,7 +506,8 @@ void DistributedWorld::Step(Real dt) {
   w.FindContacts(dt);
 
   const int k = w.def.velocityIterations;
-  w.solve.Begin(w.local, w.def, dt, w.contacts, *w.run);
+  IntegrateVelocities(w.local, w.def, dt, *w.run);
+  w.solve.Begin(w.local, w.def, dt, w.contacts);
   w.ExchangeVelocities(true, 3);
   w.solve.Prepare(w.def);
   for (int it = 0; it < k; ++it) {

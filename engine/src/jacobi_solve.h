@@ -45,12 +45,12 @@ namespace quadrant {
 
 class JacobiSolve {
  public:
-  /// Gravity and damping on every body, the rows of `contacts` (in their order, which must be
-  /// key order), each body's contact count, and the warm-start impulses added to the bodies.
-  /// Afterwards the velocities and counts of bodies whose contacts are not all in `contacts`
-  /// (a process's shadow bodies) are incomplete: the caller replaces them before Prepare.
-  void Begin(Bodies& bodies, const WorldDef& def, Real dt, std::span<const Contact> contacts, StageRunner& run) {
-    IntegrateVelocities(bodies, def, dt, run);
+  /// After gravity and damping (IntegrateVelocities, the caller's): the rows of `contacts` (in
+  /// their order, which must be key order), each body's contact count, and the warm-start
+  /// impulses added to the bodies. Afterwards the velocities and counts of bodies whose contacts
+  /// are not all in `contacts` (a process's shadow bodies) are incomplete: the caller replaces
+  /// them before Prepare.
+  void Begin(Bodies& bodies, const WorldDef& def, Real dt, std::span<const Contact> contacts) {
     const int n = bodies.Count();
     counts_.assign(n, 0);
     const int m = static_cast<int>(contacts.size());
