@@ -139,7 +139,15 @@ struct DistributedWorld::Impl {
   JacobiSolve solve;
   DistributedStats stats;
 
-  // Per-step scratch.
+  // Per-step scratch (kept between steps for its capacity).
+  struct Source {
+    uint32_t id;
+    int kind;  // 0 static, 1 owned, 2 shadow
+    int index;
+    int neighbour;
+  };
+  std::vector<Source> sources;
+  std::vector<Record> shadows;
   Bodies local;
   std::vector<uint8_t> localOwned;
   std::vector<int> ownedLocal;                    // owned index -> local index
@@ -624,14 +632,8 @@ void DistributedWorld::Impl::SendShadows(Real reach, Real dt) {
 // The rank's bodies in id order (statics, owned, shadows merged): every pair then has the same
 // orientation (a < b) and every contact list the same order as in one process.
 void DistributedWorld::Impl::BuildLocal(Real dt) {
-  struct Source {
-    uint32_t id;
-    int kind;  // 0 static, 1 owned, 2 shadow
-    int index;
-    int neighbour;
-  };
-  std::vector<Source> sources;
-  std::vector<Record> shadows;
+  sources.clear();
+  shadows.clear();
   for (size_t i = 0; i < statics.size(); ++i) sources.push_back({statics[i].id, 0, int(i), -1});
   for (size_t i = 0; i < owned.size(); ++i) sources.push_back({owned[i].id, 1, int(i), -1});
   for (size_t k = 0; k < neighbours.size(); ++k) {
@@ -645,7 +647,7 @@ void DistributedWorld::Impl::BuildLocal(Real dt) {
   for (size_t i = 1; i < sources.size(); ++i) {
     if (sources[i].id == sources[i - 1].id) throw std::logic_error("DistributedWorld: a body held twice");
   }
-  local = Bodies{};
+  local.ForEachArray([](auto& v) { v.clear(); });  // capacity kept: no allocation once warm
   localOwned.assign(sources.size(), 0);
   ownedLocal.assign(owned.size(), -1);
   for (auto& r : receivedShadows) r.clear();
