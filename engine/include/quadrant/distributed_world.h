@@ -22,7 +22,10 @@
 //      by exact integer reductions (nothing lost, nothing duplicated).
 // A round sends exactly one message to every neighbour rank (a rank owning a tile next to one of
 // its own), empty or not, and reads the neighbours' messages in rank order, never arrival order.
-// For k velocity iterations a step takes k + 2 neighbour rounds and two small allreduces.
+// For k velocity iterations a step takes k + 2 neighbour rounds and three small allreduces (the
+// halo reach, the body count and checksum, the most loaded rank's work); with load balancing on,
+// every rebalanceInterval steps an allreduce of the tiles' work and, when it re-deals them, an
+// all-to-all of the bodies that change owner.
 //
 // Determinism: each rank builds its bodies in id order and computes every contact of its own
 // bodies, so every body sees the same contacts, in the same order, with the same arithmetic as in
