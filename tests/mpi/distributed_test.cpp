@@ -117,6 +117,34 @@ TEST(Distributed, CircleStressMatchesWorld) {
   if (Rank() == 0) std::printf("[ info ] circle stress 1000, 200 steps, %d ranks: %lld migrations\n", Size(), (long long)migrated);
 }
 
+// Threads inside a rank: two workers per rank with small parallel grains (the broad and narrow
+// phases split even this scene) give the same hashes as the World on one thread.
+TEST(Distributed, ThreadsInsideRanksMatchWorld) {
+  scene::StressParams p;
+  p.count = 1000;
+  const scene::Scene s = scene::MakeStressScene(p);
+  WorldDef def = JacobiDef(s);
+  DistributedDef dist;
+  dist.bounds = s.bounds;
+  dist.tilesX = dist.tilesY = 4;
+  std::unique_ptr<World> world;
+  if (Rank() == 0) {
+    world = std::make_unique<World>(def);
+    for (const BodyDef& b : ToBodyDefs(s)) world->CreateBody(b);
+  }
+  def.threadCount = 2;
+  def.minParallelItems = 64;
+  DistributedWorld dw(def, dist, MPI_COMM_WORLD);
+  dw.Load(ToBodyDefs(s));
+  for (int step = 0; step < 60; ++step) {
+    if (world) world->Step(s.timeStep);
+    dw.Step(s.timeStep);
+  }
+  uint64_t expected = world ? world->StateHash() : 0;
+  MPI_Bcast(&expected, 1, MPI_UINT64_T, 0, MPI_COMM_WORLD);
+  EXPECT_EQ(dw.StateHash(), expected);
+}
+
 // The stress scene's circles falling under gravity with friction and no bounce into a pile: many
 // lasting contacts whose bodies change owner while they carry warm-start impulses (the entries
 // must travel with a migrating body, or the next step starts from other impulses).
