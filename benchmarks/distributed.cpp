@@ -6,7 +6,8 @@
 // Rank 0 prints one JSON object (a run of distributed.json): ms per step (the slowest rank's wall
 // time over the measured steps), neighbour rounds per step, payload bytes sent per step (all
 // ranks), bytes per shadow body, shadow fraction (shadows / bodies), imbalance (max / mean over the
-// ranks of owned bodies plus their contacts, averaged over the steps; a work measure, not a time) and the state hash.
+// ranks of owned bodies plus their contacts, averaged over the steps; a work measure, not a time),
+// the state hash, and peak resident memory summed over the ranks (and per body).
 // Bad options: one line on stderr, exit 2 (every rank parses the same arguments).
 #include <mpi.h>
 
@@ -59,6 +60,19 @@ int ParseInt(int rank, const char* name, const char* text, int lo, int hi) {
     Usage(rank, std::string(name) + " must be an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
   }
   return static_cast<int>(v);
+}
+
+// Peak resident memory of this process (kB, Linux VmHWM), 0 where unknown.
+long PeakRssKb() {
+  std::FILE* f = std::fopen("/proc/self/status", "r");
+  if (f == nullptr) return 0;
+  char line[256];
+  long kb = 0;
+  while (std::fgets(line, sizeof line, f) != nullptr) {
+    if (std::strncmp(line, "VmHWM:", 6) == 0) kb = std::strtol(line + 6, nullptr, 10);
+  }
+  std::fclose(f);
+  return kb;
 }
 
 }  // namespace
@@ -155,17 +169,24 @@ int main(int argc, char** argv) {
     double slowest = 0;
     MPI_Allreduce(&mine, &slowest, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
     const uint64_t hash = dw.StateHash();
+    // Memory: peak resident size summed over the ranks (each rank also holds the whole scene's
+    // BodyDefs, as Load takes them, and the MPI library's buffers).
+    const long rssKb = PeakRssKb();
+    long rssTotalKb = 0;
+    MPI_Allreduce(&rssKb, &rssTotalKb, 1, MPI_LONG, MPI_SUM, MPI_COMM_WORLD);
     if (rank == 0) {
       const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
       std::printf(
           "{\"scene\": \"%s\", \"ranks\": %d, \"bodies\": %zu, \"steps\": %d, \"warmup\": %d, \"tiles\": %d, "
           "\"iterations\": %d, \"weak\": %s, \"ms_per_step\": %.4f, \"rounds_per_step\": %d, \"bytes_per_step\": %.1f, "
           "\"bytes_per_boundary_body\": %.1f, \"shadow_fraction\": %.5f, \"imbalance\": %.4f, "
-          "\"state_hash\": \"%016llx\", \"oversubscribed\": %s, \"cores\": %u}\n",
+          "\"state_hash\": \"%016llx\", \"oversubscribed\": %s, \"cores\": %u, \"peak_rss_mb\": %.1f, "
+          "\"rss_bytes_per_body\": %.0f}\n",
           sceneName.c_str(), size, bodies.size(), steps, warmup, tiles, iterations, perRank ? "true" : "false",
           1000.0 * slowest / steps, rounds, bytes / steps, shadows > 0 ? bytes / shadows : 0.0,
           shadows / steps / double(bodies.size()), imbalance / steps, (unsigned long long)hash,
-          unsigned(size) > cores ? "true" : "false", cores);
+          unsigned(size) > cores ? "true" : "false", cores, rssTotalKb / 1024.0,
+          1024.0 * double(rssTotalKb) / double(bodies.size()));
     }
   } catch (const Error& e) {
     std::fprintf(stderr, "quadrant_distributed: rank %d: error: %s\n", rank, e.what());

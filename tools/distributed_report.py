@@ -56,11 +56,11 @@ def main():
         base = rows[0]
         if kind == "weak":
             out.append(f"\n## Weak scaling: {scene}, {base['bodies'] // base['ranks']} bodies per rank\n")
-            out.append("| ranks | bodies | ms/step | efficiency | rounds/step | bytes/step | bytes/boundary body | shadow fraction | imbalance | state hash |")
+            out.append("| ranks | bodies | ms/step | efficiency | rounds/step | bytes/step | bytes/boundary body | shadow fraction | imbalance | peak MB (all ranks) | state hash |")
         else:
             out.append(f"\n## Strong scaling: {scene}, {base['bodies']} bodies, {base['iterations']} iterations\n")
-            out.append("| ranks | bodies | ms/step | speed-up | rounds/step | bytes/step | bytes/boundary body | shadow fraction | imbalance | state hash |")
-        out.append("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|")
+            out.append("| ranks | bodies | ms/step | speed-up | rounds/step | bytes/step | bytes/boundary body | shadow fraction | imbalance | peak MB (all ranks) | state hash |")
+        out.append("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|")
         for r in rows:
             ratio = base["ms_per_step"] / r["ms_per_step"] if r["ms_per_step"] > 0 else 0.0
             ranks = f"{r['ranks']}{'*' if r.get('oversubscribed') else ''}"
@@ -68,7 +68,7 @@ def main():
             same = "" if kind == "weak" or r["state_hash"] == base["state_hash"] else " (differs!)"
             out.append(f"| {ranks} | {r['bodies']} | {r['ms_per_step']:.2f} | {figure} | {r['rounds_per_step']} | "
                        f"{r['bytes_per_step']:.0f} | {r['bytes_per_boundary_body']:.0f} | {r['shadow_fraction']:.4f} | "
-                       f"{r['imbalance']:.3f} | `{r['state_hash']}`{same} |")
+                       f"{r['imbalance']:.3f} | {r.get('peak_rss_mb', 0):.0f} | `{r['state_hash']}`{same} |")
     with open(args.md, "w") as f:
         f.write("\n".join(out) + "\n")
 

@@ -451,23 +451,28 @@ void DistributedWorld::Load(std::span<const BodyDef> bodies) {
   Require(bodies.size() < (uint64_t(1) << 31), "DistributedWorld::Load: more than 2^31 bodies");
   // Rows made by the World's own code (validation and mass data): the same bits as a World's.
   // Identical scenes make every rank refuse the same body with the same message.
-  Bodies all;
-  for (size_t i = 0; i < bodies.size(); ++i) AppendBody(all, bodies[i], w.def, static_cast<uint32_t>(i));
-  w.statics.clear();
-  w.owned.clear();
-  w.cache.clear();
-  w.expectedCount = 0;
-  w.expectedChecksum = 0;
-  for (int i = 0; i < all.Count(); ++i) {
-    const Record r = Impl::ToRecord(all, i, static_cast<uint32_t>(i));
+  // Each body is made in a one-row scratch and kept only if it is static or this rank's, so a
+  // rank holds its share of a large scene, not all of it (the caller's BodyDefs aside).
+  std::vector<Record> statics, owned;
+  uint64_t count = 0, checksum = 0;
+  Bodies row;
+  for (size_t i = 0; i < bodies.size(); ++i) {
+    row.ForEachArray([](auto& v) { v.clear(); });
+    AppendBody(row, bodies[i], w.def, static_cast<uint32_t>(i));
+    const Record r = Impl::ToRecord(row, 0, static_cast<uint32_t>(i));
     if (r.type == BodyType::kStatic) {
-      w.statics.push_back(r);
+      statics.push_back(r);
       continue;
     }
-    ++w.expectedCount;
-    w.expectedChecksum += MixId(r.id);
-    if (w.OwnerOf(r.center) == w.rank) w.owned.push_back(r);
+    ++count;
+    checksum += MixId(r.id);
+    if (w.OwnerOf(r.center) == w.rank) owned.push_back(r);
   }
+  w.statics.swap(statics);
+  w.owned.swap(owned);
+  w.cache.clear();
+  w.expectedCount = count;
+  w.expectedChecksum = checksum;
   w.loaded = true;
   std::fill(w.tileCost.begin(), w.tileCost.end(), 0);
   w.CheckCounts();
