@@ -23,6 +23,7 @@ def main():
     ap.add_argument("--load", default="unknown")
     ap.add_argument("--json", required=True)
     ap.add_argument("--md", required=True)
+    ap.add_argument("--png", help="also draw ms per step against ranks, one line per kind of run")
     args = ap.parse_args()
     runs = []
     with open(args.runs) as f:
@@ -71,6 +72,31 @@ def main():
                        f"{r['imbalance']:.3f} | {r.get('peak_rss_mb', 0):.0f} | `{r['state_hash']}`{same} |")
     with open(args.md, "w") as f:
         f.write("\n".join(out) + "\n")
+    if args.png:
+        plot(groups, args)
+
+
+def plot(groups, args):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    for (kind, scene), rows in sorted(groups.items(), key=lambda g: (g[0][0] != "weak", g[0][1])):
+        rows = sorted(rows, key=lambda r: r["ranks"])
+        size = f"{rows[0]['bodies'] // rows[0]['ranks']} per rank" if kind == "weak" else f"{rows[0]['bodies']} bodies"
+        ax.plot([r["ranks"] for r in rows], [r["ms_per_step"] for r in rows], marker="o",
+                label=f"{kind} scaling, {scene}, {size}")
+        for r in rows:
+            if r.get("oversubscribed"):
+                ax.annotate("*", (r["ranks"], r["ms_per_step"]), textcoords="offset points", xytext=(4, 4))
+    ax.set_xlabel("ranks (* oversubscribed)")
+    ax.set_ylabel("ms per step (slowest rank)")
+    ax.set_yscale("log")
+    ax.set_xticks(sorted({r["ranks"] for rows in groups.values() for r in rows}))
+    ax.set_title(f"Quadrant distributed world, {args.machine}, {args.commit}")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(args.png, dpi=120)
 
 
 if __name__ == "__main__":
