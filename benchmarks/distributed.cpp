@@ -85,6 +85,7 @@ int main(int argc, char** argv) {
   std::string sceneName = "circle_stress";
   int count = 16000, steps = 100, warmup = 10, tiles = 0, iterations = 8;
   bool perRank = false;
+  std::string ownersPath;  // --owners FILE: every body's position, radius and owner rank as CSV
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto value = [&]() -> const char* {
@@ -103,10 +104,12 @@ int main(int argc, char** argv) {
       warmup = ParseInt(rank, "--warmup", value(), 0, 1000000);
     } else if (a == "--tiles") {
       tiles = ParseInt(rank, "--tiles", value(), 1, 1024);
+    } else if (a == "--owners") {
+      ownersPath = value();
     } else if (a == "--iterations") {
       iterations = ParseInt(rank, "--iterations", value(), 1, 1000);
     } else {
-      Usage(rank, "unknown option '" + a + "' (accepted: --scene, --count, --per-rank, --steps, --warmup, --tiles, --iterations)");
+      Usage(rank, "unknown option '" + a + "' (accepted: --scene, --count, --per-rank, --steps, --warmup, --tiles, --iterations, --owners)");
     }
   }
   if (sceneName != "circle_stress" && sceneName != "pyramid") {
@@ -174,6 +177,38 @@ int main(int argc, char** argv) {
     const long rssKb = PeakRssKb();
     long rssTotalKb = 0;
     MPI_Allreduce(&rssKb, &rssTotalKb, 1, MPI_LONG, MPI_SUM, MPI_COMM_WORLD);
+    if (!ownersPath.empty()) {
+      // The thesis's Figure 13 by rank (tools/figure13_ranks.py): owners gathered to rank 0.
+      const std::vector<BodyState> states = dw.GatherStates();
+      const std::vector<uint32_t> mine = dw.OwnedIds();
+      const int n = static_cast<int>(mine.size());
+      std::vector<int> counts(static_cast<size_t>(size)), displs(static_cast<size_t>(size));
+      MPI_Gather(&n, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, MPI_COMM_WORLD);
+      int total = 0;
+      for (int r = 0; r < size; ++r) displs[size_t(r)] = total, total += counts[size_t(r)];
+      std::vector<uint32_t> ids(size_t(std::max(total, 1)));
+      MPI_Gatherv(mine.data(), n, MPI_UINT32_T, ids.data(), counts.data(), displs.data(), MPI_UINT32_T, 0, MPI_COMM_WORLD);
+      if (rank == 0) {
+        std::vector<int> owner(bodies.size(), -1);  // -1: static (on every rank)
+        for (int r = 0; r < size; ++r) {
+          for (int k = 0; k < counts[size_t(r)]; ++k) owner[ids[size_t(displs[size_t(r)] + k)]] = r;
+        }
+        std::FILE* f = std::fopen(ownersPath.c_str(), "w");
+        if (f == nullptr) throw Error("cannot write '" + ownersPath + "'");
+        const std::vector<int> tileOwners = dw.TileOwners();
+        std::fprintf(f, "# bounds %g %g %g %g tiles %d %d ranks %d steps %d owners", double(dist.bounds.lower.x),
+                     double(dist.bounds.lower.y), double(dist.bounds.upper.x), double(dist.bounds.upper.y), dist.tilesX,
+                     dist.tilesY, size, warmup + steps);
+        for (int o : tileOwners) std::fprintf(f, " %d", o);
+        std::fprintf(f, "\nx,y,radius,rank\n");
+        for (const BodyState& b : states) {
+          if (owner[b.id] < 0 || bodies[b.id].shape.type != ShapeType::kCircle) continue;
+          std::fprintf(f, "%.4f,%.4f,%.4f,%d\n", double(b.position.x), double(b.position.y),
+                       double(bodies[b.id].shape.circle.radius), owner[b.id]);
+        }
+        std::fclose(f);
+      }
+    }
     if (rank == 0) {
       const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
       std::printf(
