@@ -232,18 +232,8 @@ struct DistributedWorld::Impl {
     b.islandOf[i] = 0;
   }
 
-  // The broad-phase box of a moving record for a step of dt (BroadPhaseBox on a one-body Bodies
-  // would do the same; this avoids building one).
-  AABB BoxOf(const Record& r, Real dt) const {
-    const ShapeDef& s = r.shape;
-    AABB box = s.type == ShapeType::kCircle ? ComputeAABB(s.circle, r.xf) : ComputeAABB(s.polygon, r.xf);
-    const Real sweep = def.effects.continuous ? dt : Real(0);
-    const Real margin = Real(0.5) * def.speculativeDistance + sweep * std::abs(r.vel.w) * r.boundRadius;
-    const Vec2 d = sweep * r.vel.v;
-    box.lower = box.lower + Vec2{std::min(d.x, Real(0)) - margin, std::min(d.y, Real(0)) - margin};
-    box.upper = box.upper + Vec2{std::max(d.x, Real(0)) + margin, std::max(d.y, Real(0)) + margin};
-    return box;
-  }
+  // The broad-phase box of a record for a step of dt (the World's formula, world_internal.h).
+  AABB BoxOf(const Record& r, Real dt) const { return SweptBox(r.shape, r.xf, r.vel, r.boundRadius, def, dt); }
 
   void DealTiles(const std::vector<int64_t>& cost);
   void FindNeighbours();

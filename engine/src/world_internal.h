@@ -84,17 +84,21 @@ int AppendBody(Bodies& bodies, const BodyDef& def, const WorldDef& worldDef, uin
 // by this step's displacement, so a pair that can meet within the step is found before it
 // touches and the speculative contact stops it at the surface. Shared with the distributed
 // world, which must find exactly the World's pairs.
-inline AABB BroadPhaseBox(const Bodies& bodies, int i, const WorldDef& def, Real dt) {
-  const ShapeDef& s = bodies.shape[i];
-  AABB box = s.type == ShapeType::kCircle ? ComputeAABB(s.circle, bodies.xf[i]) : ComputeAABB(s.polygon, bodies.xf[i]);
-  const BodyVelocity& bv = bodies.vel[i];
+inline AABB SweptBox(const ShapeDef& s, const Transform& xf, const BodyVelocity& bv, Real boundRadius,
+                     const WorldDef& def, Real dt) {
+  AABB box = s.type == ShapeType::kCircle ? ComputeAABB(s.circle, xf) : ComputeAABB(s.polygon, xf);
   // Without continuous collision the box is not swept (dt 0 below): only the base margin.
   const Real sweep = def.effects.continuous ? dt : Real(0);
-  const Real margin = Real(0.5) * def.speculativeDistance + sweep * std::abs(bv.w) * bodies.boundRadius[i];
+  const Real margin = Real(0.5) * def.speculativeDistance + sweep * std::abs(bv.w) * boundRadius;
   const Vec2 d = sweep * bv.v;
   box.lower = box.lower + Vec2{std::min(d.x, Real(0)) - margin, std::min(d.y, Real(0)) - margin};
   box.upper = box.upper + Vec2{std::max(d.x, Real(0)) + margin, std::max(d.y, Real(0)) + margin};
   return box;
+}
+
+/// The same for body i of `bodies`.
+inline AABB BroadPhaseBox(const Bodies& bodies, int i, const WorldDef& def, Real dt) {
+  return SweptBox(bodies.shape[i], bodies.xf[i], bodies.vel[i], bodies.boundRadius[i], def, dt);
 }
 
 
