@@ -32,6 +32,7 @@ struct Record {
   BodyInverseMass inv;
   Real mass, inertia, linearDamping, angularDamping, boundRadius;
   ShapeDef shape;
+  Filter filter;
 };
 static_assert(std::is_trivially_copyable_v<Record>);
 
@@ -107,6 +108,8 @@ uint64_t HashScene(std::span<const BodyDef> bodies) {
       mix(s.polygon.vertices[k].x), mix(s.polygon.vertices[k].y);
     }
     mix(s.density), mix(s.friction), mix(s.restitution);
+    // 16 bits at a time: a float holds integers exactly only up to 2^24.
+    for (uint32_t bits : {b.filter.categoryBits, b.filter.maskBits}) mix(Real(bits & 0xFFFFu)), mix(Real(bits >> 16));
   }
   return h.Value();
 }
@@ -207,6 +210,7 @@ struct DistributedWorld::Impl {
     r.angularDamping = b.angularDamping[i];
     r.boundRadius = b.boundRadius[i];
     r.shape = b.shape[i];
+    r.filter = b.filter[i];
     return r;
   }
 
@@ -230,6 +234,7 @@ struct DistributedWorld::Impl {
     b.awake[i] = r.type == BodyType::kStatic ? 0 : 1;
     b.sleepTime[i] = 0;
     b.islandOf[i] = 0;
+    b.filter[i] = r.filter;
   }
 
   // The broad-phase box of a record for a step of dt (the World's formula, world_internal.h).
@@ -671,8 +676,15 @@ void DistributedWorld::Impl::BuildLocal(Real dt) {
 void DistributedWorld::Impl::FindContacts(Real dt) {
   broadPhase->FindPairs(local.aabb, local.dynamic, pairs, *run);
   ownPairs.clear();
+  // The World's collision filter (Box2D's rule) on the same pairs; its compaction keeps order.
+  const std::vector<Filter>& f = local.filter;
   for (const CandidatePair& p : pairs) {
-    if (localOwned[size_t(p.a)] || localOwned[size_t(p.b)]) ownPairs.push_back(p);
+    if (!localOwned[size_t(p.a)] && !localOwned[size_t(p.b)]) continue;
+    if ((f[size_t(p.a)].maskBits & f[size_t(p.b)].categoryBits) == 0 ||
+        (f[size_t(p.b)].maskBits & f[size_t(p.a)].categoryBits) == 0) {
+      continue;
+    }
+    ownPairs.push_back(p);
   }
   contacts.clear();
   CollidePairs(local, def, dt, ownPairs, contacts);
