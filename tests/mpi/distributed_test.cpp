@@ -263,9 +263,10 @@ TEST(Distributed, HeavyMigrationKeepsEveryBody) {
   int64_t total = 0;
   MPI_Allreduce(&migrated, &total, 1, MPI_INT64_T, MPI_SUM, MPI_COMM_WORLD);
   if (Size() > 1) {
-    // More owner changes than bodies (2 ranks: 797 for 500 bodies; the gas diffuses, mean free
-    // path about a metre, so a body crosses a boundary far less often than its path length allows).
-    EXPECT_GT(total, int64_t(bodies.size()));
+    // Heavy: owner changes of the order of the body count (measured for 500 bodies: 517 at 2
+    // ranks, 1392 at 3, 1035 at 4; the gas diffuses, mean free path about a metre, so a body
+    // crosses a boundary far less often than its path length allows). Bound: half the bodies.
+    EXPECT_GT(total, int64_t(bodies.size()) / 2);
   }
   if (Rank() == 0) std::printf("[ info ] circle stress 500, 2000 steps, %d ranks: %lld migrations\n", Size(), (long long)total);
 }
