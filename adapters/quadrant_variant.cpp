@@ -2,9 +2,10 @@
 //
 // Variants ("quadrant:<tokens>", tokens joined by '+'): solver "thesis", "pgs" or "soft_step",
 // broad phase "quadtree" or "grid", parallel scheme "deterministic" or "quadrants", "b2rest" for
-// Box2D 2.4.1's restitution (RestitutionPolicy::kBox2d, pgs only), "b2skin" for its 0.01 m polygon
+// Box2D 2.4.1's restitution (RestitutionPolicy::kBox2d, pgs and soft_step), "b2skin" for its 0.01 m polygon
 // skin (WorldDef::polygonSkin), "coupled" for the thesis solver's coupled impulse
-// (WorldDef::thesisCoupledImpulse). The default is pgs with the uniform grid and the deterministic
+// (WorldDef::thesisCoupledImpulse), "points" for its impulse at each touching point
+// (WorldDef::thesisPointImpulses). The default is pgs with the uniform grid and the deterministic
 // scheme, the combination the suite measured fastest on the stress scenes (see README).
 //
 // Solver budget for soft_step: a scene states the budget a case needs as pgs velocity
@@ -65,6 +66,8 @@ QuadrantVariant QuadrantVariant::Parse(std::string_view variant) {
       v.restitution = RestitutionPolicy::kBox2d;
     } else if (token == "coupled") {
       v.thesisCoupled = true;
+    } else if (token == "points") {
+      v.thesisPoints = true;
     } else if (token == "b2skin") {
       v.polygonSkin = Real(0.01);  // Box2D 2.4.1's b2_polygonRadius
     } else if (token == "quadtree") {
@@ -78,7 +81,7 @@ QuadrantVariant QuadrantVariant::Parse(std::string_view variant) {
     } else {
       throw Error("unknown quadrant variant '" + std::string(token) +
                   "' (known: thesis, pgs, soft_step, quadtree, grid, deterministic, quadrants, sub<N>, it<N>, pos<N>, "
-                  "relax<N>, ratio<N>, b2rest, b2skin, coupled)");
+                  "relax<N>, ratio<N>, b2rest, b2skin, coupled, points)");
     }
     if (end == std::string_view::npos) break;
     start = end + 1;
@@ -103,6 +106,7 @@ WorldDef QuadrantVariant::MakeWorldDef(const Scene& scene, int threads) const {
   def.restitution = restitution;
   def.polygonSkin = polygonSkin;
   def.thesisCoupledImpulse = thesisCoupled;
+  def.thesisPointImpulses = thesisPoints;
   def.softMassRatioLimit = Real(massRatioLimit);
   if (relaxIterations > 0) def.softRelaxIterations = relaxIterations;
   def.threadCount = threads;

@@ -40,8 +40,8 @@ void ValidateWorldDef(const WorldDef& d) {
           "WorldDef.restitutionThreshold must be finite and >= 0");
   Require(d.restitution == RestitutionPolicy::kCollisions || d.restitution == RestitutionPolicy::kBox2d,
           "WorldDef.restitution is unknown");
-  Require(d.restitution == RestitutionPolicy::kCollisions || d.solver == SolverType::kPgs,
-          "WorldDef.restitution = kBox2d needs SolverType::kPgs");
+  Require(d.restitution == RestitutionPolicy::kCollisions || d.solver != SolverType::kThesis,
+          "WorldDef.restitution = kBox2d needs SolverType::kPgs or kSoftStep");
   Require(IsFinite(d.polygonSkin) && d.polygonSkin >= 0 && 2 * d.polygonSkin <= d.speculativeDistance,
           "WorldDef.polygonSkin must be in [0, speculativeDistance / 2]");
   // The quadrants scheme solves private copies of its bodies without their shapes (quadrants_scheme.cpp).
