@@ -5,7 +5,7 @@
 // Box2D 2.4.1's restitution (RestitutionPolicy::kBox2d, pgs and soft_step), "b2skin" for its 0.01 m polygon
 // skin (WorldDef::polygonSkin), "coupled" for the thesis solver's coupled impulse
 // (WorldDef::thesisCoupledImpulse), "points" for its impulse at each touching point
-// (WorldDef::thesisPointImpulses). The default is pgs with the uniform grid and the deterministic
+// (WorldDef::thesisPointImpulses), "passes<N>" for its passes (WorldDef::thesisPasses). The default is pgs with the uniform grid and the deterministic
 // scheme, the combination the suite measured fastest on the stress scenes (see README).
 //
 // Solver budget for soft_step: a scene states the budget a case needs as pgs velocity
@@ -62,6 +62,8 @@ QuadrantVariant QuadrantVariant::Parse(std::string_view variant) {
       // soft_step's WorldDef::softRelaxIterations.
     } else if (token.size() > 5 && token.starts_with("ratio") && ParseCount(token.substr(5), &v.massRatioLimit)) {
       // soft_step's WorldDef::softMassRatioLimit (issue #13 item 3: a heavy body on a light one).
+    } else if (token.size() > 6 && token.starts_with("passes") && ParseCount(token.substr(6), &v.thesisPasses)) {
+      // the thesis solver's WorldDef::thesisPasses.
     } else if (token == "b2rest") {
       v.restitution = RestitutionPolicy::kBox2d;
     } else if (token == "coupled") {
@@ -81,7 +83,7 @@ QuadrantVariant QuadrantVariant::Parse(std::string_view variant) {
     } else {
       throw Error("unknown quadrant variant '" + std::string(token) +
                   "' (known: thesis, pgs, soft_step, quadtree, grid, deterministic, quadrants, sub<N>, it<N>, pos<N>, "
-                  "relax<N>, ratio<N>, b2rest, b2skin, coupled, points)");
+                  "relax<N>, ratio<N>, passes<N>, b2rest, b2skin, coupled, points)");
     }
     if (end == std::string_view::npos) break;
     start = end + 1;
@@ -107,6 +109,7 @@ WorldDef QuadrantVariant::MakeWorldDef(const Scene& scene, int threads) const {
   def.polygonSkin = polygonSkin;
   def.thesisCoupledImpulse = thesisCoupled;
   def.thesisPointImpulses = thesisPoints;
+  if (thesisPasses > 0) def.thesisPasses = thesisPasses;
   def.softMassRatioLimit = Real(massRatioLimit);
   if (relaxIterations > 0) def.softRelaxIterations = relaxIterations;
   def.threadCount = threads;

@@ -21,11 +21,12 @@ struct QuadrantVariant {
   Real polygonSkin = 0;        ///< b2skin: Box2D 2.4.1's 0.01 m polygon radius
   bool thesisCoupled = false;  ///< coupled: the thesis solver's coupled impulse
   bool thesisPoints = false;   ///< points: the thesis solver's impulse at each touching point
+  int thesisPasses = 0;        ///< passes<N>: the thesis solver's WorldDef::thesisPasses; 0: the engine's
   int massRatioLimit = 0;      ///< ratio<N>: soft_step's WorldDef::softMassRatioLimit; 0: off
   int relaxIterations = 0;     ///< relax<N>: soft_step's WorldDef::softRelaxIterations; 0: the engine's
 
   /// Tokens joined by '+' ("" is the default): thesis, pgs, soft_step, quadtree, grid,
-  /// deterministic, quadrants, sub<N>, it<N>, pos<N>, relax<N>, ratio<N> (N in [1, 1000]), b2rest,
+  /// deterministic, quadrants, sub<N>, it<N>, pos<N>, relax<N>, ratio<N>, passes<N> (N in [1, 1000]), b2rest,
   /// b2skin, coupled, points.
   /// Throws quadrant::Error naming an unknown token and the known ones.
   static QuadrantVariant Parse(std::string_view variant);

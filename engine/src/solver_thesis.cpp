@@ -117,7 +117,11 @@ class ThesisSolver final : public Solver {
       height_[i] = Dot(up, contacts[i].manifold.points[0].point);
     }
     std::stable_sort(order_.begin(), order_.end(), [&](uint32_t x, uint32_t y) { return height_[x] < height_[y]; });
-    for (uint32_t i : order_) Resolve<kRotation>(bodies, def, contacts[i], start_, up, true);
+    // WorldDef::thesisPasses: the thesis makes one pass; more repeat it (a second pass finds no
+    // depth left to push, only the approach the later contacts' impulses left at the earlier ones).
+    for (int pass = 0; pass < def.thesisPasses; ++pass) {
+      for (uint32_t i : order_) Resolve<kRotation>(bodies, def, contacts[i], start_, up, true);
+    }
     for (Contact& c : contacts) {
       if (bodies.inv[c.a].invMass == 0 || bodies.inv[c.b].invMass == 0) {
         Resolve<kRotation>(bodies, def, c, start_, up, false);

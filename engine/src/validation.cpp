@@ -29,6 +29,8 @@ void ValidateWorldDef(const WorldDef& d) {
   Require(d.velocityIterations <= kMaxIterations, "WorldDef.velocityIterations must be <= 1000");
   Require(d.positionIterations >= 0, "WorldDef.positionIterations must be >= 0");
   Require(d.positionIterations <= kMaxIterations, "WorldDef.positionIterations must be <= 1000");
+  Require(d.thesisPasses >= 1, "WorldDef.thesisPasses must be >= 1");
+  Require(d.thesisPasses <= kMaxIterations, "WorldDef.thesisPasses must be <= 1000");
   Require(d.restitutionIterations >= 1, "WorldDef.restitutionIterations must be >= 1");
   Require(d.restitutionIterations <= kMaxIterations, "WorldDef.restitutionIterations must be <= 1000");
   Require(IsFinite(d.linearSlop) && d.linearSlop >= 0, "WorldDef.linearSlop must be finite and >= 0");

@@ -76,10 +76,37 @@ TEST(RestitutionPolicyTest, SlidingBounceGetsCoulombFrictionOverTheWholeImpact) 
   }
 }
 
-TEST(RestitutionPolicyTest, ThesisRefusesBox2dRestitution) {
+TEST(RestitutionPolicyTest, ThesisRefusesBox2dRestitutionAndBadPassCounts) {
   WorldDef def = NoGravityDef(SolverType::kThesis);
   def.restitution = RestitutionPolicy::kBox2d;
   EXPECT_THROW(World{def}, Error);
+  def.restitution = RestitutionPolicy::kCollisions;
+  def.thesisPasses = 0;
+  EXPECT_THROW(World{def}, Error);
+  def.thesisPasses = 1001;
+  EXPECT_THROW(World{def}, Error);
+}
+
+TEST(RestitutionPolicyTest, ThesisPointImpulsesAndPassesLandABoxFlat) {
+  // e = 0, a box landing flat: the thesis's one impulse at the centroid of the two corners stops
+  // the centre; an impulse at each corner in turn leaves the first corner approaching again after
+  // the second one's impulse, and further passes settle that (thesisPasses).
+  auto land = [](bool points, int passes) {
+    WorldDef def = NoGravityDef(SolverType::kThesis);
+    def.thesisPointImpulses = points;
+    def.thesisPasses = passes;
+    World world(def);
+    AddStaticGround(world, 0, 0);
+    const BodyId box = AddBox(world, {Real(0.1), Real(0.9995)}, Real(0.5), Real(0.5), 1, 0, {0, -3});
+    world.Step(kDt);
+    return std::pair<Real, Real>{world.GetLinearVelocity(box).y, world.GetAngularVelocity(box)};
+  };
+  const auto centroid = land(false, 1), points = land(true, 1), settled = land(true, 8);
+  EXPECT_NEAR(centroid.first, 0.0, 1e-4);
+  EXPECT_NEAR(centroid.second, 0.0, 1e-4);
+  EXPECT_GT(std::abs(points.second), 0.1) << "one pass, corner after corner, leaves the box turning";
+  EXPECT_NEAR(settled.first, 0.0, 1e-3);
+  EXPECT_LT(std::abs(settled.second), 0.1 * std::abs(points.second));
 }
 
 }  // namespace

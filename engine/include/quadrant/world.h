@@ -173,7 +173,7 @@ struct WorldDef {
   Real speculativeDistance = Real(0.02);///< contacts are created this far before touching (m)
   Real restitutionThreshold = Real(1);  ///< approach speed (m/s) below which no bounce is added
   RestitutionPolicy restitution = RestitutionPolicy::kCollisions;  ///< pgs's and soft_step's restitution model
-  /// Skin (m) around every polygon as the pgs and soft_step solvers see contacts, 0..speculativeDistance/2:
+  /// Skin (m) around every polygon as the solvers see contacts, 0..speculativeDistance/2:
   /// a point is solved as if its separation were smaller by the skins of the pair's polygons, so
   /// points within them are touching rows and bodies rest that far apart. 0 (the default): shapes
   /// are exactly their vertices. Box2D 2.4.1's b2_polygonRadius is 0.01; with it and
@@ -188,6 +188,10 @@ struct WorldDef {
   /// thesis's one impulse at their centroid. Off (the default): the thesis's method. README
   /// "validation" gives what it changes.
   bool thesisPointImpulses = false;
+  /// thesis solver: passes over the contacts per step, >= 1. 1 (the default): the thesis's one
+  /// pass; more let the impulses of a contact's two points, or of neighbouring contacts, settle
+  /// as an iterative solver's do. README "validation" gives what it changes.
+  int thesisPasses = 1;
   Real maxLinearSpeed = Real(400);      ///< m/s; a numerical guard, as Box2D 3's default
   /// Most a body turns in one step (rad), as Box2D 3's 0.25 pi: a numerical guard. Speculative
   /// contacts see where a corner is, not where a fast spin takes it within the step; without
