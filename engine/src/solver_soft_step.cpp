@@ -5,6 +5,8 @@
 // position integration, and one relax solve (the same rows with no bias, removing the push-out
 // velocity). Restitution comes first, as pairwise collisions before the sub-steps (shared with
 // pgs: ApplyCollisions in contact_solver.h); the early-bounce shifts follow the last sub-step.
+// With RestitutionPolicy::kBox2d it is Box2D's velocity target instead, applied after the first
+// sub-step (ApplyBox2dRestitution).
 //
 // Why: many small steps converge where many iterations of one big step do not (Macklin et al.
 // 2019, "Small steps in physics simulation"), which is what stacks and large mass ratios need.
