@@ -327,12 +327,13 @@ class SoftStepSolver final : public ContactSolverBase {
   // pass: restitutionIterations passes of, per contact, friction then normal rows, the normal row
   // keeping vn >= -e vn0 with an impulse of its own (it can only push apart), friction bounded by
   // mu times the sub-step's normal impulse plus that one, as Box2D 2.4.1's iterations bound it by
-  // the whole biased impulse. The bounce impulse becomes the rows' collisionImpulse, so the later
-  // sub-steps' friction sees it too (as it sees ApplyCollisions' impulse by default).
+  // the whole biased impulse. The later sub-steps' warm start repeats this sub-step's friction and
+  // their relax pass clamps it back to their own bound, so the step's friction stays within mu
+  // times its normal impulses (RestitutionPolicyTest.SlidingBounceGetsCoulombFrictionOverTheWholeImpact).
   //
   // Why after the first sub-step, not after the last as Box2D 3 applies it: the bodies then move
-  // apart within the step, as in Box2D 2.4.1. Scalar and serial per colour: it runs once per step
-  // on the bouncing points only, and only under this setting.
+  // apart within the step, as in Box2D 2.4.1. One row at a time (no four-wide path), colour by
+  // colour as the rows are solved: it runs once per step, on bouncing points, under this setting.
   template <bool kRotation, bool kFriction>
   void ApplyBox2dRestitution(StageRunner& run, const WorldDef& def, Real h) {
     SolverBody* states = states_.data();
