@@ -3,6 +3,9 @@
 // both policies on pgs and soft_step, on single hits without gravity whose answers are known.
 #include <gtest/gtest.h>
 
+#include <cstdint>
+#include <utility>
+
 #include "test_helpers.h"
 
 namespace quadrant::test {
@@ -73,6 +76,37 @@ TEST(RestitutionPolicyTest, SlidingBounceGetsCoulombFrictionOverTheWholeImpact) 
     StepN(world, 5);
     EXPECT_NEAR(world.GetLinearVelocity(ball).y, 1.0, 1e-3) << s.name;
     EXPECT_NEAR(world.GetLinearVelocity(ball).x, 3.1, 1e-3) << s.name;
+  }
+}
+
+uint64_t BouncingPile(SolverType solver, RestitutionPolicy policy, int threads) {
+  WorldDef def;
+  def.solver = solver;
+  def.restitution = policy;
+  def.threadCount = threads;
+  def.minParallelItems = 8;  // split every section that has 8 items: colours run on several threads
+  World world(def);
+  AddGround(world, 30);
+  for (int i = 0; i < 60; ++i) {
+    BodyDef b;
+    b.type = BodyType::kDynamic;
+    b.position = {Real(i % 12) * Real(1.1) - 6, Real(2) + Real(i / 12) * Real(1.2)};
+    b.angle = Real(0.3) * Real(i);
+    b.shape = i % 2 ? ShapeDef::MakeCircle(Real(0.4)) : ShapeDef::Box(Real(0.3), Real(0.45));
+    b.shape.restitution = Real(0.5);
+    b.shape.friction = Real(0.3);
+    world.CreateBody(b);
+  }
+  StepN(world, 120);
+  return world.StateHash();
+}
+
+TEST(RestitutionPolicyTest, Box2dRestitutionIsDeterministicAcrossThreadCounts) {
+  // Bodies falling 1-6 m onto the ground and onto each other bounce above the 1 m/s threshold.
+  for (SolverType solver : {SolverType::kPgs, SolverType::kSoftStep}) {
+    const uint64_t one = BouncingPile(solver, RestitutionPolicy::kBox2d, 1);
+    EXPECT_EQ(BouncingPile(solver, RestitutionPolicy::kBox2d, 3), one);
+    EXPECT_NE(BouncingPile(solver, RestitutionPolicy::kCollisions, 1), one) << "the policy changes the bounces";
   }
 }
 
