@@ -311,9 +311,10 @@ inline void SolveRows(SolverBody* states, SoftRowGroup& g, int lane, const SoftS
       }
       const V vt = dvx * tx + dvy * ty;
       // Coulomb over the whole impact, as pgs: the step's collision impulse (ApplyCollisions)
-      // counts, a 1/n share per sub-step (BuildRows says why). Bounded by the sub-steps' normal
-      // impulse alone, a bouncing hit got almost no friction: the random campaign's p90
-      // difference to Box2D was 49 %, then 9.5 %, 6.7 % with the share (2000 hits, seed 17).
+      // counts, a 1/n share per sub-step (solver_soft_step.cpp says why). Bounded by the
+      // sub-steps' normal impulse alone, a bouncing hit got almost no friction: the random
+      // campaign's p90 difference to Box2D was 49 %, then 9.5 %, 6.7 % with the share (2000 hits,
+      // seed 17).
       const V maxFriction = friction * (Load(p.normalImpulse, lane, V{}) + Load(p.collisionImpulse, lane, V{}));
       const V ti = Load(p.tangentImpulse, lane, V{});
       const V newImpulse = Min(Max(ti - Load(p.tangentMass, lane, V{}) * vt, Neg(maxFriction)), maxFriction);

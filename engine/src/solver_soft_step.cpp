@@ -96,6 +96,14 @@ class SoftStepSolver final : public ContactSolverBase {
     const Softness soft = MakeSoftness(hertz, def.contactDampingRatio, h);
     // Contacts with a static body hold twice as stiff: nothing on the other side gives way.
     const Softness staticSoft = MakeSoftness(2 * hertz, def.contactDampingRatio, h);
+    // Each sub-step's friction row is bounded by mu times its normal impulse plus 1/n of the step's
+    // collision impulse. The tangential impulse is a per-sub-step one (the warm start applies it
+    // again every sub-step), so with the whole collision impulse in every sub-step's bound a
+    // sliding bounce got up to n times the friction Coulomb allows over the impact: circle-circle
+    // e = 0.5 differed from Box2D by 6.96 % at p90 with 4 sub-steps and 0.00 % with one; with the
+    // share, 0.00 % at 4, and the whole campaign's p90 went from 9.47 % to 6.66 % (2000 hits, seed
+    // 17).
+    collisionShare_ = Real(1) / Real(n);
 
     double integrateMs = 0;
     auto t0 = Clock::now();
@@ -111,14 +119,7 @@ class SoftStepSolver final : public ContactSolverBase {
     // The sub-steps run on the compact solver state (velocity and motion since the step began,
     // 32 bytes a body) and on the rows in groups of four (soft_rows.h), not on the body arrays
     // and the constraints.
-    // Each sub-step's friction row is bounded by mu times its normal impulse plus 1/n of the step's
-    // collision impulse. The tangential impulse is a per-sub-step one (the warm start applies it
-    // again every sub-step), so with the whole collision impulse in every sub-step's bound a
-    // sliding bounce got up to n times the friction Coulomb allows over the impact: circle-circle
-    // e = 0.5 differed from Box2D by 6.96 % at p90 with 4 sub-steps and 0.00 % with one; with the
-    // share, 0.00 % at 4, and the whole campaign's p90 went from 9.47 % to 6.66 % (2000 hits, seed
-    // 17).
-    BuildRows(run, soft, staticSoft, def.softMassRatioLimit, Real(1) / Real(n));
+    BuildRows(run, soft, staticSoft, def.softMassRatioLimit);
     auto ti = Clock::now();
     LoadStates(run, bodies);
     integrateMs += Ms(ti, Clock::now());
@@ -171,8 +172,7 @@ class SoftStepSolver final : public ContactSolverBase {
   // carries its impulse into the next sub-step. With friction in both passes the 15-box stack's
   // top crept 0.014 m in 9 s and slowly toppled (worse at 8 and 16 sub-steps, with less
   // numerical damping: 0.14-0.17 m); with friction in the relax pass only it moves 0.0003 m.
-  void BuildRows(StageRunner& run, const Softness& soft, const Softness& staticSoft, Real massLimit,
-                 Real collisionShare) {
+  void BuildRows(StageRunner& run, const Softness& soft, const Softness& staticSoft, Real massLimit) {
     groupStart_.assign(kColors + 2, 0);
     for (int k = 0; k <= kColors; ++k) {
       const int count = colorStart_[k + 1] - colorStart_[k];
@@ -252,7 +252,7 @@ class SoftStepSolver final : public ContactSolverBase {
               }
               p.normalImpulse[lane] = pc.normalImpulse;
               p.tangentImpulse[lane] = pc.tangentImpulse;
-              p.collisionImpulse[lane] = pc.collisionImpulse * collisionShare;
+              p.collisionImpulse[lane] = pc.collisionImpulse * collisionShare_;
             }
           }
         }
@@ -626,6 +626,7 @@ class SoftStepSolver final : public ContactSolverBase {
     });
   }
 
+  Real collisionShare_ = 1;  // a sub-step's share of the step's collision impulses (Run says why)
   std::vector<SolverBody> states_;
   std::vector<SoftRowGroup> groups_;
   std::vector<int> groupStart_;

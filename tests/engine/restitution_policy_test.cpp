@@ -67,7 +67,7 @@ TEST(RestitutionPolicyTest, SlidingBounceGetsCoulombFrictionOverTheWholeImpact) 
   // (1 + e) m 2 = 3 m; sticking would take m vt / 3 = 1.33 m of tangential impulse (a disc's
   // tangential effective mass is m / 3), more than mu times the normal impulse, 0.9 m: it slides,
   // and leaves at vx = 4 - 0.9 = 3.1 m/s. soft_step bounded each sub-step's friction by the whole
-  // collision impulse until it took a 1/n share per sub-step (solver_soft_step.cpp, BuildRows):
+  // collision impulse until it took a 1/n share per sub-step (solver_soft_step.cpp, collisionShare_):
   // it stuck (vx 2.67 m/s).
   for (const Solver& s : kSolvers) {
     World world = MakeWorld(s);
