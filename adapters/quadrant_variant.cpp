@@ -5,8 +5,11 @@
 // Box2D 2.4.1's restitution (RestitutionPolicy::kBox2d, pgs and soft_step), "b2skin" for its 0.01 m polygon
 // skin (WorldDef::polygonSkin), "coupled" for the thesis solver's coupled impulse
 // (WorldDef::thesisCoupledImpulse), "points" for its impulse at each touching point
-// (WorldDef::thesisPointImpulses), "passes<N>" for its passes (WorldDef::thesisPasses). The default is pgs with the uniform grid and the deterministic
-// scheme, the combination the suite measured fastest on the stress scenes (see README).
+// (WorldDef::thesisPointImpulses), "passes<N>" for its passes (WorldDef::thesisPasses), "b3soft"
+// for soft_step with Box2D 3's settings (one relax pass, no mass-ratio limit, damping ratio 10).
+// The default is the engine's own (WorldDef: soft_step with two relax passes and a mass-ratio
+// limit of 10) with the uniform grid and the deterministic scheme.
+// relax<N> and ratio<N> override the engine's defaults; "pgs" alone is Box2D 2.4's solver.
 //
 // Solver budget for soft_step: a scene states the budget a case needs as pgs velocity
 // iterations (Box2D 2.4's default 8; 16 or 32 in the hard cases that need more). Box2D 3 spends
@@ -64,6 +67,10 @@ QuadrantVariant QuadrantVariant::Parse(std::string_view variant) {
       // soft_step's WorldDef::softMassRatioLimit (issue #13 item 3: a heavy body on a light one).
     } else if (token.size() > 6 && token.starts_with("passes") && ParseCount(token.substr(6), &v.thesisPasses)) {
       // the thesis solver's WorldDef::thesisPasses.
+    } else if (token == "b3soft") {
+      // soft_step as Box2D 3 sets it (one relax pass, no mass-ratio limit, damping ratio 10): the
+      // engine's soft_step before issue #13 changed its defaults.
+      v.box2d3Soft = true;
     } else if (token == "b2rest") {
       v.restitution = RestitutionPolicy::kBox2d;
     } else if (token == "coupled") {
@@ -83,7 +90,7 @@ QuadrantVariant QuadrantVariant::Parse(std::string_view variant) {
     } else {
       throw Error("unknown quadrant variant '" + std::string(token) +
                   "' (known: thesis, pgs, soft_step, quadtree, grid, deterministic, quadrants, sub<N>, it<N>, pos<N>, "
-                  "relax<N>, ratio<N>, passes<N>, b2rest, b2skin, coupled, points)");
+                  "relax<N>, ratio<N>, passes<N>, b3soft, b2rest, b2skin, coupled, points)");
     }
     if (end == std::string_view::npos) break;
     start = end + 1;
@@ -110,7 +117,12 @@ WorldDef QuadrantVariant::MakeWorldDef(const Scene& scene, int threads) const {
   def.thesisCoupledImpulse = thesisCoupled;
   def.thesisPointImpulses = thesisPoints;
   if (thesisPasses > 0) def.thesisPasses = thesisPasses;
-  def.softMassRatioLimit = Real(massRatioLimit);
+  if (box2d3Soft) {
+    def.softRelaxIterations = 1;
+    def.softMassRatioLimit = 0;
+    def.contactDampingRatio = 10;
+  }
+  if (massRatioLimit > 0) def.softMassRatioLimit = Real(massRatioLimit);
   if (relaxIterations > 0) def.softRelaxIterations = relaxIterations;
   def.threadCount = threads;
   def.scheme = scheme;
