@@ -5,7 +5,8 @@
 // Box2D 2.4.1's restitution (RestitutionPolicy::kBox2d, pgs and soft_step), "b2skin" for its 0.01 m polygon
 // skin (WorldDef::polygonSkin), "coupled" for the thesis solver's coupled impulse
 // (WorldDef::thesisCoupledImpulse), "points" for its impulse at each touching point
-// (WorldDef::thesisPointImpulses), "passes<N>" for its passes (WorldDef::thesisPasses), "b3soft"
+// (WorldDef::thesisPointImpulses), "passes<N>" for its passes (WorldDef::thesisPasses),
+// "relaxfriction" for soft_step's friction in every relax pass, "b3soft"
 // for soft_step with Box2D 3's settings (one relax pass, no mass-ratio limit, damping ratio 10).
 // The default is the engine's own (WorldDef: soft_step with two relax passes and a mass-ratio
 // limit of 10) with the uniform grid and the deterministic scheme.
@@ -71,6 +72,8 @@ QuadrantVariant QuadrantVariant::Parse(std::string_view variant) {
       // soft_step as Box2D 3 sets it (one relax pass, no mass-ratio limit, damping ratio 10): the
       // engine's soft_step before issue #13 changed its defaults.
       v.box2d3Soft = true;
+    } else if (token == "relaxfriction") {
+      v.frictionEveryRelax = true;
     } else if (token == "b2rest") {
       v.restitution = RestitutionPolicy::kBox2d;
     } else if (token == "coupled") {
@@ -90,7 +93,7 @@ QuadrantVariant QuadrantVariant::Parse(std::string_view variant) {
     } else {
       throw Error("unknown quadrant variant '" + std::string(token) +
                   "' (known: thesis, pgs, soft_step, quadtree, grid, deterministic, quadrants, sub<N>, it<N>, pos<N>, "
-                  "relax<N>, ratio<N>, passes<N>, b3soft, b2rest, b2skin, coupled, points)");
+                  "relax<N>, ratio<N>, passes<N>, b3soft, relaxfriction, b2rest, b2skin, coupled, points)");
     }
     if (end == std::string_view::npos) break;
     start = end + 1;
@@ -124,6 +127,7 @@ WorldDef QuadrantVariant::MakeWorldDef(const Scene& scene, int threads) const {
   }
   if (massRatioLimit > 0) def.softMassRatioLimit = Real(massRatioLimit);
   if (relaxIterations > 0) def.softRelaxIterations = relaxIterations;
+  def.softFrictionEveryRelaxPass = frictionEveryRelax;
   def.threadCount = threads;
   def.scheme = scheme;
   def.effects = scene.effects;  // one type (scene.h); sleep with Box2D 2.4's tolerances, WorldDef's defaults

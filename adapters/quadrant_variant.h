@@ -20,6 +20,7 @@ struct QuadrantVariant {
   RestitutionPolicy restitution = RestitutionPolicy::kCollisions;  ///< b2rest: kBox2d (pgs and soft_step)
   Real polygonSkin = 0;        ///< b2skin: Box2D 2.4.1's 0.01 m polygon radius
   bool thesisCoupled = false;  ///< coupled: the thesis solver's coupled impulse
+  bool frictionEveryRelax = false;  ///< relaxfriction: soft_step's WorldDef::softFrictionEveryRelaxPass
   bool thesisPoints = false;   ///< points: the thesis solver's impulse at each touching point
   int thesisPasses = 0;        ///< passes<N>: the thesis solver's WorldDef::thesisPasses; 0: the engine's
   int massRatioLimit = 0;      ///< ratio<N>: soft_step's WorldDef::softMassRatioLimit; 0: the engine's
@@ -28,7 +29,7 @@ struct QuadrantVariant {
 
   /// Tokens joined by '+' ("" is the default): thesis, pgs, soft_step, quadtree, grid,
   /// deterministic, quadrants, sub<N>, it<N>, pos<N>, relax<N>, ratio<N>, passes<N> (N in [1,
-  /// 1000]), b3soft, b2rest, b2skin, coupled, points.
+  /// 1000]), b3soft, relaxfriction, b2rest, b2skin, coupled, points.
   /// Throws quadrant::Error naming an unknown token and the known ones.
   static QuadrantVariant Parse(std::string_view variant);
 

@@ -150,7 +150,7 @@ class SoftStepSolver final : public ContactSolverBase {
       // as with friction in both (tall_stack top 0.034 m; with friction in the first pass only
       // 0.051 m, which fails).
       for (int it = 0; it < def.softRelaxIterations; ++it) {
-        if (it == def.softRelaxIterations - 1) {
+        if (it == def.softRelaxIterations - 1 || def.softFrictionEveryRelaxPass) {
           ForEachGroup(run, simd, [&](auto lanes, SoftRowGroup& g, int lane) {
             SolveRows<decltype(lanes), kRotation, kFriction, false>(states_.data(), g, lane, prm);
           });

@@ -67,16 +67,19 @@ TEST(RandomHits, Box2dCompatibleSettingStaysBelowOnePercent) {
 }
 
 TEST(RandomHits, SoftStepBox2dCompatibleSettingStaysBelowOnePercent) {
-  // soft_step's Box2D-compatible setting: Box2D's restitution, its skin and four relax passes
-  // (0.80 % here, 0.68 % on the 2000 hits). Each alone leaves it far above (README "validation").
+  // soft_step's Box2D-compatible setting: Box2D's restitution, its skin and friction in each of four
+  // relax passes (0.76 % here, 0.69 % on the 2000 hits; with the default two passes 1.06 % here and
+  // 0.82 % there). Each alone leaves it far above (README "validation").
   const std::vector<CampaignRow> rows = Sample().Box2dRows();
-  EXPECT_LT(Find(rows, "all", "quadrant:soft_step", "box2d_restitution+box2d_skin+relax4").p90, 0.01);
+  const char* compat = "box2d_restitution+box2d_skin+relax4+relaxfriction";
+  EXPECT_LT(Find(rows, "all", "quadrant:soft_step", compat).p90, 0.01);
   EXPECT_GT(Find(rows, "all", "quadrant:soft_step", "box2d_restitution").p90, 0.015);
   EXPECT_GT(Find(rows, "all", "quadrant:soft_step", "box2d_skin").p90, 0.04);
-  EXPECT_GT(Find(rows, "all", "quadrant:soft_step", "relax4").p90, 0.04);
+  EXPECT_GT(Find(rows, "all", "quadrant:soft_step", "relaxfriction").p90, 0.04);
+  EXPECT_GT(Find(rows, "all", "quadrant:soft_step", "box2d_restitution+box2d_skin").p90, 0.015);
   for (const char* cls : kClasses) {
-    // The largest class here is polygon-polygon e=1 at 9.4 % (33 hits; 2000 hits: 2.7 % at most).
-    EXPECT_LT(Find(rows, cls, "quadrant:soft_step", "box2d_restitution+box2d_skin+relax4").p90, 0.125) << cls;
+    // The largest class here is polygon-polygon e=1 at 9.4 % (33 hits; 2000 hits: 2.8 % at most).
+    EXPECT_LT(Find(rows, cls, "quadrant:soft_step", compat).p90, 0.125) << cls;
   }
 }
 
@@ -95,7 +98,7 @@ TEST(RandomHits, EverySolverWithinItsBoundOfBox2d) {
   for (const char* cls : {"circle-circle e=0", "circle-circle e=0.5", "circle-circle e=1"}) {
     EXPECT_LT(Find(rows, cls, "quadrant:pgs", "default").max, 1e-4) << cls;
     EXPECT_LT(Find(rows, cls, "quadrant:soft_step", "default").max, 1e-4) << cls;
-    EXPECT_LT(Find(rows, cls, "quadrant:soft_step", "box2d_restitution+box2d_skin+relax4").max, 1e-4) << cls;
+    EXPECT_LT(Find(rows, cls, "quadrant:soft_step", "box2d_restitution+box2d_skin+relax4+relaxfriction").max, 1e-4) << cls;
   }
 }
 
@@ -107,7 +110,7 @@ TEST(RandomHits, AnalyticReferenceAgreesWithBox2dAndTheCompatibleSetting) {
   EXPECT_LT(box2d.p90, 0.01);
   EXPECT_LT(Find(rows, "all", "quadrant:pgs", "box2d_restitution").p90, 0.01);
   // soft_step's compatible setting is as near the mechanics (0.05 % here, Box2D 0.54 %).
-  EXPECT_LT(Find(rows, "all", "quadrant:soft_step", "box2d_restitution+box2d_skin+relax4").p90, 0.005);
+  EXPECT_LT(Find(rows, "all", "quadrant:soft_step", "box2d_restitution+box2d_skin+relax4+relaxfriction").p90, 0.005);
   EXPECT_GT(Find(rows, "all", "quadrant:soft_step", "default").p90, 3 * box2d.p90);
   // Quadrant's default restitution (a frictionless collision before the iterations) is the
   // farther from the mechanics: its p90 distance is several times Box2D's.
@@ -131,14 +134,13 @@ TEST(RandomHits, Box2dSettingsAreRefusedWhereTheyDoNotApply) {
   def.solver = SolverType::kSoftStep;
   EXPECT_NO_THROW(World{def});
   def = WorldDef{};
-  def = WorldDef{};
   def.polygonSkin = Real(-0.01);
   EXPECT_THROW(World{def}, Error);
   def.polygonSkin = def.speculativeDistance;  // more than half of it
   EXPECT_THROW(World{def}, Error);
   def.polygonSkin = Real(0.01);
   def.restitution = RestitutionPolicy::kBox2d;
-  EXPECT_THROW(World{def}, Error);  // the default solver is soft_step
+  EXPECT_NO_THROW(World{def});  // the default solver, soft_step, takes kBox2d too
   def.solver = SolverType::kPgs;
   EXPECT_NO_THROW(World{def});
   def.scheme = ParallelScheme::kQuadrants;

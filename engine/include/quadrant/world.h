@@ -196,6 +196,10 @@ struct WorldDef {
   /// cost of one pass over the rows per sub-step (friction is solved in the last one only; base-100
   /// pyramid: +4.3M instructions a step).
   int softRelaxIterations = 2;
+  /// soft_step: solve friction in every relax pass, not only the last. Where a lever arm couples
+  /// friction and the normal row (an oblique corner hit), the passes then converge both as Box2D
+  /// 2.4.1's iterations do; part of soft_step's Box2D-compatible setting (README "validation").
+  bool softFrictionEveryRelaxPass = false;
   /// soft_step: 0 (off) or the largest mass ratio a contact between two dynamic bodies sees, >= 1.
   /// Where two bodies' masses differ by more, the lighter one takes part in their contact as if it
   /// were only this many times lighter (inverse mass and inertia scaled alike): a heavy body then
