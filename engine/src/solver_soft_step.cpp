@@ -293,20 +293,27 @@ class SoftStepSolver final : public ContactSolverBase {
         for (int lane = 0; lane < kLanes; ++lane) fn(Real{}, groups_[gi], lane);
       }
     };
-    const int minGroups = std::max(1, MinColorItems(run) / kLanes);
-    for (int color = 0; color < kColors; ++color) {
+    // One region per pass, a stage per colour (ForEachColor says why); the overflow colour's
+    // groups are one chunk, run row by row.
+    stagePlan_.clear();
+    stageFirst_.clear();
+    for (int color = 0; color <= kColors; ++color) {
       const int begin = groupStart_[color], count = groupStart_[color + 1] - begin;
       if (count == 0) continue;
-      run.For(Stage::kSolve, count, minGroups, [&](int b, int e, int) { rows(begin + b, begin + e); });
+      stagePlan_.push_back({count, color < kColors ? kColorGrain / kLanes : count});
+      stageFirst_.push_back(begin);
     }
-    const int begin = groupStart_[kColors], end = groupStart_[kColors + 1];
-    if (begin < end) {
-      run.Serial(Stage::kSolve, [&] {
-        for (int gi = begin; gi < end; ++gi) {
-          for (int lane = 0; lane < kLanes; ++lane) fn(Real{}, groups_[gi], lane);
-        }
-      });
-    }
+    const int overflow = groupStart_[kColors];
+    run.Stages(Stage::kSolve, stagePlan_, std::max(1, run.MinHeavyItems() / kLanes), [&](int s, int b, int e) {
+      const int gb = stageFirst_[s] + b, ge = stageFirst_[s] + e;
+      if (stageFirst_[s] < overflow) {
+        rows(gb, ge);
+        return;
+      }
+      for (int gi = gb; gi < ge; ++gi) {
+        for (int lane = 0; lane < kLanes; ++lane) fn(Real{}, groups_[gi], lane);
+      }
+    });
   }
 
   // ApplyBounceShifts (contact_solver.h) on the solver states.

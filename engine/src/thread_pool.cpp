@@ -58,6 +58,8 @@
 #include <chrono>
 #include <climits>
 #include <cstdint>
+#include <cstdio>
+#include <cstdlib>
 #include <exception>
 #include <limits>
 #include <mutex>
@@ -72,11 +74,28 @@
 #endif
 #if defined(__linux__)
 #include <linux/futex.h>
+#include <sched.h>
 #include <sys/syscall.h>
 #include <unistd.h>
 #endif
 
 namespace quadrant {
+
+// The default region: one ParallelFor per stage over the stage's chunks. Task systems with a
+// cheaper way (the pool below) override it.
+void TaskSystem::ParallelStages(int stages, const StagePlan* plan, const StageFn& fn) {
+  for (int s = 0; s < stages; ++s) {
+    const int count = plan[s].count, chunks = StageChunks(count, plan[s].grain, WorkerCount());
+    if (chunks == 0) continue;
+    ParallelFor(chunks, [&](int cb, int ce, int) {
+      for (int c = cb; c < ce; ++c) {
+        const int begin = BlockBegin(count, chunks, c), end = BlockBegin(count, chunks, c + 1);
+        if (begin < end) fn(s, begin, end, c);
+      }
+    });
+  }
+}
+
 namespace {
 
 using Clock = std::chrono::steady_clock;
@@ -87,24 +106,26 @@ class InlineTaskSystem final : public TaskSystem {
   void ParallelFor(int count, const RangeFn& fn) override {
     if (count > 0) fn(0, count, 0);
   }
+  void ParallelStages(int stages, const StagePlan* plan, const StageFn& fn) override {
+    for (int s = 0; s < stages; ++s) {
+      if (plan[s].count > 0) fn(s, 0, plan[s].count, 0);
+    }
+  }
 };
 
 // Longest spin on a quiet machine (see the head comment for the measurement behind 1 ms).
 constexpr int kMaxSpinMicros = 1000;
-// Spin before a futex wait when the pool is contended: about one futex system call.
-constexpr int kContendedSpinMicros = 5;
-// A gap this long between two clock reads of a spin loop means the spinner was descheduled for
-// another thread. The loop reads the clock every 32 pause instructions (1-5 us on x86-64); a
-// scheduler time slice is 0.75 ms or more, while interrupts and a VM's short steals are tens of
-// microseconds and must not count.
-constexpr int kPreemptedMicros = 200;
-// How long contention (two signs within kSignWindowMillis) keeps the pool from spinning.
+// Contention is judged by the caller's stalls: the part of each wait at a stage's end beyond
+// twice its own last chunk plus kStallSlackMicros (a worker that runs finishes its chunk within
+// about that), summed over windows of kWindowMillis of parallel running. A window with more than
+// kStallShare of it stalled makes the pool serial (the caller alone) for kContendedMillis; a
+// window that is stalled again right after such a period doubles the next one, up to
+// kMaxContendedMillis, so a machine that stays busy pays for a probe rarely.
+constexpr int kStallSlackMicros = 50;
+constexpr int kWindowMillis = 40;
+constexpr double kStallShare = 0.2;
 constexpr int kContendedMillis = 200;
-constexpr int kSignWindowMillis = 50;
-// A contended worker between jobs sleeps this long at a time and then looks for a job (plus the
-// timer slack, 50 us by default), for up to kPollMillis before it waits on the futex; see Poll.
-constexpr int kPollMicros = 50;
-constexpr int kPollMillis = 20;
+constexpr int kMaxContendedMillis = 1600;
 
 // Sleeps while *word == expected (or returns at once if it differs). Linux: the futex system
 // call itself, because libstdc++'s std::atomic::wait first calls sched_yield four times, and a
@@ -128,19 +149,47 @@ void WakeAll(std::atomic<uint32_t>& word) {
 #endif
 }
 
-// The pool thread (or caller) that is running a block of some pool right now, for nesting.
+// The cores this process may run on (its affinity mask on Linux, so `taskset -c 0` counts 1).
+int UsableCores() {
+#if defined(__linux__)
+  cpu_set_t set;
+  if (sched_getaffinity(0, sizeof(set), &set) == 0) return std::max(1, CPU_COUNT(&set));
+#endif
+  return static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+}
+
+// The pool thread (or caller) that is running a chunk of some pool right now, for nesting.
 thread_local const TaskSystem* tRunning = nullptr;
+
+// The claim word of the current region: job tag, stage, next chunk to claim, chunks of the
+// stage, 16 bits each. Everything a thread needs to claim a chunk is in the one word, so a
+// thread reads the job's other fields only after a successful claim, when the job cannot end
+// before the chunk it holds does.
+constexpr uint32_t kDoneStage = 0xFFFF;
+constexpr int kMaxStagesPerJob = 0xFFFE;
+constexpr uint64_t Pack(uint32_t tag, uint32_t stage, uint32_t next, uint32_t chunks) {
+  return uint64_t(tag & 0xFFFF) << 48 | uint64_t(stage & 0xFFFF) << 32 | uint64_t(next & 0xFFFF) << 16 | (chunks & 0xFFFF);
+}
+constexpr uint32_t TagOf(uint64_t w) { return uint32_t(w >> 48); }
+constexpr uint32_t StageOf(uint64_t w) { return uint32_t(w >> 32) & 0xFFFF; }
+constexpr uint32_t NextOf(uint64_t w) { return uint32_t(w >> 16) & 0xFFFF; }
+constexpr uint32_t ChunksOf(uint64_t w) { return uint32_t(w) & 0xFFFF; }
 
 class ThreadPool final : public TaskSystem {
  public:
-  explicit ThreadPool(int threads)
-      : workers_(threads),
-        oversubscribed_(static_cast<unsigned>(threads) > std::max(1u, std::thread::hardware_concurrency())) {
-    threads_.reserve(threads - 1);
-    for (int w = 1; w < threads; ++w) threads_.emplace_back([this] { WorkerLoop(); });
+  explicit ThreadPool(int threads) : workers_(threads) {
+    // More threads than cores would only take turns on them: the extra ones are not started
+    // (every block still exists and is run by the threads that are).
+    const int running = std::min(threads, UsableCores());
+    threads_.reserve(running - 1);
+    for (int w = 1; w < running; ++w) threads_.emplace_back([this] { WorkerLoop(); });
   }
 
   ~ThreadPool() override {
+    if (std::getenv("QUADRANT_POOL_STATS")) {
+      std::fprintf(stderr, "pool %d: jobs %lld, serial %lld, caller alone %lld, wait %.3f ms, waits>1ms %lld, marks %d\n",
+                   workers_, statJobs_, statSerial_, statAlone_, statWaitNs_ * 1e-6, statLong_, statMarks_);
+    }
     stop_.store(true, std::memory_order_seq_cst);
     jobWord_.fetch_add(1, std::memory_order_seq_cst);
     WakeAll(jobWord_);
@@ -151,54 +200,102 @@ class ThreadPool final : public TaskSystem {
 
   void ParallelFor(int count, const RangeFn& fn) override {
     if (count <= 0) return;
-    if (tRunning == this) {  // called from one of this pool's blocks: run inline
-      for (int b = 0; b < workers_; ++b) {
-        const int begin = BlockBegin(count, workers_, b), end = BlockBegin(count, workers_, b + 1);
-        if (begin < end) fn(begin, end, b);
+    if (threads_.empty() || tRunning == this || Serial()) {
+      const TaskSystem* outer = std::exchange(tRunning, this);
+      try {
+        for (int b = 0; b < workers_; ++b) {
+          const int begin = BlockBegin(count, workers_, b), end = BlockBegin(count, workers_, b + 1);
+          if (begin < end) fn(begin, end, b);
+        }
+      } catch (...) {
+        tRunning = outer;
+        throw;
       }
+      tRunning = outer;
       return;
     }
-    // Publish the job: its fields first, then the claim word (release), then the wake word.
-    fn_ = &fn;
-    count_ = count;
-    failed_.store(false, std::memory_order_relaxed);
-    remaining_.store(static_cast<uint32_t>(workers_), std::memory_order_relaxed);
-    const uint32_t job = ++job_;
-    claim_.store(uint64_t(job) << 32, std::memory_order_seq_cst);
-    jobWord_.store(job, std::memory_order_seq_cst);
-    if (sleepers_.load(std::memory_order_seq_cst) > 0) WakeAll(jobWord_);
+    rangeFn_ = &fn;
+    stageFn_ = nullptr;
+    oneStage_ = {count, 1};
+    plan_ = &oneStage_;
+    chunks_.assign(1, workers_);
+    Run(1);
+  }
 
-    const Clock::time_point start = Clock::now();
-    RunBlocks();
-    WaitForBlocks(Clock::now() - start);
-    fn_ = nullptr;
-    if (error_) {
-      std::exception_ptr error = std::exchange(error_, nullptr);
-      std::rethrow_exception(error);
+  void ParallelStages(int stages, const StagePlan* plan, const StageFn& fn) override {
+    if (threads_.empty() || tRunning == this || Serial()) {
+      const TaskSystem* outer = std::exchange(tRunning, this);
+      try {
+        for (int s = 0; s < stages; ++s) {
+          if (plan[s].count > 0) fn(s, 0, plan[s].count, 0);
+        }
+      } catch (...) {
+        tRunning = outer;
+        throw;
+      }
+      tRunning = outer;
+      return;
+    }
+    for (int first = 0; first < stages; first += kMaxStagesPerJob) {
+      const int n = std::min(stages - first, kMaxStagesPerJob);
+      StageFn shifted;
+      const StageFn* f = &fn;
+      if (first > 0) {
+        shifted = [&fn, first](int s, int b, int e, int c) { fn(first + s, b, e, c); };
+        f = &shifted;
+      }
+      rangeFn_ = nullptr;
+      stageFn_ = f;
+      plan_ = plan + first;
+      chunks_.resize(n);
+      for (int s = 0; s < n; ++s) chunks_[s] = StageChunks(plan_[s].count, plan_[s].grain, workers_);
+      Run(n);
     }
   }
 
  private:
-  bool Contended(Clock::time_point now) const {
-    return oversubscribed_ || now.time_since_epoch().count() < contendedUntil_.load(std::memory_order_relaxed);
-  }
-  // One sign of contention (a descheduled spinner, an overlong wait). Two within
-  // kSignWindowMillis make the pool contended: a competing process preempts a spinner every
-  // time slice (a few ms), while a lone sign on a quiet machine (a kernel thread, a cron job)
-  // must not cost the next 200 ms of spinning.
-  void MarkContended(Clock::time_point now) {
-    const Clock::rep previous = lastSign_.exchange(now.time_since_epoch().count(), std::memory_order_relaxed);
-    if (now.time_since_epoch().count() - previous > Clock::duration(std::chrono::milliseconds(kSignWindowMillis)).count()) return;
-    const auto until = now + std::chrono::milliseconds(kContendedMillis);
-    contendedUntil_.store(until.time_since_epoch().count(), std::memory_order_relaxed);
+  // True while the pool runs every job on the caller alone (contention, see Judge).
+  bool Serial() {
+    const Clock::time_point now = Clock::now();
+    if (now < serialUntil_) {
+      ++statSerial_;
+      return true;
+    }
+    if (!windowOpen_) {  // the first parallel job after a serial period (or ever)
+      windowOpen_ = true;
+      windowStart_ = now;
+      stalled_ = {};
+    } else if (now - windowStart_ >= std::chrono::milliseconds(kWindowMillis)) {
+      Judge(now);
+    }
+    return now < serialUntil_;
   }
 
-  // Spins until done() or the budget runs out; true if done() became true. Marks the pool
-  // contended if the spinner was descheduled while spinning.
+  // The end of a window of parallel jobs. More than kStallShare of it spent waiting for chunks
+  // whose threads were not running means another process wants these cores: every stage end
+  // then waits a time slice for a preempted worker, and the caller alone is faster.
+  void Judge(Clock::time_point now) {
+    const double share = std::chrono::duration<double>(stalled_).count() /
+                         std::chrono::duration<double>(now - windowStart_).count();
+    const bool probe = probing_;  // the first window after a serial period
+    probing_ = false;
+    windowStart_ = now;
+    stalled_ = {};
+    if (share <= kStallShare) {
+      contendedMillis_ = kContendedMillis;
+      return;
+    }
+    ++statMarks_;
+    contendedMillis_ = probe ? std::min(2 * contendedMillis_, kMaxContendedMillis) : kContendedMillis;
+    serialUntil_ = now + std::chrono::milliseconds(contendedMillis_);
+    windowOpen_ = false;
+    probing_ = true;
+  }
+
+  // Spins until done() or `budget` runs out; true if done() became true.
   template <class Done>
-  bool Spin(Done done, Clock::duration contendedBudget = std::chrono::microseconds(kContendedSpinMicros)) {
-    Clock::time_point last = Clock::now();
-    const Clock::time_point end = last + (Contended(last) ? contendedBudget : std::chrono::microseconds(kMaxSpinMicros));
+  bool Spin(Done done, Clock::duration budget) {
+    const Clock::time_point end = Clock::now() + budget;
     for (;;) {
       for (int k = 0; k < 4; ++k) {
         if (done()) return true;
@@ -208,42 +305,117 @@ class ThreadPool final : public TaskSystem {
         std::this_thread::yield();
 #endif
       }
-      const Clock::time_point now = Clock::now();
-      if (now - last > std::chrono::microseconds(kPreemptedMicros)) {
-        MarkContended(now);
-        return done();
-      }
-      if (now >= end) return done();
-      last = now;
+      if (Clock::now() >= end) return done();
     }
   }
 
-  // Claims and runs blocks of the current job until none is left.
-  void RunBlocks() {
+  // The caller: publishes the job (its fields first, then the claim word, then the wake word),
+  // runs chunks with the workers and returns when the last stage is done.
+  void Run(int stages) {
+    stages_ = stages;
+    int first = 0;
+    while (first < stages && chunks_[first] == 0) ++first;
+    if (first == stages) return;
+    ++statJobs_;
+    failed_.store(false, std::memory_order_relaxed);
+    done_.store(0, std::memory_order_relaxed);
+    tag_ = (tag_ + 1) & 0xFFFF;
+    claim_.store(Pack(tag_, first, 0, chunks_[first]), std::memory_order_seq_cst);
+    jobWord_.fetch_add(1, std::memory_order_seq_cst);
+    if (jobSleepers_.load(std::memory_order_seq_cst) > 0) WakeAll(jobWord_);
+    const int mine = Claim(tag_, true);
+    if (mine == TotalChunks()) ++statAlone_;
+    rangeFn_ = nullptr;
+    stageFn_ = nullptr;
+    if (error_) {
+      std::exception_ptr error = std::exchange(error_, nullptr);
+      std::rethrow_exception(error);
+    }
+  }
+  int TotalChunks() const {
+    int total = 0;
+    for (int s = 0; s < stages_; ++s) total += chunks_[s];
+    return total;
+  }
+
+  // Claims and runs chunks of job `tag` until its last stage is done (the caller) or it has
+  // ended or moved on (a worker). A thread whose stage has no chunk left waits for the stage to
+  // finish: it spins briefly, then sleeps on the progress word. The thread that finishes a
+  // stage's last chunk publishes the next stage. Returns the chunks this thread ran.
+  int Claim(uint32_t tag, bool caller) {
     const TaskSystem* outer = std::exchange(tRunning, this);
-    uint64_t c = claim_.load(std::memory_order_acquire);
+    int ran = 0;
+    uint64_t w = claim_.load(std::memory_order_acquire);
+    Clock::duration lastChunk{};  // the caller's longest chunk of this job so far
     for (;;) {
-      const uint32_t block = static_cast<uint32_t>(c);
-      if (block >= static_cast<uint32_t>(workers_)) break;
-      // The tag in the high half keeps a worker that read an old job's word from claiming a
-      // block of a newer one with the old job's index.
-      if (!claim_.compare_exchange_weak(c, c + 1, std::memory_order_acq_rel, std::memory_order_acquire)) continue;
-      RunBlock(static_cast<int>(block));
-      if (remaining_.fetch_sub(1, std::memory_order_seq_cst) == 1 &&
-          callerSleeping_.load(std::memory_order_seq_cst)) {
-        WakeAll(remaining_);
+      if (TagOf(w) != tag || StageOf(w) == kDoneStage) break;
+      if (NextOf(w) < ChunksOf(w)) {
+        if (!claim_.compare_exchange_weak(w, w + (uint64_t(1) << 16), std::memory_order_acq_rel, std::memory_order_acquire)) {
+          continue;
+        }
+        const Clock::time_point t0 = caller ? Clock::now() : Clock::time_point{};
+        RunChunk(static_cast<int>(StageOf(w)), static_cast<int>(NextOf(w)));
+        if (caller) lastChunk = std::max<Clock::duration>(lastChunk, Clock::now() - t0);
+        ++ran;
+        if (done_.fetch_add(1, std::memory_order_acq_rel) + 1 == ChunksOf(w)) Advance(tag, StageOf(w));
+        w = claim_.load(std::memory_order_acquire);
+        continue;
       }
-      c = claim_.load(std::memory_order_acquire);
+      w = WaitForChange(w, caller, lastChunk);
     }
     tRunning = outer;
+    return ran;
   }
 
-  void RunBlock(int b) {
-    if (failed_.load(std::memory_order_relaxed)) return;  // an earlier block threw: skip
-    const int begin = BlockBegin(count_, workers_, b), end = BlockBegin(count_, workers_, b + 1);
+  // The stage's last chunk is done: publish the next non-empty stage, or the end of the job.
+  void Advance(uint32_t tag, uint32_t stage) {
+    done_.store(0, std::memory_order_relaxed);
+    uint32_t next = stage + 1;
+    while (next < uint32_t(stages_) && chunks_[next] == 0) ++next;
+    const uint64_t w = next < uint32_t(stages_) ? Pack(tag, next, 0, chunks_[next]) : Pack(tag, kDoneStage, 0, 0);
+    claim_.store(w, std::memory_order_seq_cst);
+    progress_.fetch_add(1, std::memory_order_seq_cst);
+    if (progressSleepers_.load(std::memory_order_seq_cst) > 0) WakeAll(progress_);
+  }
+
+  // Waits until the claim word is no longer w (the stage was finished by the threads that hold
+  // its last chunks). Spins up to kMaxSpinMicros, then sleeps. A caller whose wait outlasts a
+  // few tens of microseconds more than twice its own last chunk was (in that excess) waiting
+  // on a chunk whose thread was not running: a stall (Judge).
+  uint64_t WaitForChange(uint64_t w, bool caller, Clock::duration ownChunk) {
+    auto changed = [&] { return claim_.load(std::memory_order_acquire) != w; };
+    const Clock::time_point start = Clock::now();
+    if (!Spin(changed, std::chrono::microseconds(kMaxSpinMicros))) {
+      progressSleepers_.fetch_add(1, std::memory_order_seq_cst);
+      for (;;) {
+        const uint32_t seen = progress_.load(std::memory_order_seq_cst);
+        if (changed()) break;
+        WaitWhileEqual(progress_, seen);
+      }
+      progressSleepers_.fetch_sub(1, std::memory_order_seq_cst);
+    }
+    if (caller) {
+      const Clock::time_point now = Clock::now();
+      const Clock::duration waited = now - start;
+      statWaitNs_ += std::chrono::duration_cast<std::chrono::nanoseconds>(waited).count();
+      if (waited > std::chrono::milliseconds(1)) ++statLong_;
+      const Clock::duration normal = 2 * ownChunk + std::chrono::microseconds(kStallSlackMicros);
+      if (waited > normal) stalled_ += waited - normal;
+    }
+    return claim_.load(std::memory_order_acquire);
+  }
+
+  void RunChunk(int stage, int chunk) {
+    if (failed_.load(std::memory_order_relaxed)) return;  // an earlier chunk threw: skip
+    const int count = plan_[stage].count, chunks = chunks_[stage];
+    const int begin = BlockBegin(count, chunks, chunk), end = BlockBegin(count, chunks, chunk + 1);
     if (begin >= end) return;
     try {
-      (*fn_)(begin, end, b);
+      if (rangeFn_) {
+        (*rangeFn_)(begin, end, chunk);
+      } else {
+        (*stageFn_)(stage, begin, end, chunk);
+      }
     } catch (...) {
       std::lock_guard<std::mutex> lock(errorMutex_);
       if (!error_) error_ = std::current_exception();
@@ -251,78 +423,55 @@ class ThreadPool final : public TaskSystem {
     }
   }
 
-  // A worker of a contended pool, between jobs: sleeps kPollMicros at a time and looks for a
-  // job, for up to kPollMillis. The caller then starts a job with no system call: waking a
-  // futex sleeper costs the waker 7.5 us here (measured: mean of 2000 wakes, loaded VM), and a
-  // step of 16000 circles runs 49 parallel-fors in about 1.2 ms. A sleeping poller keeps its
-  // scheduler credit, so when it finds a block it is not the thread preempted mid-block. True if
-  // the job arrived; false when the pool is no longer contended or the polling time is up.
-  template <class Done>
-  bool Poll(Done arrived) {
-    const Clock::time_point end = Clock::now() + std::chrono::milliseconds(kPollMillis);
-    for (Clock::time_point now = Clock::now(); Contended(now) && now < end; now = Clock::now()) {
-      std::this_thread::sleep_for(std::chrono::microseconds(kPollMicros));
-      if (arrived()) return true;
-    }
-    return arrived();
-  }
-
-  // The caller, after its own blocks (which took `own`): waits until every claimed block has
-  // finished.
-  void WaitForBlocks(Clock::duration own) {
-    auto done = [this] { return remaining_.load(std::memory_order_acquire) == 0; };
-    const Clock::time_point start = Clock::now();
-    // Contended, the caller still spins as long as its own blocks took (at most 1 ms): a worker
-    // that is running finishes its block within about that, and a futex round trip costs the
-    // caller a wake-up latency; one that is not running costs the caller at most that much.
-    const Clock::duration budget =
-        std::clamp<Clock::duration>(own, std::chrono::microseconds(kContendedSpinMicros), std::chrono::microseconds(kMaxSpinMicros));
-    if (Spin(done, budget)) return;
-    callerSleeping_.store(true, std::memory_order_seq_cst);
-    for (uint32_t left; (left = remaining_.load(std::memory_order_seq_cst)) != 0;) WaitWhileEqual(remaining_, left);
-    callerSleeping_.store(false, std::memory_order_relaxed);
-    // Blocks are about equal, so a worker's block that ends much later than the caller's own
-    // (twice as long, and a whole spin budget more) was one the scheduler was not running:
-    // another process wants these cores.
-    const Clock::time_point now = Clock::now();
-    if (now - start > 2 * own + std::chrono::microseconds(kMaxSpinMicros)) MarkContended(now);
-  }
-
   void WorkerLoop() {
     uint32_t seen = 0;
     for (;;) {
       auto arrived = [&] { return jobWord_.load(std::memory_order_acquire) != seen; };
-      if (!Spin(arrived) && !Poll(arrived)) {
-        sleepers_.fetch_add(1, std::memory_order_seq_cst);
+      if (!Spin(arrived, std::chrono::microseconds(kMaxSpinMicros))) {
+        jobSleepers_.fetch_add(1, std::memory_order_seq_cst);
         while (jobWord_.load(std::memory_order_seq_cst) == seen) WaitWhileEqual(jobWord_, seen);
-        sleepers_.fetch_sub(1, std::memory_order_relaxed);
+        jobSleepers_.fetch_sub(1, std::memory_order_relaxed);
       }
       if (stop_.load(std::memory_order_acquire)) return;
       seen = jobWord_.load(std::memory_order_acquire);
-      RunBlocks();
+      Claim(TagOf(claim_.load(std::memory_order_acquire)), false);
     }
   }
 
   const int workers_;
-  const bool oversubscribed_;  // more threads than cores: the pool always waits on futexes
   std::vector<std::thread> threads_;
 
-  // The current job: written by the caller before the claim word is published.
-  const RangeFn* fn_ = nullptr;
-  int count_ = 0;
-  uint32_t job_ = 0;
+  // The current job: written by the caller before the claim word is published, read by the
+  // others only while they hold a chunk.
+  const RangeFn* rangeFn_ = nullptr;  // ParallelFor: one stage whose chunks are the blocks
+  const StageFn* stageFn_ = nullptr;
+  const StagePlan* plan_ = nullptr;
+  StagePlan oneStage_;
+  std::vector<int> chunks_;
+  int stages_ = 0;
+  uint32_t tag_ = 0;
 
-  std::atomic<uint64_t> claim_{0};       // job number << 32 | next block to claim
-  std::atomic<uint32_t> jobWord_{0};     // the job number, for workers to wait on
-  std::atomic<uint32_t> remaining_{0};   // blocks of the current job not yet finished
-  std::atomic<int> sleepers_{0};         // workers in a futex wait for the next job
-  std::atomic<bool> callerSleeping_{false};
+  std::atomic<uint64_t> claim_{Pack(0, kDoneStage, 0, 0)};
+  std::atomic<uint32_t> done_{0};            // chunks of the current stage finished
+  std::atomic<uint32_t> jobWord_{0};         // bumped per job, for workers to wait on
+  std::atomic<uint32_t> progress_{0};        // bumped per stage, for waiters inside a job
+  std::atomic<int> jobSleepers_{0};
+  std::atomic<int> progressSleepers_{0};
   std::atomic<bool> stop_{false};
-  std::atomic<Clock::rep> contendedUntil_{0};
-  std::atomic<Clock::rep> lastSign_{std::numeric_limits<Clock::rep>::min() / 2};
+
+  // Contention (the caller's alone): see Serial and Judge.
+  Clock::time_point serialUntil_{};
+  Clock::time_point windowStart_{};
+  Clock::duration stalled_{};
+  bool windowOpen_ = false;
+  bool probing_ = false;
+  int contendedMillis_ = kContendedMillis;
+
+  long long statJobs_ = 0, statSerial_ = 0, statAlone_ = 0, statWaitNs_ = 0, statLong_ = 0;
+  int statMarks_ = 0;
 
   std::mutex errorMutex_;
-  std::exception_ptr error_;             // the first exception of the current job
+  std::exception_ptr error_;  // the first exception of the current job
   std::atomic<bool> failed_{false};
 };
 
