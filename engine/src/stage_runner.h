@@ -6,7 +6,8 @@
 // the machine's core count. There are as many blocks as threads, but any thread may run any
 // block (task_system.h), so the times are kept per block index, never per thread.
 //
-// Which clock: with more threads than cores, blocks are timed with the thread's own CPU clock,
+// Which clock: with more running threads than cores (TaskSystem::ThreadCount: the default pool
+// starts no more than the cores, oneTBB's arena does), blocks are timed with the thread's own CPU clock,
 // so a worker that the OS preempts in favour of another of the pool is not charged for the
 // wait. That clock is a system call: 930 ns per read on the 2-core VMs here (steady_clock, read
 // in user space, 39 ns), and a step at 2 threads reads it about 190 times: 0.09 ms of a 1.3 ms
@@ -40,7 +41,7 @@ class StageRunner {
         minItems_(minParallelItems),
         workerMs_(tasks.WorkerCount(), 0.0),
         measure_(tasks.WorkerCount() > 1),
-        threadClock_(static_cast<unsigned>(tasks.WorkerCount()) > std::max(1u, std::thread::hardware_concurrency())),
+        threadClock_(static_cast<unsigned>(tasks.ThreadCount()) > std::max(1u, std::thread::hardware_concurrency())),
         readMs_(measure_ ? ClockReadMs() : 0.0) {}
 
   int Workers() const { return tasks_.WorkerCount(); }

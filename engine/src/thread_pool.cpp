@@ -103,6 +103,7 @@ using Clock = std::chrono::steady_clock;
 class InlineTaskSystem final : public TaskSystem {
  public:
   int WorkerCount() const override { return 1; }
+  int ThreadCount() const override { return 1; }
   void ParallelFor(int count, const RangeFn& fn) override {
     if (count > 0) fn(0, count, 0);
   }
@@ -124,6 +125,11 @@ constexpr int kMaxSpinMicros = 1000;
 constexpr int kStallSlackMicros = 50;
 constexpr int kWindowMillis = 40;
 constexpr double kStallShare = 0.2;
+// A window in which the workers ran less than this share of the chunks (at least kMinJobs
+// jobs) also makes the pool serial: the workers were not running when the jobs came (another
+// process had their cores), so waking them only cost the caller a system call per job.
+constexpr double kMinHelpShare = 0.1;
+constexpr int kMinJobs = 8;
 constexpr int kContendedMillis = 200;
 constexpr int kMaxContendedMillis = 1600;
 
@@ -197,6 +203,7 @@ class ThreadPool final : public TaskSystem {
   }
 
   int WorkerCount() const override { return workers_; }
+  int ThreadCount() const override { return static_cast<int>(threads_.size()) + 1; }
 
   void ParallelFor(int count, const RangeFn& fn) override {
     if (count <= 0) return;
@@ -265,6 +272,7 @@ class ThreadPool final : public TaskSystem {
       windowOpen_ = true;
       windowStart_ = now;
       stalled_ = {};
+      windowJobs_ = windowChunks_ = windowMine_ = 0;
     } else if (now - windowStart_ >= std::chrono::milliseconds(kWindowMillis)) {
       Judge(now);
     }
@@ -278,10 +286,12 @@ class ThreadPool final : public TaskSystem {
     const double share = std::chrono::duration<double>(stalled_).count() /
                          std::chrono::duration<double>(now - windowStart_).count();
     const bool probe = probing_;  // the first window after a serial period
+    const bool idle = windowJobs_ >= kMinJobs && windowChunks_ - windowMine_ < kMinHelpShare * windowChunks_;
     probing_ = false;
     windowStart_ = now;
     stalled_ = {};
-    if (share <= kStallShare) {
+    windowJobs_ = windowChunks_ = windowMine_ = 0;
+    if (share <= kStallShare && !idle) {
       contendedMillis_ = kContendedMillis;
       return;
     }
@@ -323,8 +333,11 @@ class ThreadPool final : public TaskSystem {
     claim_.store(Pack(tag_, first, 0, chunks_[first]), std::memory_order_seq_cst);
     jobWord_.fetch_add(1, std::memory_order_seq_cst);
     if (jobSleepers_.load(std::memory_order_seq_cst) > 0) WakeAll(jobWord_);
-    const int mine = Claim(tag_, true);
-    if (mine == TotalChunks()) ++statAlone_;
+    const int mine = Claim(tag_, true), total = TotalChunks();
+    if (mine == total) ++statAlone_;
+    ++windowJobs_;
+    windowChunks_ += total;
+    windowMine_ += mine;
     rangeFn_ = nullptr;
     stageFn_ = nullptr;
     if (error_) {
@@ -465,6 +478,7 @@ class ThreadPool final : public TaskSystem {
   Clock::duration stalled_{};
   bool windowOpen_ = false;
   bool probing_ = false;
+  long long windowJobs_ = 0, windowChunks_ = 0, windowMine_ = 0;  // this window's jobs and chunks
   int contendedMillis_ = kContendedMillis;
 
   long long statJobs_ = 0, statSerial_ = 0, statAlone_ = 0, statWaitNs_ = 0, statLong_ = 0;

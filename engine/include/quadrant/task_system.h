@@ -33,6 +33,9 @@ class TaskSystem {
   virtual ~TaskSystem() = default;
   /// Threads that run blocks, the caller included (>= 1); also the number of blocks.
   virtual int WorkerCount() const = 0;
+  /// Threads that actually run blocks, the caller included: at most WorkerCount(), fewer when a
+  /// pool starts no more threads than the process has cores.
+  virtual int ThreadCount() const { return WorkerCount(); }
   virtual void ParallelFor(int count, const RangeFn& fn) = 0;
 
   /// One stage of a ParallelStages region: `count` items, at least `grain` of them a chunk
