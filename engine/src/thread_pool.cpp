@@ -17,37 +17,60 @@
 // scheduler preempts, mid-block; and a caller spinning on its core keeps the scheduler from
 // moving the waiting worker there.
 //
-// With this pool, interleaved with the first one and with oneTBB (README) in one run, one busy
-// loop, load average 10-19 (first pool / this pool, ms per step at 1, 2, 3, 4 threads):
+// With the second pool (8b5591b), interleaved with the first one and with oneTBB (README) in one
+// run, one busy loop, load average 10-19 (first pool / second pool, ms per step at 1, 2, 3, 4 threads):
 // circles 16000 3.92 / 4.17, 234 / 4.91, 113 / 3.32, 73.0 / 2.67; pyramid 23.0 / 24.9,
 // 681 / 9.49, 445 / 42.9, 34.4 / 9.67. (Under that much foreign load the figures are noisy;
 // the busy-machine table of speedup.md is the measurement on an otherwise quiet machine.)
 //
-// What this pool does instead:
-// - Any thread takes any block. Blocks are claimed from one atomic counter (tagged with the job
-//   number, so a late worker cannot claim a block of the next job); the caller claims too. A
-//   worker that the scheduler has not run simply takes no block: the caller does its share.
-//   The block boundaries and the `worker` argument (the block index) stay what they were, so
-//   per-block outputs concatenated in block order are unchanged (determinism).
-// - Waiting adapts to contention. A spinning thread reads the clock every few pause
-//   instructions; a jump of more than kPreemptedMicros between two reads means the scheduler
-//   took its core for something else, and a caller whose wait for the other blocks outlasts
-//   twice its own blocks plus kMaxSpinMicros means a worker holding one was not running. Two
-//   such signs within kSignWindowMillis mark the pool contended for kContendedMillis: then no
-//   thread spins for long. The caller spins at most as long as its own blocks took, then waits
-//   on a futex; a worker between jobs naps kPollMicros at a time and looks for a job (so
-//   starting a job costs the caller no system call), and after kPollMillis without one waits
-//   on a futex. No spinner takes the core from the thread it waits for, and a napping thread
-//   keeps its scheduler credit for the moment it has work. On a quiet machine nothing
-//   is ever preempted and waiting is what it was: up to kMaxSpinMicros of pause spinning,
-//   because a sleeping worker takes about 100 us to wake on these VMs and a step's serial gaps
-//   are of that order (2000 circles at 2 threads: 0.65 ms per step with a 100 us spin, 0.24 ms
-//   with 1 ms; 1 thread 0.22, measured with the first pool).
-// - An exception thrown by a block is caught, the blocks not yet started are skipped, and the
-//   first exception is rethrown to the caller once every started block has finished; the pool
-//   stays usable.
-// - A ParallelFor called from inside a block runs inline on that thread, block by block (the
-//   same partition), instead of deadlocking.
+// Why the second pool (dynamic blocks, contention detection, naps) still lost, traced with the
+// pool's counters (QUADRANT_POOL_STATS=1 prints them when a pool is destroyed) at 8b5591b, base-100
+// pyramid, 2 threads, 30 + 10 steps, beside other helpers' nice -n 19 builds (load 2.9): pgs ran
+// 2844 jobs (71 per step), soft_step 3656 (91 per step: 4 sub-steps x 3 passes x ~7 colours, each
+// colour a job of 20-50 us). The caller ran every block alone in 1912 (pgs) and 3195 (soft_step)
+// of them, and the pool was "contended" for 2149 and 2875 of them after only 17 and 2 signs: a
+// niced neighbour's time slice is enough to preempt a spinner twice in 50 ms. Contended, a worker
+// napped 50 us (plus 50 us of timer slack) between jobs, so it came too late for jobs shorter than
+// that and the caller did their work plus every hand-over; pgs at 2 threads took 16.6 ms per step
+// against about 8 on 1. Where the worker did come, each colour cost a hand-over and a join.
+//
+// What this pool does:
+// - Regions of stages. ParallelStages (task_system.h) runs a list of stages as one job: every
+//   stage's chunks are claimed from one 64-bit claim word (job tag, stage, next chunk, chunk
+//   count), and the thread that finishes a stage's last chunk publishes the next stage in the
+//   same word. A thread with nothing left in the current stage spins (then sleeps) until the
+//   word moves on. The solver's colours are such a region (one per pass; pgs's 8 velocity
+//   iterations are one region), so a pass costs one hand-over instead of one per colour, and
+//   chunks of 64 constraints (ContactSolverBase::kColorGrain, at most four per thread and stage)
+//   balance the threads and leave a late thread little to wait on. A ParallelFor is a region of
+//   one stage whose chunks are the blocks of the static partition (their indices index per-block
+//   outputs, so determinism is unchanged). Any thread takes any chunk, the caller included: a
+//   worker that the scheduler has not run takes none, and no chunk waits for it.
+// - The caller runs jobs alone while the machine is busy. A preempted worker that holds a chunk
+//   stalls the stage until the scheduler runs it again, a time slice later; with one busy loop
+//   on two cores that happens every few milliseconds, and no chunk size avoids it (a claimed
+//   chunk cannot be taken back: its rows write bodies). So the caller measures, per window of
+//   kWindowMillis, how long it waited beyond twice its own chunk, and how many chunks the
+//   workers ran. A window stalled more than kStallShare, or one where the workers ran under
+//   kMinHelpShare of the chunks (descheduled: waking them only costs a system call per job),
+//   makes the pool serial for kContendedMillis: every job then runs on the caller, stage by
+//   stage, with no hand-over at all, which is the one-thread step plus a clock read per job.
+//   Then the workers are tried again; a window that fails right after a serial period doubles
+//   the next one (up to kMaxContendedMillis), so a machine that stays busy costs a failed probe
+//   of about 40 ms every 1.6 s. Which thread runs a chunk never changes the arithmetic, so the
+//   results are bit-identical whichever way a job runs.
+// - No more threads than cores: a pool asked for more threads than the process may run on
+//   (its affinity mask) starts only as many; the blocks and chunks are the same, fewer threads
+//   claim them. Threads beyond the cores could only take turns, each preempting the others
+//   mid-chunk.
+// - Waiting on a quiet machine: up to kMaxSpinMicros of pause spinning, then a futex, because
+//   a sleeping worker takes about 100 us to wake on these VMs and a step's serial gaps are of
+//   that order (2000 circles at 2 threads: 0.65 ms per step with a 100 us spin, 0.24 ms with
+//   1 ms; 1 thread 0.22, measured with the first pool).
+// - An exception thrown by a chunk is caught, the chunks not yet started (of this and every
+//   later stage) are skipped, and the first exception is rethrown to the caller once every
+//   started chunk has finished; the pool stays usable.
+// - A ParallelFor or ParallelStages called from inside a chunk runs inline on that thread.
 //
 // Why not the compiler's OpenMP or oneTBB: benchmarks/task_overhead.cpp measures the cost of
 // one parallel-for over 2 threads for this pool and for OpenMP (see the README's table); GCC's
@@ -125,10 +148,13 @@ constexpr int kMaxSpinMicros = 1000;
 constexpr int kStallSlackMicros = 50;
 constexpr int kWindowMillis = 40;
 constexpr double kStallShare = 0.2;
-// A window in which the workers ran less than this share of the chunks (at least kMinJobs
-// jobs) also makes the pool serial: the workers were not running when the jobs came (another
-// process had their cores), so waking them only cost the caller a system call per job.
-constexpr double kMinHelpShare = 0.1;
+// A window in which the workers took part in fewer than this share of the jobs (at least
+// kMinJobs of them) also makes the pool serial: the workers were not running when the jobs came
+// (another process had their cores), so waking them only cost the caller a system call per job.
+// Counted in jobs, not chunks: one job of pgs's velocity iterations has hundreds of chunks, and
+// a worker that arrived for one such job in ten (measured beside niced builds: 44 of 637 jobs)
+// outweighed the rest.
+constexpr double kMinHelpShare = 0.5;
 constexpr int kMinJobs = 8;
 constexpr int kContendedMillis = 200;
 constexpr int kMaxContendedMillis = 1600;
@@ -272,7 +298,7 @@ class ThreadPool final : public TaskSystem {
       windowOpen_ = true;
       windowStart_ = now;
       stalled_ = {};
-      windowJobs_ = windowChunks_ = windowMine_ = 0;
+      windowJobs_ = windowHelped_ = 0;
     } else if (now - windowStart_ >= std::chrono::milliseconds(kWindowMillis)) {
       Judge(now);
     }
@@ -286,11 +312,11 @@ class ThreadPool final : public TaskSystem {
     const double share = std::chrono::duration<double>(stalled_).count() /
                          std::chrono::duration<double>(now - windowStart_).count();
     const bool probe = probing_;  // the first window after a serial period
-    const bool idle = windowJobs_ >= kMinJobs && windowChunks_ - windowMine_ < kMinHelpShare * windowChunks_;
+    const bool idle = windowJobs_ >= kMinJobs && windowHelped_ < kMinHelpShare * windowJobs_;
     probing_ = false;
     windowStart_ = now;
     stalled_ = {};
-    windowJobs_ = windowChunks_ = windowMine_ = 0;
+    windowJobs_ = windowHelped_ = 0;
     if (share <= kStallShare && !idle) {
       contendedMillis_ = kContendedMillis;
       return;
@@ -336,8 +362,7 @@ class ThreadPool final : public TaskSystem {
     const int mine = Claim(tag_, true), total = TotalChunks();
     if (mine == total) ++statAlone_;
     ++windowJobs_;
-    windowChunks_ += total;
-    windowMine_ += mine;
+    windowHelped_ += mine < total;
     rangeFn_ = nullptr;
     stageFn_ = nullptr;
     if (error_) {
@@ -478,7 +503,7 @@ class ThreadPool final : public TaskSystem {
   Clock::duration stalled_{};
   bool windowOpen_ = false;
   bool probing_ = false;
-  long long windowJobs_ = 0, windowChunks_ = 0, windowMine_ = 0;  // this window's jobs and chunks
+  long long windowJobs_ = 0, windowHelped_ = 0;  // this window's jobs, those a worker took part in
   int contendedMillis_ = kContendedMillis;
 
   long long statJobs_ = 0, statSerial_ = 0, statAlone_ = 0, statWaitNs_ = 0, statLong_ = 0;
