@@ -51,7 +51,7 @@ struct ContactConstraint {
 // x >= 0 with velocities w = K x + b >= 0 and x_i w_i = 0, found by trying the four cases in
 // turn (both points active, the first alone, the second alone, neither), as Box2D 2.4's block
 // solver does. Returns false when no case fits (a numerical corner).
-inline bool SolveLcp2(Real k11, Real k12, Real k22, Real b0, Real b1, Real& x0, Real& x1) {
+[[gnu::always_inline]] inline bool SolveLcp2(Real k11, Real k12, Real k22, Real b0, Real b1, Real& x0, Real& x1) {
   const Real det = k11 * k22 - k12 * k12;
   x0 = -(k22 * b0 - k12 * b1) / det;
   x1 = -(k11 * b1 - k12 * b0) / det;

@@ -167,10 +167,19 @@ class SoftStepSolver final : public ContactSolverBase {
       groupStart_[k + 1] = groupStart_[k] + (count + kLanes - 1) / kLanes;
     }
     groups_.resize(groupStart_[kColors + 1]);
+    // One region, a stage per colour (the groups are independent; a stage tells its groups their
+    // colour): one hand-over instead of one per colour (ForEachColor).
+    stagePlan_.clear();
+    stageFirst_.clear();  // here: each stage's colour
     for (int k = 0; k <= kColors; ++k) {
-      const int begin = groupStart_[k], count = groupStart_[k + 1] - begin;
+      const int count = groupStart_[k + 1] - groupStart_[k];
       if (count == 0) continue;
-      run.For(Stage::kSolve, count, std::max(1, MinColorItems(run) / kLanes), [&](int gb, int ge, int) {
+      stagePlan_.push_back({count, kColorGrain / kLanes});
+      stageFirst_.push_back(k);
+    }
+    run.Stages(Stage::kSolve, stagePlan_, std::max(1, run.MinHeavyItems() / kLanes), [&](int stage, int gb, int ge) {
+      const int k = stageFirst_[stage], begin = groupStart_[k];
+      {
         for (int gi = begin + gb; gi < begin + ge; ++gi) {
           SoftRowGroup& g = groups_[gi];
           for (int lane = 0; lane < kLanes; ++lane) {
@@ -244,8 +253,8 @@ class SoftStepSolver final : public ContactSolverBase {
             }
           }
         }
-      });
-    }
+      }
+    });
   }
 
   static void PadPoint(SoftPointRows& p, int lane) {
