@@ -141,12 +141,14 @@ class InlineTaskSystem final : public TaskSystem {
 constexpr int kMaxSpinMicros = 1000;
 // Contention is judged by the caller's stalls: the part of each wait at a stage's end beyond
 // twice its own last chunk plus kStallSlackMicros (a worker that runs finishes its chunk within
-// about that), summed over windows of kWindowMillis of parallel running. A window with more than
-// kStallShare of it stalled makes the pool serial (the caller alone) for kContendedMillis; a
-// window that is stalled again right after such a period doubles the next one, up to
-// kMaxContendedMillis, so a machine that stays busy pays for a probe rarely.
+// about that), summed over windows of kWindowMillis of parallel running (judged from
+// kFirstJudgeMillis on, see Judge). A window with more than kStallShare of it stalled makes the
+// pool serial (the caller alone) for kContendedMillis; a window that is stalled again right
+// after such a period doubles the next one, up to kMaxContendedMillis, so a machine that stays
+// busy pays for a probe rarely.
 constexpr int kStallSlackMicros = 50;
 constexpr int kWindowMillis = 40;
+constexpr int kFirstJudgeMillis = 10;
 constexpr double kStallShare = 0.2;
 // A window in which the workers took part in fewer than this share of the jobs (at least
 // kMinJobs of them) also makes the pool serial: the workers were not running when the jobs came
@@ -299,28 +301,33 @@ class ThreadPool final : public TaskSystem {
       windowStart_ = now;
       stalled_ = {};
       windowJobs_ = windowHelped_ = 0;
-    } else if (now - windowStart_ >= std::chrono::milliseconds(kWindowMillis)) {
+    } else if (now - windowStart_ >= std::chrono::milliseconds(kFirstJudgeMillis)) {
       Judge(now);
     }
     return now < serialUntil_;
   }
 
-  // The end of a window of parallel jobs. More than kStallShare of it spent waiting for chunks
+  // The window of parallel jobs so far. More than kStallShare of it spent waiting for chunks
   // whose threads were not running means another process wants these cores: every stage end
-  // then waits a time slice for a preempted worker, and the caller alone is faster.
+  // then waits a time slice for a preempted worker, and the caller alone is faster. A busy
+  // machine is judged as soon as kFirstJudgeMillis have passed (a benchmark run of 16000
+  // circles is 70 steps of about 1.2 ms: a 40 ms window at the 2-thread busy speed would be half
+  // of it); a window is closed as clean only after kWindowMillis.
   void Judge(Clock::time_point now) {
     const double share = std::chrono::duration<double>(stalled_).count() /
                          std::chrono::duration<double>(now - windowStart_).count();
-    const bool probe = probing_;  // the first window after a serial period
     const bool idle = windowJobs_ >= kMinJobs && windowHelped_ < kMinHelpShare * windowJobs_;
-    probing_ = false;
-    windowStart_ = now;
-    stalled_ = {};
-    windowJobs_ = windowHelped_ = 0;
     if (share <= kStallShare && !idle) {
+      if (now - windowStart_ < std::chrono::milliseconds(kWindowMillis)) return;
+      probing_ = false;
+      windowStart_ = now;
+      stalled_ = {};
+      windowJobs_ = windowHelped_ = 0;
       contendedMillis_ = kContendedMillis;
       return;
     }
+    const bool probe = probing_;  // the first window after a serial period
+    probing_ = false;
     ++statMarks_;
     contendedMillis_ = probe ? std::min(2 * contendedMillis_, kMaxContendedMillis) : kContendedMillis;
     serialUntil_ = now + std::chrono::milliseconds(contendedMillis_);
