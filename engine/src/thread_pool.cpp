@@ -18,8 +18,8 @@
 // moving the waiting worker there.
 //
 // With the second pool (8b5591b), interleaved with the first one and with oneTBB (README) in one
-// run, one busy loop, load average 10-19 (first pool / second pool, ms per step at 1, 2, 3, 4 threads):
-// circles 16000 3.92 / 4.17, 234 / 4.91, 113 / 3.32, 73.0 / 2.67; pyramid 23.0 / 24.9,
+// run, one busy loop, load average 10-19 (first pool / second pool, ms per step at 1, 2, 3, 4
+// threads): circles 16000 3.92 / 4.17, 234 / 4.91, 113 / 3.32, 73.0 / 2.67; pyramid 23.0 / 24.9,
 // 681 / 9.49, 445 / 42.9, 34.4 / 9.67. (Under that much foreign load the figures are noisy;
 // the busy-machine table of speedup.md is the measurement on an otherwise quiet machine.)
 //
@@ -71,6 +71,16 @@
 //   later stage) are skipped, and the first exception is rethrown to the caller once every
 //   started chunk has finished; the pool stays usable.
 // - A ParallelFor or ParallelStages called from inside a chunk runs inline on that thread.
+//
+// Measured with this pool (bench-style runs of quadrant_bench, this pool and 8b5591b's alternated,
+// 5 rounds, medians, ms per step at 1 / 2 / 3 / 4 threads) beside one busy loop while other
+// users' niced builds also loaded the VM (load average 11-15, so 1-thread steps ran 4-5x slower
+// than on a quiet machine): circles 16000 (60 + 10 steps) 5.45 / 5.66 / 5.97 / 5.57 against
+// 5.08 / 6.21 / 3.25 / 3.34 at 8b5591b; pyramid 5050 (30 + 10 steps) 29.9 / 31.4 / 29.9 / 30.4
+// against 29.5 / 34.7 / 16.3 / 12.0. The pool ran 97 % of the pyramid's jobs serially. (8b5591b's
+// fast 3- and 4-thread cells are its threads outnumbering the busy loop and the niced builds for
+// the cores; on an otherwise quiet machine with one busy loop it measured 7.03 / 8.78 / 9.31 /
+// 8.83 on the pyramid, README.)
 //
 // Why not the compiler's OpenMP or oneTBB: benchmarks/task_overhead.cpp measures the cost of
 // one parallel-for over 2 threads for this pool and for OpenMP (see the README's table); GCC's
