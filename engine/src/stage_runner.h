@@ -7,8 +7,8 @@
 // block (task_system.h), so the times are kept per block index, never per thread.
 //
 // Which clock: with more running threads than cores (TaskSystem::ThreadCount: the default pool
-// starts no more than the cores, oneTBB's arena does), blocks are timed with the thread's own CPU clock,
-// so a worker that the OS preempts in favour of another of the pool is not charged for the
+// starts no more threads than cores, oneTBB's arena does), blocks are timed with the thread's
+// own CPU clock, so a worker that the OS preempts in favour of another of the pool is not charged for the
 // wait. That clock is a system call: 930 ns per read on the 2-core VMs here (steady_clock, read
 // in user space, 39 ns), and a step at 2 threads reads it about 190 times: 0.09 ms of a 1.3 ms
 // step of 16000 circles on the critical path. With no more threads than cores no worker waits
@@ -81,7 +81,9 @@ class StageRunner {
   /// begin, end) over each stage's items, which must be independent of each other within a
   /// stage. A region of fewer than minParallel items in all runs inline on the caller. The
   /// load-balance bound counts per stage the larger of its largest chunk and its work shared
-  /// evenly (chunks are claimed dynamically, so no thread's share is fixed in advance).
+  /// evenly (chunks are claimed dynamically, so no thread's share is fixed in advance); a region
+  /// the pool ran on the caller alone (a busy machine) comes as one chunk per stage and counts
+  /// as serial.
   template <class Fn>
   void Stages(Stage stage, const std::vector<TaskSystem::StagePlan>& plan, int minParallel, Fn&& fn) {
     long long total = 0;
