@@ -81,9 +81,8 @@ class StageRunner {
   /// begin, end) over each stage's items, which must be independent of each other within a
   /// stage. A region of fewer than minParallel items in all runs inline on the caller. The
   /// load-balance bound counts per stage the larger of its largest chunk and its work shared
-  /// evenly (chunks are claimed dynamically, so no thread's share is fixed in advance); a region
-  /// the pool ran on the caller alone (a busy machine) comes as one chunk per stage and counts
-  /// as serial.
+  /// evenly (chunks are claimed dynamically, so no thread's share is fixed in advance). A pool
+  /// that runs a region on the caller alone (a busy machine) still calls it chunk by chunk.
   template <class Fn>
   void Stages(Stage stage, const std::vector<TaskSystem::StagePlan>& plan, int minParallel, Fn&& fn) {
     long long total = 0;
@@ -111,7 +110,7 @@ class StageRunner {
     tasks_.ParallelStages(stages, plan.data(), [&](int s, int b, int e, int chunk) {
       const double t0 = NowMs();
       fn(s, b, e);
-      // A pool that runs the region on the caller alone calls each stage as one chunk.
+      // (A task system that calls a whole stage at once passes chunk 0.)
       chunkMs_[chunkOffset_[s] + std::min(chunk, chunkOffset_[s + 1] - chunkOffset_[s] - 1)] += Elapsed(t0);
     });
     double work = 0, critical = 0;

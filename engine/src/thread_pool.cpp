@@ -54,7 +54,8 @@
 //   workers ran. A window stalled more than kStallShare, or one where the workers ran under
 //   kMinHelpShare of the chunks (descheduled: waking them only costs a system call per job),
 //   makes the pool serial for kContendedMillis: every job then runs on the caller, stage by
-//   stage, with no hand-over at all, which is the one-thread step plus a clock read per job.
+//   stage and chunk by chunk (so StageRunner's load-balance bound still describes the
+//   partition), with no hand-over at all: the one-thread step plus a clock read per job.
 //   Then the workers are tried again; a window that fails right after a serial period doubles
 //   the next one (up to kMaxContendedMillis), so a machine that stays busy costs a failed probe
 //   of about 40 ms every 1.6 s. Which thread runs a chunk never changes the arithmetic, so the
@@ -72,15 +73,15 @@
 //   started chunk has finished; the pool stays usable.
 // - A ParallelFor or ParallelStages called from inside a chunk runs inline on that thread.
 //
-// Measured with this pool (bench-style runs of quadrant_bench, this pool and 8b5591b's alternated,
-// 5 rounds, medians, ms per step at 1 / 2 / 3 / 4 threads) beside one busy loop while other
-// users' niced builds also loaded the VM (load average 11-15, so 1-thread steps ran 4-5x slower
-// than on a quiet machine): circles 16000 (60 + 10 steps) 5.45 / 5.66 / 5.97 / 5.57 against
-// 5.08 / 6.21 / 3.25 / 3.34 at 8b5591b; pyramid 5050 (30 + 10 steps) 29.9 / 31.4 / 29.9 / 30.4
-// against 29.5 / 34.7 / 16.3 / 12.0. The pool ran 97 % of the pyramid's jobs serially. (8b5591b's
-// fast 3- and 4-thread cells are its threads outnumbering the busy loop and the niced builds for
-// the cores; on an otherwise quiet machine with one busy loop it measured 7.03 / 8.78 / 9.31 /
-// 8.83 on the pyramid, README.)
+// Measured with this pool (quadrant_bench runs, this pool and 8b5591b's alternated, 5 rounds,
+// medians, ms per step at 1 / 2 / 3 / 4 threads) beside one busy loop while other users' niced
+// builds also loaded the VM (load average 11-15, so 1-thread steps ran 4-5x slower than on a
+// quiet machine): circles 16000 (60 + 10 steps) 5.45 / 5.66 / 5.97 / 5.57 against 5.08 / 6.21 /
+// 3.25 / 3.34 at 8b5591b; pyramid 5050 (30 + 10 steps) 29.9 / 31.4 / 29.9 / 30.4 against 29.5 /
+// 34.7 / 16.3 / 12.0. The pool ran 95-98 % of the pyramid's jobs serially (four runs).
+// (8b5591b's fast 3- and 4-thread cells are its threads outnumbering the busy loop and the niced
+// builds for the cores; on an otherwise quiet machine with one busy loop it measured 7.03 / 8.78
+// / 9.31 / 8.83 on the pyramid, README.)
 //
 // Why not the compiler's OpenMP or oneTBB: benchmarks/task_overhead.cpp measures the cost of
 // one parallel-for over 2 threads for this pool and for OpenMP (see the README's table); GCC's
@@ -273,9 +274,15 @@ class ThreadPool final : public TaskSystem {
   void ParallelStages(int stages, const StagePlan* plan, const StageFn& fn) override {
     if (threads_.empty() || tRunning == this || Serial()) {
       const TaskSystem* outer = std::exchange(tRunning, this);
+      // Chunk by chunk, as the threads would run them, so that StageRunner's load-balance bound
+      // describes the partition whichever way the region ran.
       try {
         for (int s = 0; s < stages; ++s) {
-          if (plan[s].count > 0) fn(s, 0, plan[s].count, 0);
+          const int count = plan[s].count, chunks = StageChunks(count, plan[s].grain, workers_);
+          for (int c = 0; c < chunks; ++c) {
+            const int begin = BlockBegin(count, chunks, c), end = BlockBegin(count, chunks, c + 1);
+            if (begin < end) fn(s, begin, end, c);
+          }
         }
       } catch (...) {
         tRunning = outer;
