@@ -97,6 +97,7 @@
 #include <exception>
 #include <limits>
 #include <mutex>
+#include <stdexcept>
 #include <thread>
 #include <utility>
 #include <vector>
@@ -151,8 +152,8 @@ class InlineTaskSystem final : public TaskSystem {
 // Longest spin on a quiet machine (see the head comment for the measurement behind 1 ms).
 constexpr int kMaxSpinMicros = 1000;
 // Contention is judged by the caller's stalls: the part of each wait at a stage's end beyond
-// twice its own last chunk plus kStallSlackMicros (a worker that runs finishes its chunk within
-// about that), summed over windows of kWindowMillis of parallel running (judged from
+// twice its longest chunk of the job plus kStallSlackMicros (a worker that runs finishes its
+// chunk within about that), summed over windows of kWindowMillis of parallel running (judged from
 // kFirstJudgeMillis on, see Judge). A window with more than kStallShare of it stalled makes the
 // pool serial (the caller alone) for kContendedMillis; a window that is stalled again right
 // after such a period doubles the next one, up to kMaxContendedMillis, so a machine that stays
@@ -214,6 +215,7 @@ thread_local const TaskSystem* tRunning = nullptr;
 // thread reads the job's other fields only after a successful claim, when the job cannot end
 // before the chunk it holds does.
 constexpr uint32_t kDoneStage = 0xFFFF;
+constexpr int kMaxThreads = 0xFFFF / 4;
 constexpr int kMaxStagesPerJob = 0xFFFE;
 constexpr uint64_t Pack(uint32_t tag, uint32_t stage, uint32_t next, uint32_t chunks) {
   return uint64_t(tag & 0xFFFF) << 48 | uint64_t(stage & 0xFFFF) << 32 | uint64_t(next & 0xFFFF) << 16 | (chunks & 0xFFFF);
@@ -226,6 +228,8 @@ constexpr uint32_t ChunksOf(uint64_t w) { return uint32_t(w) & 0xFFFF; }
 class ThreadPool final : public TaskSystem {
  public:
   explicit ThreadPool(int threads) : workers_(threads) {
+    // The claim word holds a stage's chunk count (up to 4 per thread) in 16 bits.
+    if (threads > kMaxThreads) throw std::invalid_argument("MakeThreadPool: at most 16383 threads");
     // More threads than cores would only take turns on them: the extra ones are not started
     // (every block still exists and is run by the threads that are).
     const int running = std::min(threads, UsableCores());

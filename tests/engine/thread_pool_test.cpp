@@ -69,6 +69,15 @@ TEST(ThreadPoolTest, EveryIndexRunsOnceInTheStaticBlocks) {
   }
 }
 
+TEST(ThreadPoolTest, TooManyThreadsIsAClearError) {
+  try {
+    MakeThreadPool(20000);
+    ADD_FAILURE() << "no exception";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(), "MakeThreadPool: at most 16383 threads");
+  }
+}
+
 TEST(ThreadPoolTest, ZeroAndNegativeCountsCallNothing) {
   for (int threads : {1, 2, 4}) {
     auto tasks = MakeThreadPool(threads);

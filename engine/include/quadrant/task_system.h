@@ -50,11 +50,12 @@ class TaskSystem {
   virtual void ParallelStages(int stages, const StagePlan* plan, const StageFn& fn);
 };
 
-/// A pool of threadCount - 1 worker threads plus the caller, which claim blocks from a shared
-/// counter. On a quiet machine waiting threads spin up to 1 ms, so back-to-back stages start
-/// within microseconds; once a spinner is seen to be descheduled (another process wants the
-/// cores) they wait on a futex instead, so the pool never takes a core from the thread it waits
-/// for. threadCount 1 runs everything inline with no threading at all.
+/// A pool of threadCount blocks run by the caller and up to threadCount - 1 worker threads (no
+/// more threads than the process has cores), which claim blocks and chunks from a shared word.
+/// On a quiet machine waiting threads spin up to 1 ms, then sleep on a futex. When the caller
+/// finds itself waiting on preempted workers (another process wants the cores), it runs the
+/// jobs alone for a while (thread_pool.cpp). threadCount 1 runs everything inline with no
+/// threading at all; more than 16383 throws std::invalid_argument.
 std::unique_ptr<TaskSystem> MakeThreadPool(int threadCount);
 
 /// The chunks ParallelStages cuts a stage of `count` items into: one per `grain` items (at
