@@ -333,16 +333,21 @@ class ThreadPool final : public TaskSystem {
 
   // The window of parallel jobs so far. More than kStallShare of it spent waiting for chunks
   // whose threads were not running means another process wants these cores: every stage end
-  // then waits a time slice for a preempted worker, and the caller alone is faster. A busy
-  // machine is judged as soon as kFirstJudgeMillis have passed (a benchmark run of 16000
-  // circles is 70 steps of about 1.2 ms: a 40 ms window at the 2-thread busy speed would be half
-  // of it); a window is closed as clean only after kWindowMillis.
+  // then waits a time slice for a preempted worker, and the caller alone is faster. Stalls are
+  // judged as soon as kFirstJudgeMillis have passed (a benchmark run of 16000 circles is 70
+  // steps of about 1.2 ms: a 40 ms window at the 2-thread busy speed would be half of it); idle
+  // workers, and a clean window, only after kWindowMillis.
   void Judge(Clock::time_point now) {
     const double share = std::chrono::duration<double>(stalled_).count() /
                          std::chrono::duration<double>(now - windowStart_).count();
-    const bool idle = windowJobs_ >= kMinJobs && windowHelped_ < kMinHelpShare * windowJobs_;
+    const bool full = now - windowStart_ >= std::chrono::milliseconds(kWindowMillis);
+    // Idle workers are judged on full windows only: a worker woken at a run's start can be late
+    // for a few milliseconds behind a niced neighbour's time slice (seen: 53 of the first 105
+    // jobs of a 16000-circle run on an otherwise quiet machine, which then ran serially), and
+    // idle workers cost the caller little (a spinning worker needs no wake-up).
+    const bool idle = full && windowJobs_ >= kMinJobs && windowHelped_ < kMinHelpShare * windowJobs_;
     if (share <= kStallShare && !idle) {
-      if (now - windowStart_ < std::chrono::milliseconds(kWindowMillis)) return;
+      if (!full) return;
       probing_ = false;
       windowStart_ = now;
       stalled_ = {};
