@@ -334,12 +334,16 @@ class ThreadPool final : public TaskSystem {
   // The window of parallel jobs so far. More than kStallShare of it spent waiting for chunks
   // whose threads were not running means another process wants these cores: every stage end
   // then waits a time slice for a preempted worker, and the caller alone is faster. Stalls are
-  // judged as soon as kFirstJudgeMillis have passed (a benchmark run of 16000 circles is 70
-  // steps of about 1.2 ms: a 40 ms window at the 2-thread busy speed would be half of it); idle
-  // workers, and a clean window, only after kWindowMillis.
+  // judged from kFirstJudgeMillis on, as soon as they exceed kStallShare of a whole window (a
+  // benchmark run of 16000 circles is 70 steps of about 1.2 ms: waiting for the end of a 40 ms
+  // window at the 2-thread busy speed would be half of it); idle workers, and a clean window,
+  // only after kWindowMillis.
   void Judge(Clock::time_point now) {
-    const double share = std::chrono::duration<double>(stalled_).count() /
-                         std::chrono::duration<double>(now - windowStart_).count();
+    // Over at least a whole window: a lone preemption of 2-3 ms in the first 10 ms of a run on an
+    // otherwise quiet machine (another process's burst) must not make the run serial.
+    const double share =
+        std::chrono::duration<double>(stalled_).count() /
+        std::chrono::duration<double>(std::max<Clock::duration>(now - windowStart_, std::chrono::milliseconds(kWindowMillis))).count();
     const bool full = now - windowStart_ >= std::chrono::milliseconds(kWindowMillis);
     // Idle workers are judged on full windows only: a worker woken at a run's start can be late
     // for a few milliseconds behind a niced neighbour's time slice (seen: 53 of the first 105
