@@ -83,6 +83,13 @@
 // builds for the cores; on an otherwise quiet machine with one busy loop it measured 7.03 / 8.78
 // / 9.31 / 8.83 on the pyramid, README.)
 //
+// Quiet (no niced process running, checked from /proc/stat around each run), 8b5591b / this pool,
+// medians of 5-8 alternated runs, 60 + 10 steps, ms per step at 1, 2, 3, 4 threads: pyramid 5050
+// pgs 7.5 / 6.97, 4.90 / 4.44, 6.37 / 4.46, 7.12 / 4.16; soft_step 4.06 / 3.76, 2.79 / 2.78,
+// 4.09 / 2.74, 3.99 / 2.81; circles 16000 1.25 / 1.21, 0.845 / 0.811, 1.21 / 0.952, 1.39 / 0.822;
+// polygons 16000 2.52 / 2.87, 1.54 / 1.62, 2.17 / 1.81, 2.18 / 1.65. The pyramid ran 71 jobs per
+// step at 8b5591b (pgs) and 26 now; soft_step 91 and 45.
+//
 // Why not the compiler's OpenMP or oneTBB: benchmarks/task_overhead.cpp measures the cost of
 // one parallel-for over 2 threads for this pool and for OpenMP (see the README's table); GCC's
 // libgomp is not instrumented for ThreadSanitizer, so the tsan preset would report its internal
