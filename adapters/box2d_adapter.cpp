@@ -56,7 +56,7 @@ class Box2dAdapter final : public Adapter {
     caps.notes =
         "Box2D 2.4.1 (Debian), single-threaded. Friction mixing sqrt(f1*f2), restitution "
         "mixing max(e1, e2); restitution threshold set per fixture from the scene (default "
-        "1 m/s). Velocity/position iterations from the scene (defaults 8/3); scene sub-steps "
+        "1 m/s). Velocity/position iterations from the scene (defaults 8/3); scene pipeline repeats "
         "are ignored (one b2World::Step per step). Continuous physics (dynamic vs static TOI) "
         "follows the scene's continuous effect (Box2D's own default is on). Warm starting "
         "follows the scene. Polygons carry Box2D's 0.01 m skin (b2_polygonRadius), so they "

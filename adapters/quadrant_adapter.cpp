@@ -40,42 +40,22 @@ class QuadrantAdapter final : public Adapter {
     auto world = std::make_unique<World>(v_.MakeWorldDef(scene, threads));
     std::vector<BodyId> ids;
     ids.reserve(scene.bodies.size());
-    for (const BodyDesc& b : scene.bodies) {
-      BodyDef bd;
-      bd.type = b.dynamic ? BodyType::kDynamic : b.kinematic ? BodyType::kKinematic : BodyType::kStatic;
-      bd.position = b.position;
-      bd.angle = b.angle;
-      bd.linearVelocity = b.velocity;
-      bd.angularVelocity = b.angularVelocity;
-      bd.linearDamping = b.linearDamping;  // the engine applies them only with effects.damping
-      bd.angularDamping = b.angularDamping;
-      bd.shape = b.shape == ShapeKind::kCircle ? ShapeDef::MakeCircle(b.radius) : ShapeDef::FromPolygon(MakePolygon(b.vertices));
-      bd.shape.density = b.density;
-      bd.shape.friction = b.friction;
-      bd.shape.restitution = b.restitution;
+    for (size_t i = 0; i < scene.bodies.size(); ++i) {
+      BodyDef bd = ToBodyDef(scene.bodies[i]);
+      bd.userData = i;  // the scene index, for Contacts()
       ids.push_back(world->CreateBody(bd));
     }
     world_ = std::move(world);
     ids_ = std::move(ids);
     scene_ = &scene;
     dt_ = scene.timeStep;
-    subSteps_ = scene.subSteps;
+    pipelineRepeats_ = scene.pipelineRepeats;
     totals_ = Profile{};
   }
 
   void DoStep() override {
-    world_->Step(dt_, subSteps_);
-    const Profile& p = world_->GetProfile();
-    totals_.broadPhase += p.broadPhase;
-    totals_.narrowPhase += p.narrowPhase;
-    totals_.persistence += p.persistence;
-    totals_.solve += p.solve;
-    totals_.integrate += p.integrate;
-    totals_.total += p.total;
-    for (size_t k = 0; k < kStageCount; ++k) {
-      totals_.balance[k].workMs += p.balance[k].workMs;
-      totals_.balance[k].criticalMs += p.balance[k].criticalMs;
-    }
+    world_->StepRepeated(dt_, pipelineRepeats_);
+    totals_ += world_->GetProfile();
   }
 
   std::vector<std::pair<std::string, double>> StageTotals() const override {
@@ -107,17 +87,8 @@ class QuadrantAdapter final : public Adapter {
   std::vector<ContactReadback> Contacts() const override {
     std::vector<ContactReadback> out;
     if (!world_) return out;
-    // Slot index -> scene index, once per call: the lookup was a scan of every id per contact
-    // end (O(contacts x N)); slot indices are below the number of slots ever used.
-    uint32_t slots = 0;
-    for (BodyId id : ids_) slots = std::max(slots, id.index + 1);
-    std::vector<int> bySlot(slots, -1);
-    for (size_t i = 0; i < ids_.size(); ++i) bySlot[ids_[i].index] = static_cast<int>(i);
-    auto sceneIndex = [&](BodyId id) {
-      if (id.index >= slots) return -1;
-      const int i = bySlot[id.index];
-      return i >= 0 && ids_[size_t(i)] == id ? i : -1;  // the generation must match too
-    };
+    // Each body carries its scene index as user data (DoLoad).
+    auto sceneIndex = [&](BodyId id) { return static_cast<int>(world_->GetUserData(id)); };
     for (const ContactInfo& c : world_->GetContacts()) {
       ContactReadback r;
       r.bodyA = sceneIndex(c.bodyA);
@@ -153,7 +124,7 @@ class QuadrantAdapter final : public Adapter {
   std::vector<BodyId> ids_;
   const Scene* scene_ = nullptr;
   Real dt_ = Real(1.0 / 60.0);
-  int subSteps_ = 1;
+  int pipelineRepeats_ = 1;
   Profile totals_;
 };
 

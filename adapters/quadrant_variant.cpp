@@ -4,8 +4,11 @@
 // broad phase "quadtree" or "grid", parallel scheme "deterministic" or "quadrants", "b2rest" for
 // Box2D 2.4.1's restitution (RestitutionPolicy::kBox2d, pgs only), "b2skin" for its 0.01 m polygon
 // skin (WorldDef::polygonSkin), "coupled" for the thesis solver's coupled impulse
-// (WorldDef::thesisCoupledImpulse). The default is pgs with the uniform grid and the deterministic
-// scheme, the combination the suite measured fastest on the stress scenes (see README).
+// (WorldDef::thesisCoupledImpulse), "b3soft" for soft_step with Box2D 3's settings (one relax
+// pass, no mass-ratio limit, damping ratio 10). The default is the engine's own (WorldDef:
+// soft_step with two relax passes and a mass-ratio limit of 10) with the uniform grid and the
+// deterministic scheme.
+// relax<N> and ratio<N> override the engine's defaults; "pgs" alone is Box2D 2.4's solver.
 //
 // Solver budget for soft_step: a scene states the budget a case needs as pgs velocity
 // iterations (Box2D 2.4's default 8; 16 or 32 in the hard cases that need more). Box2D 3 spends
@@ -61,6 +64,10 @@ QuadrantVariant QuadrantVariant::Parse(std::string_view variant) {
       // soft_step's WorldDef::softRelaxIterations.
     } else if (token.size() > 5 && token.starts_with("ratio") && ParseCount(token.substr(5), &v.massRatioLimit)) {
       // soft_step's WorldDef::softMassRatioLimit (issue #13 item 3: a heavy body on a light one).
+    } else if (token == "b3soft") {
+      // soft_step as Box2D 3 sets it (one relax pass, no mass-ratio limit, damping ratio 10): the
+      // engine's soft_step before issue #13 changed its defaults.
+      v.box2d3Soft = true;
     } else if (token == "b2rest") {
       v.restitution = RestitutionPolicy::kBox2d;
     } else if (token == "coupled") {
@@ -78,7 +85,7 @@ QuadrantVariant QuadrantVariant::Parse(std::string_view variant) {
     } else {
       throw Error("unknown quadrant variant '" + std::string(token) +
                   "' (known: thesis, pgs, soft_step, quadtree, grid, deterministic, quadrants, sub<N>, it<N>, pos<N>, "
-                  "relax<N>, ratio<N>, b2rest, b2skin, coupled)");
+                  "relax<N>, ratio<N>, b3soft, b2rest, b2skin, coupled)");
     }
     if (end == std::string_view::npos) break;
     start = end + 1;
@@ -103,7 +110,12 @@ WorldDef QuadrantVariant::MakeWorldDef(const Scene& scene, int threads) const {
   def.restitution = restitution;
   def.polygonSkin = polygonSkin;
   def.thesisCoupledImpulse = thesisCoupled;
-  def.softMassRatioLimit = Real(massRatioLimit);
+  if (box2d3Soft) {
+    def.softRelaxIterations = 1;
+    def.softMassRatioLimit = 0;
+    def.contactDampingRatio = 10;
+  }
+  if (massRatioLimit > 0) def.softMassRatioLimit = Real(massRatioLimit);
   if (relaxIterations > 0) def.softRelaxIterations = relaxIterations;
   def.threadCount = threads;
   def.scheme = scheme;

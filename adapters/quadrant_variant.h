@@ -11,7 +11,7 @@
 namespace quadrant::scene {
 
 struct QuadrantVariant {
-  SolverType solver = SolverType::kPgs;
+  SolverType solver = WorldDef{}.solver;  ///< the engine's default unless a token names one
   BroadPhaseType broadPhase = BroadPhaseType::kUniformGrid;
   ParallelScheme scheme = ParallelScheme::kDeterministic;
   int softSubSteps = 0;        ///< sub<N>; 0: derived from the budget (soft_step) or the engine's
@@ -20,11 +20,12 @@ struct QuadrantVariant {
   RestitutionPolicy restitution = RestitutionPolicy::kCollisions;  ///< b2rest: kBox2d (pgs only)
   Real polygonSkin = 0;        ///< b2skin: Box2D 2.4.1's 0.01 m polygon radius
   bool thesisCoupled = false;  ///< coupled: the thesis solver's coupled impulse
-  int massRatioLimit = 0;      ///< ratio<N>: soft_step's WorldDef::softMassRatioLimit; 0: off
+  int massRatioLimit = 0;      ///< ratio<N>: soft_step's WorldDef::softMassRatioLimit; 0: the engine's
   int relaxIterations = 0;     ///< relax<N>: soft_step's WorldDef::softRelaxIterations; 0: the engine's
+  bool box2d3Soft = false;     ///< b3soft: soft_step with Box2D 3's settings (relax 1, no ratio limit, damping 10)
 
   /// Tokens joined by '+' ("" is the default): thesis, pgs, soft_step, quadtree, grid,
-  /// deterministic, quadrants, sub<N>, it<N>, pos<N>, relax<N>, ratio<N> (N in [1, 1000]), b2rest,
+  /// deterministic, quadrants, sub<N>, it<N>, pos<N>, relax<N>, ratio<N> (N in [1, 1000]), b3soft, b2rest,
   /// b2skin, coupled.
   /// Throws quadrant::Error naming an unknown token and the known ones.
   static QuadrantVariant Parse(std::string_view variant);

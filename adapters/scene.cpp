@@ -1,7 +1,7 @@
 // Scene validation and mass properties, shared by every adapter.
 #include "scene.h"
 
-#include <limits>
+#include <algorithm>
 #include <string>
 
 #include "quadrant/error.h"
@@ -63,6 +63,32 @@ BodyDesc MakeBoxBody(Vec2 position, Real hx, Real hy, bool dynamic) {
   return b;
 }
 
+BodyDef ToBodyDef(const BodyDesc& b) {
+  BodyDef bd;
+  bd.type = b.dynamic ? BodyType::kDynamic : b.kinematic ? BodyType::kKinematic : BodyType::kStatic;
+  bd.position = b.position;
+  bd.angle = b.angle;
+  bd.linearVelocity = b.velocity;
+  bd.angularVelocity = b.angularVelocity;
+  bd.linearDamping = b.linearDamping;  // the engine applies them only with effects.damping
+  bd.angularDamping = b.angularDamping;
+  if (b.shape == ShapeKind::kCircle) {
+    bd.shape.type = ShapeType::kCircle;
+    bd.shape.circle = Circle{{0, 0}, b.radius};
+  } else {
+    if (b.vertices.size() > size_t(kMaxPolygonVertices)) {
+      throw Error("a polygon has at most 8 vertices, got " + std::to_string(b.vertices.size()));
+    }
+    bd.shape.type = ShapeType::kPolygon;
+    std::copy(b.vertices.begin(), b.vertices.end(), bd.shape.polygon.vertices.begin());
+    bd.shape.polygon.count = static_cast<int>(b.vertices.size());
+  }
+  bd.shape.density = b.density;
+  bd.shape.friction = b.friction;
+  bd.shape.restitution = b.restitution;
+  return bd;
+}
+
 MassProperties ComputeMassProperties(const BodyDesc& body) {
   MassData md = body.shape == ShapeKind::kCircle
                     ? ComputeMass(Circle{{0, 0}, body.radius}, body.density)
@@ -76,8 +102,8 @@ void ValidateScene(const Scene& scene) {
   RequireFinite(IsFinite(scene.restitutionThreshold), "restitution threshold");
   if (scene.timeStep <= 0) throw Error("scene time step must be > 0");
   if (scene.timeStep > kMaxTimeStep) throw Error("scene time step must be <= 1 s");
-  if (scene.subSteps < 1) throw Error("scene sub-steps must be >= 1");
-  if (scene.subSteps > kMaxIterations) throw Error("scene sub-steps must be <= 1000");
+  if (scene.pipelineRepeats < 1) throw Error("scene pipelineRepeats must be >= 1");
+  if (scene.pipelineRepeats > kMaxIterations) throw Error("scene pipelineRepeats must be <= 1000");
   if (scene.velocityIterations > kMaxIterations) throw Error("scene velocity iterations must be <= 1000");
   if (scene.positionIterations > kMaxIterations) throw Error("scene position iterations must be <= 1000");
   if (scene.velocityIterations < 1) throw Error("scene velocity iterations must be >= 1");
@@ -85,41 +111,21 @@ void ValidateScene(const Scene& scene) {
   if (scene.restitutionThreshold < 0) throw Error("scene restitution threshold must be >= 0");
   for (int i = 0; i < static_cast<int>(scene.bodies.size()); ++i) {
     const BodyDesc& b = scene.bodies[i];
-    if (!IsFinite(b.position) || !IsFinite(b.angle)) Fail(i, "position or angle is not finite");
-    if (!IsFinite(b.velocity) || !IsFinite(b.angularVelocity)) Fail(i, "velocity is not finite");
-    if (std::abs(b.position.x) > kMaxCoordinate || std::abs(b.position.y) > kMaxCoordinate) {
-      Fail(i, "position is beyond the coordinate limit of 1e6 m");
-    }
-    if (!IsFinite(b.density) || (b.dynamic && b.density <= 0)) Fail(i, "density must be > 0");
     if (b.dynamic && b.kinematic) Fail(i, "a body is either dynamic or kinematic, not both");
-    if (!IsFinite(b.friction) || b.friction < 0) Fail(i, "friction must be >= 0");
-    if (!IsFinite(b.linearDamping) || b.linearDamping < 0 || !IsFinite(b.angularDamping) || b.angularDamping < 0) {
-      Fail(i, "damping must be finite and >= 0");
-    }
-    if (!IsFinite(b.restitution) || b.restitution < 0 || b.restitution > 1) {
-      Fail(i, "restitution must be in [0, 1]");
-    }
-    if (std::abs(b.velocity.x) > kMaxInputSpeed || std::abs(b.velocity.y) > kMaxInputSpeed ||
-        std::abs(b.angularVelocity) > kMaxInputSpeed) {
-      Fail(i, "velocity is beyond the limit of 1e6 m/s (rad/s)");
-    }
-    if (b.shape == ShapeKind::kCircle) {
+    if (b.shape == ShapeKind::kPolygon && (b.vertices.size() < 3 || b.vertices.size() > size_t(kMaxPolygonVertices))) {
+      // MakePolygon's own messages for both (ToBodyDef cannot hold more than 8).
       try {
-        ValidateCircle(Circle{{0, 0}, b.radius});
+        (void)MakePolygon(b.vertices);
       } catch (const Error& e) {
         Fail(i, e.what());
       }
-    } else {
-      ValidatePolygonOrder(b, i);
     }
-    if (b.dynamic) {
-      const MassProperties mp = ComputeMassProperties(b);
-      constexpr Real kSmallest = std::numeric_limits<Real>::min();  // subnormals count as underflow
-      if (!IsFinite(mp.mass) || mp.mass < kSmallest || !IsFinite(mp.inertia) || mp.inertia < kSmallest ||
-          !IsFinite(Real(1) / mp.mass) || !IsFinite(Real(1) / mp.inertia)) {
-        Fail(i, "mass or rotational inertia is not a positive finite number (density too large or too small)");
-      }
+    try {
+      CheckBodyDef(ToBodyDef(b));
+    } catch (const Error& e) {
+      Fail(i, e.what());
     }
+    if (b.shape == ShapeKind::kPolygon) ValidatePolygonOrder(b, i);
   }
 }
 

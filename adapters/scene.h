@@ -65,7 +65,7 @@ struct Scene {
   std::string name;
   Vec2 gravity{0, Real(-10)};
   Real timeStep = Real(1.0 / 60.0);   ///< s, fixed
-  int subSteps = 1;                   ///< Quadrant sub-steps per step
+  int pipelineRepeats = 1;            ///< Quadrant: whole-pipeline repeats per step (World::StepRepeated)
   int velocityIterations = 8;         ///< Box2D 2.4 and Quadrant pgs
   int positionIterations = 3;
   Real restitutionThreshold = Real(1);///< m/s; approach speeds below it do not bounce
@@ -91,9 +91,18 @@ struct MassProperties {
 };
 MassProperties ComputeMassProperties(const BodyDesc& body);
 
-/// Validates a whole scene (finite numbers, positive sizes and densities, convex CCW polygons
-/// of 3..8 vertices, time step > 0, iterations >= 1); throws quadrant::Error naming the
-/// first bad body or field.
+/// The engine's definition of a scene body (the Quadrant adapter loads these; other adapters
+/// translate the BodyDesc themselves). Polygons are copied vertex for vertex, not validated:
+/// CheckBodyDef and CreateBody do that. Throws quadrant::Error for more than 8 vertices, which a
+/// Polygon cannot hold.
+BodyDef ToBodyDef(const BodyDesc& body);
+
+/// Validates a whole scene; throws quadrant::Error naming the first bad body or field. The
+/// world settings are checked here (time step > 0, iterations >= 1, ...); each body is checked
+/// by the engine's own rules (quadrant::CheckBodyDef on ToBodyDef, so the scene API and the
+/// engine refuse the same bodies, message prefixed with "scene body <i>: "), plus what only a
+/// scene can get wrong: dynamic and kinematic both set, polygon vertices not in
+/// counter-clockwise convex order (the engine re-orders them; other engines need the order).
 void ValidateScene(const Scene& scene);
 
 }  // namespace quadrant::scene

@@ -15,6 +15,8 @@
 //   quadrant_icount --scene NAME --count N --steps S [--seed X]
 //       prints one line "key=<key> scene=<name> source=<registry|builtin> bodies=<n> steps=<s>
 //       hash=<16 hex digits>"; <key> (e.g. circle_stress_1000_60) names the count in icount.json
+//       --engine quadrant:VARIANT steps a Quadrant variant instead of the default engine (to compare
+//       solvers by hand; tools/icount.py always counts the default "quadrant")
 //   quadrant_icount --info
 //       prints the build: compiler=..., build_type=..., cxx_flags=..., extra_work=0|1
 //
@@ -126,6 +128,7 @@ struct Args {
   int steps = 0;
   uint64_t seed = 42;
   bool info = false;
+  std::string engine = "quadrant";
 };
 
 long long ParseInt(const char* flag, const char* text, long long lo, long long hi) {
@@ -152,6 +155,7 @@ Args ParseArgs(int argc, char** argv) {
     else if (std::strcmp(arg, "--count") == 0) a.count = int(ParseInt(arg, value, 1, 1000000));
     else if (std::strcmp(arg, "--steps") == 0) a.steps = int(ParseInt(arg, value, 1, 1000000));
     else if (std::strcmp(arg, "--seed") == 0) a.seed = uint64_t(ParseInt(arg, value, 0, INT64_MAX));
+    else if (std::strcmp(arg, "--engine") == 0) a.engine = value;
     else throw quadrant::Error(std::string("unknown argument '") + arg + "'");
   }
   if (!a.info && (a.scene.empty() || a.count == 0 || a.steps == 0))
@@ -178,7 +182,7 @@ int main(int argc, char** argv) {
   } catch (const std::exception& e) {
     std::fprintf(stderr,
                  "quadrant_icount: %s\nusage: quadrant_icount --scene NAME --count N --steps S "
-                 "[--seed X] | --info\n",
+                 "[--seed X] [--engine quadrant:VARIANT] | --info\n",
                  e.what());
     return 2;
   }
@@ -190,7 +194,7 @@ int main(int argc, char** argv) {
   try {
     // Not counted: building the scene, the adapter and the world.
     Made made = MakeIcountScene(args.scene, args.count, args.seed);
-    std::unique_ptr<qs::Adapter> adapter = qs::MakeAdapter("quadrant");
+    std::unique_ptr<qs::Adapter> adapter = qs::MakeAdapter(args.engine);
     adapter->Load(made.scene, 1);
 #if QUADRANT_ICOUNT_INJECT_EXTRA_WORK
     std::vector<qs::BodyState> states;

@@ -416,13 +416,13 @@ std::string DescribeScene(const qs::Scene& scene) {
   return fmt::format(
       "dt {:.6g} s; {} dynamic bodies ({} circles, {} polygons) and {} static; box {:.4g} x "
       "{:.4g} m; area fraction {}; restitution {}; friction {}; gravity ({:g}, {:g}); "
-      "restitution threshold {:g} m/s; velocity/position iterations {}/{}; substeps {}; "
+      "restitution threshold {:g} m/s; velocity/position iterations {}/{}; pipeline repeats {}; "
       "effects {}",
       double(scene.timeStep), dynamic, circles, polygons, int(scene.bodies.size()) - dynamic, w,
       h, boxArea > 0 ? fmt::format("{:.3f}", bodyArea / boxArea) : std::string("n/a"),
       range(eMin, eMax), range(fMin, fMax), double(scene.gravity.x), double(scene.gravity.y),
       double(scene.restitutionThreshold), scene.velocityIterations, scene.positionIterations,
-      scene.subSteps, effects.empty() ? std::string("none") : effects);
+      scene.pipelineRepeats, effects.empty() ? std::string("none") : effects);
 }
 
 // ---- The benchmark -------------------------------------------------------------------------

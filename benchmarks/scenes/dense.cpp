@@ -22,7 +22,7 @@ Scene DenseBase(const char* name) {
   s.name = name;
   s.gravity = {0, Real(-10)};
   s.timeStep = Real(1.0 / 60.0);
-  s.subSteps = 1;
+  s.pipelineRepeats = 1;
   s.velocityIterations = 8;  // the default budget of every engine
   s.positionIterations = 3;
   s.restitutionThreshold = 1;

@@ -36,10 +36,10 @@ std::string Fixed(double v, int digits) {
 std::string SettingsText(const Scene& s) {
   char buffer[320];
   std::snprintf(buffer, sizeof buffer,
-                "dt %.5g s, %d velocity + %d position iterations, %d sub-step%s, gravity %s, restitution "
+                "dt %.5g s, %d velocity + %d position iterations, %d pipeline repeat%s, gravity %s, restitution "
                 "threshold %g m/s, continuous %s, warm starting %s, sleep %s",
-                double(s.timeStep), s.velocityIterations, s.positionIterations, s.subSteps,
-                s.subSteps == 1 ? "" : "s", s.effects.gravity ? "(0, -10)" : "off", double(s.restitutionThreshold),
+                double(s.timeStep), s.velocityIterations, s.positionIterations, s.pipelineRepeats,
+                s.pipelineRepeats == 1 ? "" : "s", s.effects.gravity ? "(0, -10)" : "off", double(s.restitutionThreshold),
                 s.effects.continuous ? "on" : "off", s.effects.warmStarting ? "on" : "off",
                 s.effects.sleep ? "on" : "off");
   return buffer;
@@ -657,14 +657,6 @@ double HardCaseResult::Get(std::string_view figure) const {
     if (m.name == figure) return m.value;
   }
   throw Error("hard case " + name + ": no measured figure '" + std::string(figure) + "'");
-}
-
-// Issue #13's three cases are reported on every engine but not yet required of the default
-// engine: at its default budget pgs topples the 30-box stack (top moves 15.8 m) and lets the
-// 1000 kg box sink 0.197 m into its supports, and soft_step's top moves 0.089 m (limit 0.05 m).
-// quadrant:soft_step+relax2+ratio10 holds all three (hard_cases_test.cpp), but fails `confined`.
-bool RequiredOfDefaultEngine(std::string_view name) {
-  return name != "heavy_on_slab" && name != "tall_stack" && name != "heavy_on_supports";
 }
 
 std::vector<std::string> HardCaseNames() {

@@ -49,11 +49,6 @@ struct HardCaseOptions {
 /// #13's tall_stack, heavy_on_supports, heavy_on_slab (default budget).
 std::vector<std::string> HardCaseNames();
 
-/// Whether the default engine must pass the case (tools/quadrant hardcases exits 1 otherwise):
-/// every case but issue #13's tall_stack, heavy_on_supports and heavy_on_slab, which the default
-/// engine does not hold at its default budget yet (reported, not required).
-bool RequiredOfDefaultEngine(std::string_view name);
-
 /// Runs one case on one engine (1 thread), building the scene with the engine's material mixing
 /// (MixingOf). An engine that refuses the scene gives supported = false, pass = false. Throws
 /// quadrant::Error for an unknown case or engine name.

@@ -27,7 +27,7 @@ Scene BaseScene(const char* name) {
   s.name = name;
   s.gravity = {0, Real(-10)};
   s.timeStep = Real(1.0 / 60.0);
-  s.subSteps = 1;
+  s.pipelineRepeats = 1;
   s.velocityIterations = 8;
   s.positionIterations = 3;
   s.restitutionThreshold = 1;  // Box2D 2.4's default; cases about bouncing set their own

@@ -16,6 +16,12 @@
 namespace quadrant::scene {
 namespace {
 
+// The cases compare Box2D 2.4.1 with Quadrant's solver of the same method (pgs: 8 velocity and 3
+// position iterations, identical settings), so each difference is a design difference the tolerance
+// reasons name. The default engine (soft_step since issue #13) is another method: run here it
+// fails 6 cases, 4 only because its contact impulses are read back per sub-step, 2 in the impact
+// (box_lands_on_edge, spinning_circle_lands; README "Correctness evidence").
+constexpr const char* kQuadrant = "quadrant:pgs";
 constexpr double kDt = 1.0 / 60.0;
 constexpr double kG = 10;
 // Box2D 2.4.1's b2_polygonRadius: the skin around every polygon (2 x its 0.005 m linear slop).
@@ -145,7 +151,7 @@ ValidationResult HeadOn(double ratio, double e) {
   s.effects.friction = false;
   s.bodies = {Ball({Real(-0.5), 0}, Real(0.5), 1, 0, Real(e)), Ball({Real(0.5), 0}, Real(0.5), Real(ratio), 0, Real(e))};
   s.bodies[0].velocity = {1, 0};
-  Run q("quadrant", s), b("box2d", s);
+  Run q(kQuadrant, s), b("box2d", s);
   q.Step();
   b.Step();
   const double m1 = q.Mass(0), m2 = q.Mass(1), v1 = 1, v2 = 0;
@@ -174,7 +180,7 @@ ValidationResult Oblique() {
   const Vec2 n{Real(std::cos(angle)), Real(std::sin(angle))};
   s.bodies = {Ball({0, 0}, Real(0.5), 1, 0, 1), Ball(n, Real(0.5), 1, 0, 1)};
   s.bodies[0].velocity = {2, 0};
-  Run q("quadrant", s), b("box2d", s);
+  Run q(kQuadrant, s), b("box2d", s);
   q.Step();
   b.Step();
   const double vn = 2 * std::cos(angle);
@@ -200,7 +206,7 @@ ValidationResult CircleOnFace() {
                   "(m g dt).";
   Scene s = ValidationWorld("circle_on_face", true);
   s.bodies = {Ground(Real(0.6), 0), Ball({0, 1}, Real(0.5), 1, Real(0.6), 0)};
-  Run q("quadrant", s), b("box2d", s);
+  Run q(kQuadrant, s), b("box2d", s);
   q.Step(120);
   b.Step(120);
   const double m = q.Mass(1);
@@ -236,7 +242,7 @@ ValidationResult CircleOnVertex() {
   s.bodies = {Box({0, 0}, Real(0.5), Real(0.5), 0, false, 0, 1),
               Ball({Real(0.5 + 0.5 * nx), Real(0.5 + 0.5 * ny)}, Real(0.5), 1, 0, 1)};
   s.bodies[1].velocity = {-1, 0};
-  Run q("quadrant", s), b("box2d", s);
+  Run q(kQuadrant, s), b("box2d", s);
   q.Step();
   b.Step();
   const double vn = -nx;  // v . n
@@ -294,7 +300,7 @@ ValidationResult BoxLandsFlat() {
                   "contact is solved (symplectic Euler); then rest after 3 s.";
   Vec2 corner;
   Scene s = LandingScene("box_lands_flat", 0, 3, 0.6, 0.5, corner);
-  Run q("quadrant", s), b("box2d", s);
+  Run q(kQuadrant, s), b("box2d", s);
   q.Step();
   b.Step();
   const char* reason =
@@ -339,7 +345,7 @@ ValidationResult BoxLandsOnEdge() {
   Vec2 corner;
   Scene s = LandingScene("box_lands_on_edge", 0.3, 2, 0.6, 0, corner);
   const Vec2 centre = s.bodies[1].position;
-  Run q("quadrant", s), b("box2d", s);
+  Run q(kQuadrant, s), b("box2d", s);
   q.Step();
   b.Step();
   const CornerImpact a = NoSlipCornerImpact(corner, centre, -(2 + kG * kDt));
@@ -361,7 +367,7 @@ ValidationResult BoxLandsOnCorner() {
                   "up at e (2 + g dt) without spin.";
   Vec2 corner;
   Scene s = LandingScene("box_lands_on_corner", std::numbers::pi / 4, 2, 0.6, 0.5, corner);
-  Run q("quadrant", s), b("box2d", s);
+  Run q(kQuadrant, s), b("box2d", s);
   q.Step();
   b.Step();
   Add(r, "vy_after_impact_mps", q[1].velocity.y, b[1].velocity.y, 0.5 * (2 + kG * kDt), 1e-4, kExactImpulse);
@@ -384,7 +390,7 @@ ValidationResult CornerToFace() {
   s.bodies = {Box({0, 0}, Real(0.5), Real(0.5), 0, true, 0, 1),
               Box({Real(0.25), Real(0.5 + h)}, Real(0.5), Real(0.5), Real(std::numbers::pi / 4), true, 0, 1)};
   s.bodies[1].velocity = {0, -1};
-  Run q("quadrant", s), b("box2d", s);
+  Run q(kQuadrant, s), b("box2d", s);
   q.Step();
   b.Step();
   // Impulse P along +y on the striker at its corner; -P on the struck box at r = (0.25, 0.5).
@@ -418,7 +424,7 @@ ValidationResult SpinningCircleLands() {
   Scene s = ValidationWorld("spinning_circle_lands", true);
   s.bodies = {Ground(Real(0.5), 0), Ball({0, Real(0.6)}, Real(0.5), 1, Real(0.5), 0)};
   s.bodies[1].angularVelocity = -6;
-  Run q("quadrant", s), b("box2d", s);
+  Run q(kQuadrant, s), b("box2d", s);
   q.Step(120);
   b.Step(120);
   const double w0 = -6, radius = 0.5;
@@ -448,7 +454,7 @@ ValidationResult BoxSlidesToStop() {
   s.bodies = {Ground(Real(0.4), 0), Box({0, Real(0.5)}, Real(0.5), Real(0.5), 0, true, Real(0.4), 0)};
   s.bodies[1].velocity = {4, 0};
   const double v0 = 4, mu = 0.4;
-  Run q("quadrant", s), b("box2d", s);
+  Run q(kQuadrant, s), b("box2d", s);
   int stopQ = -1, stopB = -1;
   for (int step = 1; step <= 120; ++step) {
     q.Step();
@@ -475,7 +481,7 @@ ValidationResult RestingBox() {
   Scene s = ValidationWorld("resting_box", true);
   s.effects.restitution = false;
   s.bodies = {Ground(Real(0.6), 0), Box({0, Real(0.5)}, Real(0.5), Real(0.5), 0, true, Real(0.6), 0)};
-  Run q("quadrant", s), b("box2d", s);
+  Run q(kQuadrant, s), b("box2d", s);
   q.Step(60);
   b.Step(60);
   Add(r, "rest_height_minus_skin_m", q[1].position.y - 0.5, b[1].position.y - 0.5 - 2 * kSkin, 0.0, kSlop + kResidual,
@@ -505,7 +511,7 @@ ValidationResult TwoBoxStack() {
   s.effects.restitution = false;
   s.bodies = {Ground(Real(0.6), 0), Box({0, Real(0.5)}, Real(0.5), Real(0.5), 0, true, Real(0.6), 0),
               Box({0, Real(1.5)}, Real(0.5), Real(0.5), 0, true, Real(0.6), 0)};
-  Run q("quadrant", s), b("box2d", s);
+  Run q(kQuadrant, s), b("box2d", s);
   q.Step(120);
   b.Step(120);
   Add(r, "lower_height_minus_skin_m", q[1].position.y - 0.5, b[1].position.y - 0.5 - 2 * kSkin, 0.0, kSlop + kResidual,
@@ -535,7 +541,7 @@ ValidationResult FastHeadOn() {
   s.bodies = {Ball({Real(-1.5), 0}, Real(0.5), 1, 0, 1), Ball({Real(1.5), 0}, Real(0.5), 1, 0, 1)};
   s.bodies[0].velocity = {15, 0};
   s.bodies[1].velocity = {-15, 0};
-  Run q("quadrant", s), b("box2d", s);
+  Run q(kQuadrant, s), b("box2d", s);
   q.Step(10);
   b.Step(10);
   Add(r, "vA_x_mps", q[0].velocity.x, b[0].velocity.x, -15.0, 1e-4, kExactImpulse);
@@ -585,7 +591,7 @@ Scene ValidationWorld(const char* name, bool gravity) {
   s.name = name;
   s.gravity = gravity ? Vec2{0, Real(-kG)} : Vec2{0, 0};
   s.timeStep = Real(kDt);
-  s.subSteps = 1;
+  s.pipelineRepeats = 1;
   s.velocityIterations = 8;
   s.positionIterations = 3;
   s.restitutionThreshold = 0;

@@ -1,11 +1,31 @@
 // Broad phase selection.
 #include "broad_phase.h"
 
+#include <algorithm>
+
 namespace quadrant {
 
 void MergePairs(std::vector<std::vector<CandidatePair>>& perWorker, std::vector<CandidatePair>& out) {
   out.clear();
   for (const auto& part : perWorker) out.insert(out.end(), part.begin(), part.end());
+}
+
+bool SegmentTouchesBox(Vec2 p1, Vec2 p2, const AABB& box) {
+  double t0 = 0, t1 = 1;
+  const double p[2] = {p1.x, p1.y}, d[2] = {double(p2.x) - p1.x, double(p2.y) - p1.y};
+  const double lo[2] = {box.lower.x, box.lower.y}, hi[2] = {box.upper.x, box.upper.y};
+  for (int k = 0; k < 2; ++k) {
+    if (d[k] == 0) {
+      if (p[k] < lo[k] || p[k] > hi[k]) return false;
+      continue;
+    }
+    double a = (lo[k] - p[k]) / d[k], b = (hi[k] - p[k]) / d[k];
+    if (a > b) std::swap(a, b);
+    t0 = std::max(t0, a);
+    t1 = std::min(t1, b);
+    if (t0 > t1) return false;
+  }
+  return true;
 }
 
 std::unique_ptr<BroadPhase> MakeBroadPhase(BroadPhaseType type, int quadTreeMaxDepth) {

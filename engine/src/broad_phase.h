@@ -32,7 +32,25 @@ class BroadPhase {
   virtual void FindPairs(std::span<const AABB> aabbs, std::span<const uint8_t> movable,
                          std::vector<CandidatePair>& out, StageRunner& run) = 0;
   virtual const char* Name() const = 0;
+
+  // Queries (World::QueryAABB, RayCastClosest, RayCastAll). A separate instance of the same
+  // structure serves them: the step's instance is built from swept, fattened boxes of the
+  // moving bodies only (the grid leaves out statics far from them), so the world builds this
+  // one from every body's current box when a query comes after a change (world.cpp).
+
+  /// Builds the structure over every box of `aabbs`, none left out.
+  virtual void BuildForQueries(std::span<const AABB> aabbs, StageRunner& run) = 0;
+  /// Appends to `out` every body whose box overlaps `box` (touching counts), each once, in no
+  /// particular order. Needs BuildForQueries with the same `aabbs` first.
+  virtual void QueryBox(const AABB& box, std::span<const AABB> aabbs, std::vector<int>& out) const = 0;
+  /// Appends to `out` every body whose box the segment from p1 to p2 touches, each once (it may
+  /// append a few more; the caller tests shapes exactly), in no particular order.
+  virtual void QuerySegment(Vec2 p1, Vec2 p2, std::span<const AABB> aabbs, std::vector<int>& out) const = 0;
 };
+
+/// Whether the segment p1-p2 touches `box` (slab test, done in double so a segment grazing
+/// an edge is not lost to float rounding).
+bool SegmentTouchesBox(Vec2 p1, Vec2 p2, const AABB& box);
 
 /// Concatenates per-worker pair buffers in worker order.
 void MergePairs(std::vector<std::vector<CandidatePair>>& perWorker, std::vector<CandidatePair>& out);

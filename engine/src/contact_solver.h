@@ -359,14 +359,23 @@ class ContactSolverBase : public Solver {
   // together along the normal by it after integration, split by inverse mass (the linear part
   // only: enough for the bounce, and it cannot spin a body), which makes an isolated collision
   // exact in both. Only bodies that move are touched.
+  //
+  // BounceShift gives a constraint's shift as d: body A moves by invMassA d, body B by -invMassB d
+  // (false when there is none). soft_step applies it to its solver states.
+  static bool BounceShift(const ContactConstraint& cc, Vec2& d) {
+    Real shift = 0;
+    for (int k = 0; k < cc.pointCount; ++k) shift = std::max(shift, cc.points[k].bounceShift);
+    const Real sum = cc.invMassA + cc.invMassB;
+    if (shift == 0 || sum == 0) return false;
+    d = (shift / sum) * cc.normal;
+    return true;
+  }
+
   void ApplyBounceShifts(Bodies& bodies, int begin, int end) {
     for (int c = begin; c < end; ++c) {
       const ContactConstraint& cc = constraints_[c];
-      Real shift = 0;
-      for (int k = 0; k < cc.pointCount; ++k) shift = std::max(shift, cc.points[k].bounceShift);
-      const Real sum = cc.invMassA + cc.invMassB;
-      if (shift == 0 || sum == 0) continue;
-      const Vec2 d = (shift / sum) * cc.normal;
+      Vec2 d;
+      if (!BounceShift(cc, d)) continue;
       if (cc.invMassA > 0) {
         bodies.center[cc.a] += cc.invMassA * d;
         SyncTransform(bodies, cc.a);

@@ -19,7 +19,7 @@
 // every other pile on the ground); a moving kinematic body keeps the bodies it touches awake.
 //
 // Waking: a contact between an awake dynamic body and a sleeping one wakes the sleeper's whole
-// island in the same step (World::Impl::SubStep then finds the woken bodies' pairs and
+// island in the same step (World::Impl::RunPipeline then finds the woken bodies' pairs and
 // manifolds again before the solve), so a body thrown at a sleeping pile hits a pile that moves,
 // not a static wall. The island a body fell asleep with is remembered as an id (the slot of the
 // island's root); waking scans the bodies once for the marked ids.

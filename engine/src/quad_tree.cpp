@@ -56,7 +56,75 @@ class QuadTree final : public BroadPhase {
     MergePairs(perWorker_, out);
   }
 
+  void BuildForQueries(std::span<const AABB> aabbs, StageRunner&) override {
+    const int n = static_cast<int>(aabbs.size());
+    queryReady_ = n > 0;
+    if (!queryReady_) return;
+    ChooseRegion(aabbs);
+    AssignNodes(aabbs);
+    Bucket(n);
+    root_ = aabbs[0];
+    for (const AABB& b : aabbs) root_ = Union(root_, b);
+  }
+
+  // The walk from the root: a node's bodies are tested when its region may hold a hit, and its
+  // children only then too (a body lies inside its node's region).
+  void QueryBox(const AABB& box, std::span<const AABB> aabbs, std::vector<int>& out) const override {
+    if (!queryReady_ || !Overlaps(box, root_)) return;
+    // Cell ranges are monotone in the coordinates, so a body overlapping the box lies in a node
+    // whose cell range overlaps the box's. Clipped to the bodies' box first: a query's
+    // coordinates can be huge, the cell's int not.
+    const AABB c{Max(box.lower, root_.lower), Min(box.upper, root_.upper)};
+    const CellRange r{CellOf(c.lower.x, originX_), CellOf(c.lower.y, originY_), CellOf(c.upper.x, originX_),
+                      CellOf(c.upper.y, originY_)};
+    Walk([&](int level, int cx, int cy) {
+      const int shift = depth_ - level;
+      return !((cx << shift) > r.x1 || (((cx + 1) << shift) - 1) < r.x0 || (cy << shift) > r.y1 ||
+               (((cy + 1) << shift) - 1) < r.y0);
+    }, [&](int i) {
+      if (Overlaps(aabbs[i], box)) out.push_back(i);
+    });
+  }
+
+  void QuerySegment(Vec2 p1, Vec2 p2, std::span<const AABB> aabbs, std::vector<int>& out) const override {
+    if (!queryReady_ || !SegmentTouchesBox(p1, p2, root_)) return;
+    const double finest = 1.0 / scale_;  // side of a finest cell (m)
+    // A node's region is taken a hundredth of a finest cell larger on every side: the cell of a
+    // body corner was found with rounding, and exact tests come later.
+    const double pad = 0.01 * finest;
+    Walk([&](int level, int cx, int cy) {
+      const int shift = depth_ - level;
+      const AABB region{{Real(originX_ + double(cx << shift) * finest - pad), Real(originY_ + double(cy << shift) * finest - pad)},
+                        {Real(originX_ + double((cx + 1) << shift) * finest + pad),
+                         Real(originY_ + double((cy + 1) << shift) * finest + pad)}};
+      return SegmentTouchesBox(p1, p2, region);
+    }, [&](int i) {
+      if (SegmentTouchesBox(p1, p2, aabbs[i])) out.push_back(i);
+    });
+  }
+
  private:
+  // Depth-first over the nodes for which visitNode(level, cx, cy) holds, from the root (always
+  // visited); visitBody(i) for each of their bodies. Empty subtrees are skipped.
+  template <class NodeFn, class BodyFn>
+  void Walk(NodeFn&& visitNode, BodyFn&& visitBody) const {
+    std::vector<NodeRef>& stack = queryStack_;
+    stack.clear();
+    stack.push_back({0, 0, 0});
+    while (!stack.empty()) {
+      const NodeRef ref = stack.back();
+      stack.pop_back();
+      const int node = LevelOffset(ref.level) + (ref.cy << ref.level) + ref.cx;
+      if (subtree_[node] == 0) continue;
+      for (int k = start_[node]; k < start_[node + 1]; ++k) visitBody(items_[k]);
+      if (ref.level == depth_) continue;
+      for (int q = 0; q < 4; ++q) {
+        const int cx = (ref.cx << 1) | (q & 1), cy = (ref.cy << 1) | (q >> 1);
+        if (visitNode(ref.level + 1, cx, cy)) stack.push_back({ref.level + 1, cx, cy});
+      }
+    }
+  }
+
   struct NodeRef {
     int level, cx, cy;
   };
@@ -162,6 +230,9 @@ class QuadTree final : public BroadPhase {
     out.push_back(i < j ? CandidatePair{i, j} : CandidatePair{j, i});
   }
 
+  bool queryReady_ = false;
+  AABB root_{};  // BuildForQueries: the box of every body
+  mutable std::vector<NodeRef> queryStack_;  // queries are not run concurrently (world.h)
   int maxDepth_;
   int depth_ = 0;
   int nodeCount_ = 1;

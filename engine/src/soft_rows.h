@@ -202,6 +202,21 @@ template <>
 
 // ---- kernels ----------------------------------------------------------------------------------
 
+// The impulse (Px, Py) through a row's point, taken off body A and put on body B at the lever
+// arms rA, rB (the warm start, the normal and the friction rows all apply it so).
+template <class V, bool kRotation>
+[[gnu::always_inline]] inline void ApplyRowImpulse(RowBodies<V>& A, RowBodies<V>& B, V mA, V iA, V mB, V iB, V rAx,
+                                                   V rAy, V rBx, V rBy, V Px, V Py) {
+  A.vx -= mA * Px;
+  A.vy -= mA * Py;
+  B.vx += mB * Px;
+  B.vy += mB * Py;
+  if constexpr (kRotation) {
+    A.w -= iA * (rAx * Py - rAy * Px);
+    B.w += iB * (rBx * Py - rBy * Px);
+  }
+}
+
 struct SoftSolveParams {
   Real invH = 0;
   Real pushMaxDepth = 0;     // WorldDef::contactPushMaxDepth
@@ -222,16 +237,12 @@ inline void WarmStartRows(SolverBody* states, SoftRowGroup& g, int lane) {
     SoftPointRows& p = g.p[k];
     const V ni = Load(p.normalImpulse, lane, V{}), ti = Load(p.tangentImpulse, lane, V{});
     const V Px = ni * nx + ti * tx, Py = ni * ny + ti * ty;
-    A.vx -= mA * Px;
-    A.vy -= mA * Py;
-    B.vx += mB * Px;
-    B.vy += mB * Py;
+    V rAx{}, rAy{}, rBx{}, rBy{};
     if constexpr (kRotation) {
-      const V rAx = Load(p.rAx, lane, V{}), rAy = Load(p.rAy, lane, V{});
-      const V rBx = Load(p.rBx, lane, V{}), rBy = Load(p.rBy, lane, V{});
-      A.w -= iA * (rAx * Py - rAy * Px);
-      B.w += iB * (rBx * Py - rBy * Px);
+      rAx = Load(p.rAx, lane, V{}), rAy = Load(p.rAy, lane, V{});
+      rBx = Load(p.rBx, lane, V{}), rBy = Load(p.rBy, lane, V{});
     }
+    ApplyRowImpulse<V, kRotation>(A, B, mA, iA, mB, iB, rAx, rAy, rBx, rBy, Px, Py);
   }
   Scatter<V>(states, g.a, g.invMassA, lane, A);
   Scatter<V>(states, g.b, g.invMassB, lane, B);
@@ -288,14 +299,7 @@ inline void SolveRows(SolverBody* states, SoftRowGroup& g, int lane, const SoftS
     const V lambda = newImpulse - ni;
     Store(p.normalImpulse, lane, newImpulse);
     const V Px = lambda * nx, Py = lambda * ny;
-    A.vx -= mA * Px;
-    A.vy -= mA * Py;
-    B.vx += mB * Px;
-    B.vy += mB * Py;
-    if constexpr (kRotation) {
-      A.w -= iA * (rAx * Py - rAy * Px);
-      B.w += iB * (rBx * Py - rBy * Px);
-    }
+    ApplyRowImpulse<V, kRotation>(A, B, mA, iA, mB, iB, rAx, rAy, rBx, rBy, Px, Py);
   }
   if constexpr (kFriction && !kBias) {
     const V tx = ny, ty = Neg(nx);  // RightPerp(n)
@@ -320,14 +324,7 @@ inline void SolveRows(SolverBody* states, SoftRowGroup& g, int lane, const SoftS
       const V lambda = newImpulse - ti;
       Store(p.tangentImpulse, lane, newImpulse);
       const V Px = lambda * tx, Py = lambda * ty;
-      A.vx -= mA * Px;
-      A.vy -= mA * Py;
-      B.vx += mB * Px;
-      B.vy += mB * Py;
-      if constexpr (kRotation) {
-        A.w -= iA * (rAx * Py - rAy * Px);
-        B.w += iB * (rBx * Py - rBy * Px);
-      }
+      ApplyRowImpulse<V, kRotation>(A, B, mA, iA, mB, iB, rAx, rAy, rBx, rBy, Px, Py);
     }
   }
   Scatter<V>(states, g.a, g.invMassA, lane, A);

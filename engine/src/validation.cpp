@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <span>
 #include <string>
 
@@ -100,7 +101,22 @@ ShapeDef ValidateBodyDef(const BodyDef& def) {
   } else {
     throw Error("ShapeDef.type is unknown");
   }
+  if (def.type == BodyType::kDynamic) {
+    // Density times area can overflow (or underflow) float: a mass or inertia that is not a
+    // positive finite number would poison the solver, so the body is refused.
+    // Subnormal values count as underflow: they lose precision and make 1/m overflow.
+    const MassData md = shape.type == ShapeType::kCircle ? ComputeMass(shape.circle, shape.density)
+                                                         : ComputeMass(shape.polygon, shape.density);
+    constexpr Real kSmallest = std::numeric_limits<Real>::min();
+    Require(IsFinite(md.mass) && md.mass >= kSmallest && IsFinite(md.rotationalInertia) &&
+                md.rotationalInertia >= kSmallest && IsFinite(Real(1) / md.mass) &&
+                IsFinite(Real(1) / md.rotationalInertia),
+            "the body's mass or rotational inertia is not a positive finite number (density " +
+                DensityText(shape.density) + ")");
+  }
   return shape;
 }
+
+void CheckBodyDef(const BodyDef& def) { (void)ValidateBodyDef(def); }
 
 }  // namespace quadrant

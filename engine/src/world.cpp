@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <iterator>
 #include <limits>
 #include <string>
 
@@ -12,6 +13,7 @@
 #include "integrate.h"
 #include "islands.h"
 #include "narrow_phase.h"
+#include "queries.h"
 #include "quadrant/task_system.h"
 #include "quadrants_scheme.h"
 #include "quadrant/world.h"
@@ -73,6 +75,19 @@ struct World::Impl {
   ContactSorter sorter;
   Profile profile;
   Counters counters;
+  int customFilters = 0;  // bodies whose Filter is not the default: the pair filter runs while > 0
+
+  // Queries (world.h): their own broad-phase instance on a one-thread runner (so they never wake
+  // the pool nor touch the step's profile), rebuilt when a query follows a change.
+  std::unique_ptr<TaskSystem> queryTasks;
+  std::unique_ptr<StageRunner> queryRun;
+  std::unique_ptr<BroadPhase> queryIndex;
+  std::vector<AABB> queryBoxes;
+  std::vector<int> queryFound;
+  bool queryStale = true;
+
+  // Contact events (def.contactEvents only): touching pairs after this step and the last one.
+  std::vector<ContactEvent> touching, touchingBefore, beginEvents, endEvents;
 
   int Dense(BodyId id) const {
     if (id.generation == 0 || id.index >= generation.size() || generation[id.index] != id.generation ||
@@ -108,7 +123,11 @@ struct World::Impl {
     islands.WakeOverlapping(bodies, bodies.aabb[i]);
   }
 
-  void SubStep(Real dt);
+  void RunPipeline(Real dt);
+  void FindPairs();
+  void UpdateContactEvents();
+  void PrepareQueries();
+  BodyId IdOf(int i) const { return BodyId{bodies.slot[i], generation[bodies.slot[i]]}; }  // one pass of every stage
   void CountContacts(int candidatePairs);
   void NarrowPhase(Real dt);
   void SortContacts() { sorter.Sort(*run, bodies.Count(), workerContacts, contacts); }
@@ -131,6 +150,8 @@ World& World::operator=(World&&) noexcept = default;
 BodyId World::CreateBody(const BodyDef& def) {
   Impl& w = *impl_;
   const ShapeDef shape = ValidateBodyDef(def);  // throws before anything changes
+  Require(w.def.scheme != ParallelScheme::kQuadrants || def.filter == Filter{},
+          "CreateBody: a non-default collision filter needs ParallelScheme::kDeterministic");
 
   MassData md{};
   Real boundRadius = 0;
@@ -143,16 +164,7 @@ BodyId World::CreateBody(const BodyDef& def) {
       boundRadius = std::max(boundRadius, Length(shape.polygon.vertices[k] - md.center));
     }
   }
-  const bool dynamic = def.type == BodyType::kDynamic;
-  // Density times area can overflow (or underflow) float: a mass or inertia that is not a
-  // positive finite number would poison the solver, so the body is refused.
-  // Subnormal values count as underflow: they lose precision and make 1/m overflow.
-  constexpr Real kSmallest = std::numeric_limits<Real>::min();
-  Require(!dynamic || (IsFinite(md.mass) && md.mass >= kSmallest && IsFinite(md.rotationalInertia) &&
-                       md.rotationalInertia >= kSmallest && IsFinite(Real(1) / md.mass) &&
-                       IsFinite(Real(1) / md.rotationalInertia)),
-          "the body's mass or rotational inertia is not a positive finite number (density " +
-              DensityText(shape.density) + ")");
+  const bool dynamic = def.type == BodyType::kDynamic;  // its mass was checked by ValidateBodyDef
 
   uint32_t slot;
   if (!w.freeSlots.empty()) {
@@ -191,6 +203,10 @@ BodyId World::CreateBody(const BodyDef& def) {
   b.awake[i] = def.type == BodyType::kStatic ? 0 : 1;
   b.sleepTime[i] = 0;
   b.islandOf[i] = 0;
+  b.filter[i] = def.filter;
+  b.userData[i] = def.userData;
+  w.customFilters += def.filter == Filter{} ? 0 : 1;
+  w.queryStale = true;
   w.UpdateAABB(i, 0);
   w.WakeAround(i);  // a body created touching a sleeping pile wakes it
   return BodyId{slot, w.generation[slot]};
@@ -202,6 +218,8 @@ void World::DestroyBody(BodyId id) {
   w.WakeAround(i);  // what rested on the body falls again
   const int last = w.bodies.Count() - 1;
   Bodies& b = w.bodies;
+  w.customFilters -= b.filter[i] == Filter{} ? 0 : 1;
+  w.queryStale = true;
   auto moveLast = [&](auto& v) {
     v[i] = v[last];
     v.pop_back();
@@ -223,22 +241,113 @@ bool World::IsValid(BodyId id) const {
          w.denseOf[id.index] >= 0;
 }
 
-void World::Step(Real dt, int subSteps) {
+void World::Step(Real dt) { StepRepeated(dt, 1); }
+
+void World::StepRepeated(Real dt, int pipelineRepeats) {
   Require(IsFinite(dt) && dt > 0, "Step: dt must be finite and > 0");
   Require(dt <= kMaxTimeStep, "Step: dt must be <= 1 s");
-  Require(subSteps >= 1, "Step: subSteps must be >= 1");
-  Require(subSteps <= kMaxIterations, "Step: subSteps must be <= 1000");
+  Require(pipelineRepeats >= 1, "StepRepeated: pipelineRepeats must be >= 1");
+  Require(pipelineRepeats <= kMaxIterations, "StepRepeated: pipelineRepeats must be <= 1000");
   Impl& w = *impl_;
+  w.queryStale = true;
   w.profile = Profile{};
   w.run->Reset();
   const auto start = Clock::now();
-  const Real h = dt / Real(subSteps);
-  for (int s = 0; s < subSteps; ++s) w.SubStep(h);
+  const Real h = dt / Real(pipelineRepeats);
+  for (int s = 0; s < pipelineRepeats; ++s) w.RunPipeline(h);
   w.profile.total = Ms(start, Clock::now());
   w.profile.balance = w.run->Balance();
+  if (w.def.contactEvents) w.UpdateContactEvents();
 }
 
-void World::Impl::SubStep(Real dt) {
+void World::Impl::FindPairs() {
+  broadPhase->FindPairs(bodies.aabb, bodies.dynamic, pairs, *run);
+  if (customFilters == 0) return;  // every body collides with everything: nothing to drop
+  // Box2D's rule (world.h, Filter). Compacting in place keeps the pairs' deterministic order.
+  run->Serial(Stage::kBroadPhase, [&] {
+    const std::vector<Filter>& f = bodies.filter;
+    pairs.erase(std::remove_if(pairs.begin(), pairs.end(),
+                               [&](const CandidatePair& p) {
+                                 return (f[p.a].maskBits & f[p.b].categoryBits) == 0 ||
+                                        (f[p.b].maskBits & f[p.a].categoryBits) == 0;
+                               }),
+                pairs.end());
+  });
+}
+
+namespace {
+bool EventLess(const ContactEvent& x, const ContactEvent& y) {
+  if (x.bodyA.index != y.bodyA.index) return x.bodyA.index < y.bodyA.index;
+  if (x.bodyB.index != y.bodyB.index) return x.bodyB.index < y.bodyB.index;
+  if (x.bodyA.generation != y.bodyA.generation) return x.bodyA.generation < y.bodyA.generation;
+  return x.bodyB.generation < y.bodyB.generation;
+}
+}  // namespace
+
+// Begin and end events as the difference of two sorted lists of touching pairs, named by id
+// (not by dense index, which destroying a body changes): the order depends on ids only, so it is
+// the same for any thread count whenever the contacts are.
+void World::Impl::UpdateContactEvents() {
+  std::swap(touching, touchingBefore);
+  touching.clear();
+  for (const Contact& c : contacts) {
+    bool touches = false;
+    for (int k = 0; k < c.manifold.pointCount; ++k) touches = touches || c.manifold.points[k].separation <= 0;
+    if (!touches) continue;
+    BodyId a = IdOf(c.a), b = IdOf(c.b);
+    if (b.index < a.index) std::swap(a, b);
+    touching.push_back({a, b});
+  }
+  if (def.effects.sleep) {
+    // Sleeping bodies get no pairs (among themselves or with statics), so their contacts are not
+    // in `contacts`; a pile that falls asleep has not stopped touching. A pair of bodies that are
+    // both still there and neither simulated (asleep or static) keeps its touch from last step.
+    auto idle = [&](BodyId id) {
+      if (id.index >= generation.size() || generation[id.index] != id.generation || denseOf[id.index] < 0) return false;
+      return bodies.awake[denseOf[id.index]] == 0;
+    };
+    for (const ContactEvent& e : touchingBefore) {
+      if (idle(e.bodyA) && idle(e.bodyB)) touching.push_back(e);
+    }
+  }
+  std::sort(touching.begin(), touching.end(), EventLess);
+  // The step an island falls asleep its pairs are both in `contacts` and carried over: once each.
+  touching.erase(std::unique(touching.begin(), touching.end()), touching.end());
+  beginEvents.clear();
+  endEvents.clear();
+  std::set_difference(touching.begin(), touching.end(), touchingBefore.begin(), touchingBefore.end(),
+                      std::back_inserter(beginEvents), EventLess);
+  std::set_difference(touchingBefore.begin(), touchingBefore.end(), touching.begin(), touching.end(),
+                      std::back_inserter(endEvents), EventLess);
+}
+
+// The query structure over every body's current shape box, grown a little (1 mm, and 1e-6 of
+// the coordinate far out) so float rounding in the box never hides a shape the exact double
+// tests (queries.cpp) would report.
+void World::Impl::PrepareQueries() {
+  if (!queryStale) return;
+  if (!queryIndex) {
+    queryTasks = MakeThreadPool(1);
+    queryRun = std::make_unique<StageRunner>(*queryTasks, def.minParallelItems);
+    queryIndex = MakeBroadPhase(def.broadPhase, def.quadTreeMaxDepth);
+  }
+  const int n = bodies.Count();
+  queryBoxes.resize(n);
+  for (int i = 0; i < n; ++i) {
+    const ShapeDef& s = bodies.shape[i];
+    AABB box = s.type == ShapeType::kCircle ? ComputeAABB(s.circle, bodies.xf[i]) : ComputeAABB(s.polygon, bodies.xf[i]);
+    const Real far = std::max(std::max(std::abs(box.lower.x), std::abs(box.lower.y)),
+                              std::max(std::abs(box.upper.x), std::abs(box.upper.y)));
+    const Real m = Real(1e-3) + Real(1e-6) * far;
+    box.lower = box.lower - Vec2{m, m};
+    box.upper = box.upper + Vec2{m, m};
+    queryBoxes[i] = box;
+  }
+  queryIndex->BuildForQueries(queryBoxes, *queryRun);
+  queryStale = false;
+}
+
+void World::Impl::RunPipeline(Real dt) {
   const int n = bodies.Count();
   auto t0 = Clock::now();
   const bool sleepOn = def.effects.sleep;
@@ -263,7 +372,7 @@ void World::Impl::SubStep(Real dt) {
     CountContacts(pairCount);
     return;
   }
-  broadPhase->FindPairs(bodies.aabb, bodies.dynamic, pairs, *run);
+  FindPairs();
   auto t1 = Clock::now();
   NarrowPhase(dt);
   auto t2 = Clock::now();
@@ -275,7 +384,7 @@ void World::Impl::SubStep(Real dt) {
     // persistence: it is rare and short.)
     while (islands.WakeTouched(bodies, contacts) > 0) {
       for (int i : islands.Changed()) UpdateAABB(i, dt);
-      broadPhase->FindPairs(bodies.aabb, bodies.dynamic, pairs, *run);
+      FindPairs();
       NarrowPhase(dt);
       SortContacts();
     }
@@ -387,6 +496,7 @@ void World::SetTransform(BodyId id, Vec2 position, Real angle) {
   w.bodies.xf[i] = Transform{position, MakeRot(angle)};
   w.bodies.center[i] = TransformPoint(w.bodies.xf[i], w.bodies.localCenter[i]);
   w.UpdateAABB(i, 0);
+  w.queryStale = true;
   w.WakeAround(i);  // what it lands on
 }
 
@@ -424,6 +534,99 @@ void World::SetAwake(BodyId id, bool awake) {
     Islands::Sleep(w.bodies, i, w.bodies.slot[i]);  // an island of its own
     w.UpdateAABB(i, 0);
   }
+}
+
+uint64_t World::GetUserData(BodyId id) const { return impl_->bodies.userData[impl_->Dense(id)]; }
+void World::SetUserData(BodyId id, uint64_t userData) { impl_->bodies.userData[impl_->Dense(id)] = userData; }
+Filter World::GetFilter(BodyId id) const { return impl_->bodies.filter[impl_->Dense(id)]; }
+
+void World::SetFilter(BodyId id, Filter filter) {
+  Impl& w = *impl_;
+  const int i = w.Dense(id);
+  Require(w.def.scheme != ParallelScheme::kQuadrants || filter == Filter{},
+          "SetFilter: a non-default collision filter needs ParallelScheme::kDeterministic");
+  w.customFilters += (filter == Filter{} ? 0 : 1) - (w.bodies.filter[i] == Filter{} ? 0 : 1);
+  w.bodies.filter[i] = filter;
+}
+
+void World::QueryAABB(const AABB& box, std::vector<BodyId>& out, uint32_t categoryMask) const {
+  Require(IsFinite(box.lower) && IsFinite(box.upper), "QueryAABB: the box is not finite");
+  Require(box.lower.x <= box.upper.x && box.lower.y <= box.upper.y,
+          "QueryAABB: the box's lower corner is above or right of its upper corner");
+  Impl& w = *impl_;
+  w.PrepareQueries();
+  w.queryFound.clear();
+  w.queryIndex->QueryBox(box, w.queryBoxes, w.queryFound);
+  std::sort(w.queryFound.begin(), w.queryFound.end());  // GetBodyIds order
+  out.clear();
+  for (int i : w.queryFound) {
+    if ((w.bodies.filter[i].categoryBits & categoryMask) != 0 && ShapeOverlapsBox(w.bodies.shape[i], w.bodies.xf[i], box)) {
+      out.push_back(w.IdOf(i));
+    }
+  }
+}
+
+namespace {
+void CheckRay(const char* call, Vec2 origin, Vec2 translation) {
+  const std::string c = call;
+  Require(IsFinite(origin) && IsFinite(translation), c + ": origin or translation is not finite");
+  Require(translation.x != 0 || translation.y != 0, c + ": the translation is zero (a ray needs a direction)");
+  const Vec2 end = origin + translation;
+  Require(IsFinite(end) && std::abs(origin.x) <= kMaxCoordinate && std::abs(origin.y) <= kMaxCoordinate &&
+              std::abs(end.x) <= kMaxCoordinate && std::abs(end.y) <= kMaxCoordinate,
+          c + ": origin or end is beyond the coordinate limit of 1e6 m");
+}
+}  // namespace
+
+void World::RayCastAll(Vec2 origin, Vec2 translation, std::vector<RayHit>& out, uint32_t categoryMask) const {
+  CheckRay("RayCastAll", origin, translation);
+  Impl& w = *impl_;
+  w.PrepareQueries();
+  w.queryFound.clear();
+  const Vec2 end = origin + translation;
+  w.queryIndex->QuerySegment(origin, end, w.queryBoxes, w.queryFound);
+  std::sort(w.queryFound.begin(), w.queryFound.end());
+  out.clear();
+  for (int i : w.queryFound) {
+    RayHit hit;
+    if ((w.bodies.filter[i].categoryBits & categoryMask) == 0) continue;
+    if (!RayCastShape(w.bodies.shape[i], w.bodies.xf[i], origin, end, hit)) continue;
+    hit.body = w.IdOf(i);
+    out.push_back(hit);
+  }
+  // Stable: equal fractions stay in GetBodyIds order.
+  std::stable_sort(out.begin(), out.end(), [](const RayHit& a, const RayHit& b) { return a.fraction < b.fraction; });
+}
+
+std::optional<RayHit> World::RayCastClosest(Vec2 origin, Vec2 translation, uint32_t categoryMask) const {
+  CheckRay("RayCastClosest", origin, translation);
+  Impl& w = *impl_;
+  w.PrepareQueries();
+  w.queryFound.clear();
+  const Vec2 end = origin + translation;
+  w.queryIndex->QuerySegment(origin, end, w.queryBoxes, w.queryFound);
+  std::optional<RayHit> best;
+  int bestIndex = -1;
+  for (int i : w.queryFound) {
+    RayHit hit;
+    if ((w.bodies.filter[i].categoryBits & categoryMask) == 0) continue;
+    if (!RayCastShape(w.bodies.shape[i], w.bodies.xf[i], origin, end, hit)) continue;
+    if (best && (hit.fraction > best->fraction || (hit.fraction == best->fraction && i > bestIndex))) continue;
+    hit.body = w.IdOf(i);
+    best = hit;
+    bestIndex = i;
+  }
+  return best;
+}
+
+std::span<const ContactEvent> World::GetContactBeginEvents() const {
+  Require(impl_->def.contactEvents, "GetContactBeginEvents: contact events are off (WorldDef::contactEvents)");
+  return impl_->beginEvents;
+}
+
+std::span<const ContactEvent> World::GetContactEndEvents() const {
+  Require(impl_->def.contactEvents, "GetContactEndEvents: contact events are off (WorldDef::contactEvents)");
+  return impl_->endEvents;
 }
 
 int World::GetBodyCount() const { return impl_->bodies.Count(); }

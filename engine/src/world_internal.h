@@ -46,6 +46,10 @@ struct Bodies {
   std::vector<uint8_t> awake;          ///< 1 for simulated bodies: kinematic and awake dynamic
   std::vector<Real> sleepTime;         ///< seconds the body has been below the sleep tolerances
   std::vector<uint32_t> islandOf;      ///< while asleep: the id of the island it fell asleep with
+  // Cold: read only by the pair filter (when some body has a non-default filter), the queries
+  // and the user.
+  std::vector<Filter> filter;
+  std::vector<uint64_t> userData;
 
   int Count() const { return static_cast<int>(type.size()); }
 
@@ -55,7 +59,7 @@ struct Bodies {
   void ForEachArray(Fn&& fn) {
     fn(type), fn(xf), fn(center), fn(localCenter), fn(vel), fn(inv), fn(mass), fn(inertia);
     fn(linearDamping), fn(angularDamping), fn(shape), fn(boundRadius), fn(aabb), fn(dynamic);
-    fn(slot), fn(awake), fn(sleepTime), fn(islandOf);
+    fn(slot), fn(awake), fn(sleepTime), fn(islandOf), fn(filter), fn(userData);
   }
 };
 

@@ -62,34 +62,34 @@ std::vector<Row> Rows() {
   auto body = [](int i, std::function<void(BodyDesc&)> f) { return [i, f](Scene& s) { f(s.bodies[i]); }; };
   auto verts = [](std::vector<Vec2> v) { return [v](Scene& s) { s.bodies[kBox].vertices = v; }; };
   return {
-      {"position x NaN", body(kBox, [](BodyDesc& b) { b.position.x = kNaN; }), "scene body 1: position or angle is not finite"},
-      {"position y +inf", body(kBall, [](BodyDesc& b) { b.position.y = kInf; }), "scene body 2: position or angle is not finite"},
+      {"position x NaN", body(kBox, [](BodyDesc& b) { b.position.x = kNaN; }), "scene body 1: BodyDef position or angle is not finite"},
+      {"position y +inf", body(kBall, [](BodyDesc& b) { b.position.y = kInf; }), "scene body 2: BodyDef position or angle is not finite"},
       {"angle NaN", body(kBox, [](BodyDesc& b) { b.angle = kNaN; }), "position or angle is not finite"},
-      {"velocity NaN", body(kBall, [](BodyDesc& b) { b.velocity.x = kNaN; }), "scene body 2: velocity is not finite"},
+      {"velocity NaN", body(kBall, [](BodyDesc& b) { b.velocity.x = kNaN; }), "scene body 2: BodyDef velocity is not finite"},
       {"velocity -inf", body(kBox, [](BodyDesc& b) { b.velocity.y = -kInf; }), "velocity is not finite"},
       {"angular velocity inf", body(kBox, [](BodyDesc& b) { b.angularVelocity = kInf; }), "velocity is not finite"},
       {"position beyond 1e6 m", body(kBall, [](BodyDesc& b) { b.position.x = Real(2e6); }),
        "position is beyond the coordinate limit of 1e6 m"},
       {"velocity 2e6 m/s", body(kBox, [](BodyDesc& b) { b.velocity.x = Real(2e6); }),
-       "scene body 1: velocity is beyond the limit of 1e6 m/s (rad/s)"},
+       "scene body 1: BodyDef velocity is beyond the limit of 1e6 m/s (rad/s)"},
       {"angular velocity -2e6 rad/s", body(kBall, [](BodyDesc& b) { b.angularVelocity = Real(-2e6); }),
        "velocity is beyond the limit of 1e6 m/s (rad/s)"},
       {"density 3e38 on a 20 m box (mass overflows)", body(kBox, [](BodyDesc& b) {
          b.vertices = {{-10, -10}, {10, -10}, {10, 10}, {-10, 10}};
          b.density = Real(3e38);
        }),
-       "scene body 1: mass or rotational inertia is not a positive finite number"},
+       "scene body 1: the body's mass or rotational inertia is not a positive finite number"},
       {"density 1e-40 (mass underflows)", body(kBall, [](BodyDesc& b) { b.density = Real(1e-40); }),
        "mass or rotational inertia is not a positive finite number"},
-      {"density 0 (dynamic)", body(kBox, [](BodyDesc& b) { b.density = 0; }), "scene body 1: density must be > 0"},
-      {"density -1", body(kBall, [](BodyDesc& b) { b.density = -1; }), "density must be > 0"},
-      {"density NaN", body(kBox, [](BodyDesc& b) { b.density = kNaN; }), "density must be > 0"},
-      {"density inf", body(kBall, [](BodyDesc& b) { b.density = kInf; }), "density must be > 0"},
-      {"friction -0.1", body(kBox, [](BodyDesc& b) { b.friction = Real(-0.1); }), "friction must be >= 0"},
-      {"friction NaN", body(kBall, [](BodyDesc& b) { b.friction = kNaN; }), "friction must be >= 0"},
-      {"linear damping -1", body(kBox, [](BodyDesc& b) { b.linearDamping = -1; }), "damping must be finite and >= 0"},
+      {"density 0 (dynamic)", body(kBox, [](BodyDesc& b) { b.density = 0; }), "scene body 1: a dynamic body needs ShapeDef.density > 0"},
+      {"density -1", body(kBall, [](BodyDesc& b) { b.density = -1; }), "ShapeDef.density must be finite and >= 0"},
+      {"density NaN", body(kBox, [](BodyDesc& b) { b.density = kNaN; }), "ShapeDef.density must be finite and >= 0"},
+      {"density inf", body(kBall, [](BodyDesc& b) { b.density = kInf; }), "ShapeDef.density must be finite and >= 0"},
+      {"friction -0.1", body(kBox, [](BodyDesc& b) { b.friction = Real(-0.1); }), "ShapeDef.friction must be finite and >= 0"},
+      {"friction NaN", body(kBall, [](BodyDesc& b) { b.friction = kNaN; }), "ShapeDef.friction must be finite and >= 0"},
+      {"linear damping -1", body(kBox, [](BodyDesc& b) { b.linearDamping = -1; }), "linearDamping must be finite and >= 0"},
       {"angular damping NaN", body(kBall, [](BodyDesc& b) { b.angularDamping = kNaN; }),
-       "damping must be finite and >= 0"},
+       "angularDamping must be finite and >= 0"},
       {"restitution 1.5", body(kBox, [](BodyDesc& b) { b.restitution = Real(1.5); }), "restitution must be in [0, 1]"},
       {"restitution -0.1", body(kBall, [](BodyDesc& b) { b.restitution = Real(-0.1); }), "restitution must be in [0, 1]"},
       {"radius 0", body(kBall, [](BodyDesc& b) { b.radius = 0; }), "scene body 2: circle radius must be at least 0.005 m"},
@@ -118,7 +118,7 @@ std::vector<Row> Rows() {
       {"time step 2 s", [](Scene& s) { s.timeStep = 2; }, "scene time step must be <= 1 s"},
       {"time step NaN", [](Scene& s) { s.timeStep = kNaN; }, "scene time step is not finite"},
       {"time step inf", [](Scene& s) { s.timeStep = kInf; }, "scene time step is not finite"},
-      {"sub-steps 0", [](Scene& s) { s.subSteps = 0; }, "scene sub-steps must be >= 1"},
+      {"pipelineRepeats 0", [](Scene& s) { s.pipelineRepeats = 0; }, "scene pipelineRepeats must be >= 1"},
       {"velocity iterations 0", [](Scene& s) { s.velocityIterations = 0; }, "scene velocity iterations must be >= 1"},
       {"position iterations -1", [](Scene& s) { s.positionIterations = -1; }, "scene position iterations must be >= 0"},
       {"gravity NaN", [](Scene& s) { s.gravity.y = kNaN; }, "scene gravity is not finite"},
@@ -146,8 +146,8 @@ void ExpectMessage(const std::function<void()>& call, const std::string& message
 
 TEST(BadInputScene, IterationAndSubStepLimits) {
   Scene bad = Good();
-  bad.subSteps = 1001;
-  ExpectMessage([&] { ValidateScene(bad); }, "sub-steps must be <= 1000", "scene sub-steps 1001");
+  bad.pipelineRepeats = 1001;
+  ExpectMessage([&] { ValidateScene(bad); }, "pipelineRepeats must be <= 1000", "scene pipelineRepeats 1001");
   bad = Good();
   bad.velocityIterations = 1000000000;
   ExpectMessage([&] { ValidateScene(bad); }, "velocity iterations must be <= 1000", "scene velocity its 1e9");

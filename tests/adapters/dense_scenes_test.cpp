@@ -98,7 +98,7 @@ void ExpectTumbles(const std::string& engine) {
 
 TEST(DenseScenes, TumblerTurnsInEveryEngineThatRunsIt) {
   ExpectTumbles("quadrant");
-  ExpectTumbles("quadrant:soft_step");
+  ExpectTumbles("quadrant:pgs");
   ExpectTumbles("box2d");
   ExpectTumbles("chipmunk");
   // Bullet moves kinematic bodies by transform, not velocity: it says so instead of running.

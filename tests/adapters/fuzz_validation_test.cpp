@@ -266,7 +266,7 @@ TEST(FuzzValidation, ValidateScene) {
     const int knob = rng.UniformInt(0, 9);  // which world setting to spoil, if any
     s.gravity = knob == 0 ? Point(rng, 20) : Vec2{0, -10};
     s.timeStep = knob == 1 ? Value(rng, 0.1) : Real(1.0 / 60.0);
-    s.subSteps = knob == 2 ? rng.UniformInt(-3, 3) : 1;
+    s.pipelineRepeats = knob == 2 ? rng.UniformInt(-3, 3) : 1;
     s.velocityIterations = knob == 3 ? rng.UniformInt(-3, 10) : 8;
     s.positionIterations = knob == 4 ? rng.UniformInt(-3, 10) : 3;
     s.restitutionThreshold = knob == 5 ? Value(rng, 2) : 1;
@@ -303,7 +303,7 @@ TEST(FuzzValidation, ValidateScene) {
                    "): mass " + Text(mp.mass) + ", inertia " + Text(mp.inertia));
         }
       }
-      if (!(s.timeStep > 0) || s.subSteps < 1 || s.velocityIterations < 1 || !IsFinite(s.gravity)) {
+      if (!(s.timeStep > 0) || s.pipelineRepeats < 1 || s.velocityIterations < 1 || !IsFinite(s.gravity)) {
         fail.Add("accepted a scene with bad world settings");
       }
     } catch (const Error&) {

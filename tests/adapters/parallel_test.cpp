@@ -182,8 +182,11 @@ TEST(DeterministicSchemeTest, ThreadCountOutOfRangeIsRefused) {
 namespace quadrant {
 namespace {
 
+// pgs: the thesis's scheme is measured with Box2D 2.4's solver (with soft_step the boundary
+// collision below loses its bounce: both circles end near rest; not yet understood).
 WorldDef QuadrantsDef(int threads) {
   WorldDef def;
+  def.solver = SolverType::kPgs;
   def.gravity = {0, 0};
   def.restitutionThreshold = 0;
   def.effects.friction = false;

@@ -111,6 +111,8 @@ TEST(RandomHits, Box2dSettingsAreRefusedWhereTheyDoNotApply) {
   EXPECT_THROW(World{def}, Error);
   def.polygonSkin = Real(0.01);
   def.restitution = RestitutionPolicy::kBox2d;
+  EXPECT_THROW(World{def}, Error);  // the default solver is soft_step
+  def.solver = SolverType::kPgs;
   EXPECT_NO_THROW(World{def});
   def.scheme = ParallelScheme::kQuadrants;
   EXPECT_THROW(World{def}, Error);

@@ -241,12 +241,12 @@ TEST(BadInputMoreTest, EveryAccessorRefusesADestroyedId) {
   ExpectRefused(s.world, [&] { s.world.GetPosition(doomed); }, stale, "old id after slot reuse");
 }
 
-TEST(BadInputMoreTest, StepRefusesMoreThanAThousandSubSteps) {
+TEST(BadInputMoreTest, StepRepeatedRefusesMoreThanAThousandRepeats) {
   Scene s;
-  ExpectRefused(s.world, [&] { s.world.Step(kDt, 1001); }, "subSteps must be <= 1000", "Step(1/60, 1001)");
-  ExpectRefused(s.world, [&] { s.world.Step(kDt, 1000000000); }, "subSteps must be <= 1000", "Step(1/60, 1e9)");
+  ExpectRefused(s.world, [&] { s.world.StepRepeated(kDt, 1001); }, "pipelineRepeats must be <= 1000", "StepRepeated(1/60, 1001)");
+  ExpectRefused(s.world, [&] { s.world.StepRepeated(kDt, 1000000000); }, "pipelineRepeats must be <= 1000", "StepRepeated(1/60, 1e9)");
   const uint64_t before = s.world.StateHash();
-  s.world.Step(kDt, 1000);  // the limit itself is accepted
+  s.world.StepRepeated(kDt, 1000);  // the limit itself is accepted
   EXPECT_NE(s.world.StateHash(), before);
 }
 
@@ -311,8 +311,8 @@ TEST(BadInputMoreTest, SettersRefuseBeyondTheCoordinateLimitAndNegativeZeroDt) {
   ExpectRefused(s.world, [&] { s.world.SetTransform(s.box, {Real(2e6), 0}, 0); }, "beyond the coordinate limit",
                 "SetTransform 2e6");
   ExpectRefused(s.world, [&] { s.world.Step(Real(-0.0)); }, "dt must be finite and > 0", "Step(-0)");
-  ExpectRefused(s.world, [&] { s.world.Step(kDt, std::numeric_limits<int>::min()); }, "subSteps must be >= 1",
-                "Step(1/60, INT_MIN)");
+  ExpectRefused(s.world, [&] { s.world.StepRepeated(kDt, std::numeric_limits<int>::min()); }, "pipelineRepeats must be >= 1",
+                "StepRepeated(1/60, INT_MIN)");
 }
 
 // Finite but absurd values. The engine may refuse them (an Error, world unchanged) or run them,

@@ -152,8 +152,8 @@ TEST(BadInputTest, StepBadParameters) {
   ExpectRefused(s.world, [&] { s.world.Step(-1); }, "Step(-1)");
   ExpectRefused(s.world, [&] { s.world.Step(kNaN); }, "Step(NaN)");
   ExpectRefused(s.world, [&] { s.world.Step(kInf); }, "Step(inf)");
-  ExpectRefused(s.world, [&] { s.world.Step(kDt, 0); }, "Step(1/60, 0)");
-  ExpectRefused(s.world, [&] { s.world.Step(kDt, -2); }, "Step(1/60, -2)");
+  ExpectRefused(s.world, [&] { s.world.StepRepeated(kDt, 0); }, "StepRepeated(1/60, 0)");
+  ExpectRefused(s.world, [&] { s.world.StepRepeated(kDt, -2); }, "StepRepeated(1/60, -2)");
 }
 
 TEST(BadInputTest, WorldConstructionRefused) {

@@ -316,10 +316,10 @@ TEST(WorldTest, FreeFallFollowsGravity) {
   EXPECT_NEAR(world.GetPosition(ball).y, cont, 10 * double(kDt) * t / 2 + 1e-3);
 }
 
-TEST(WorldTest, SubStepsSplitTheStep) {
+TEST(WorldTest, PipelineRepeatsSplitTheStep) {
   World world;
   BodyId ball = AddCircle(world, {0, 100}, Real(0.5));
-  world.Step(kDt, 4);
+  world.StepRepeated(kDt, 4);
   EXPECT_NEAR(world.GetLinearVelocity(ball).y, -10 * double(kDt), 1e-5);
 }
 
@@ -458,14 +458,14 @@ TEST(WorldTest, BothBroadPhasesGiveTheSameTrajectory) {
   EXPECT_EQ(wq.StateHash(), wg.StateHash());
 }
 
-TEST(WorldTest, SubStepsEqualSmallerSteps) {
-  // Step(dt, 2) runs the pipeline twice with dt/2: bit-identical to Step(dt/2) twice (dt/2 is
+TEST(WorldTest, PipelineRepeatsEqualSmallerSteps) {
+  // StepRepeated(dt, 2) runs the pipeline twice with dt/2: bit-identical to Step(dt/2) twice (dt/2 is
   // exact in binary floating point).
   World a, b;
   BuildScene(a);
   BuildScene(b);
   for (int i = 0; i < 60; ++i) {
-    a.Step(kDt, 2);
+    a.StepRepeated(kDt, 2);
     b.Step(kDt / 2);
     b.Step(kDt / 2);
   }
