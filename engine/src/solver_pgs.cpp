@@ -58,9 +58,9 @@ class PgsSolver final : public ContactSolverBase {
     const Real invDt = Real(1) / dt;
     const bool collisions = def.effects.restitution && def.restitution == RestitutionPolicy::kCollisions;
     if (collisions) ApplyCollisionPasses<kRotation>(run, bodies, def, invDt, Vec2{});
-    for (int it = 0; it < def.velocityIterations; ++it) {
-      ForEachColor(run, [&](int b, int e) { SolveVelocities<kRotation, kFriction>(bodies, invDt, b, e); });
-    }
+    // Every iteration's colours in one region (ForEachColor): the same order of passes.
+    ForEachColor(run, [&](int b, int e) { SolveVelocities<kRotation, kFriction>(bodies, invDt, b, e); },
+                 def.velocityIterations);
     run.For(Stage::kSolve, m, run.MinHeavyItems(), [&](int b, int e, int) { StoreImpulses(ctx.contacts, b, e); });
     auto t2 = Clock::now();
 

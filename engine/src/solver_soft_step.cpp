@@ -192,10 +192,19 @@ class SoftStepSolver final : public ContactSolverBase {
       groupStart_[k + 1] = groupStart_[k] + (count + kLanes - 1) / kLanes;
     }
     groups_.resize(groupStart_[kColors + 1]);
+    // One region, a stage per colour (the groups are independent; a stage tells its groups their
+    // colour): one hand-over instead of one per colour (ForEachColor).
+    stagePlan_.clear();
+    stageFirst_.clear();  // here: each stage's colour
     for (int k = 0; k <= kColors; ++k) {
-      const int begin = groupStart_[k], count = groupStart_[k + 1] - begin;
+      const int count = groupStart_[k + 1] - groupStart_[k];
       if (count == 0) continue;
-      run.For(Stage::kSolve, count, std::max(1, MinColorItems(run) / kLanes), [&](int gb, int ge, int) {
+      stagePlan_.push_back({count, kColorGrain / kLanes});
+      stageFirst_.push_back(k);
+    }
+    run.Stages(Stage::kSolve, stagePlan_, std::max(1, run.MinHeavyItems() / kLanes), [&](int stage, int gb, int ge) {
+      const int k = stageFirst_[stage], begin = groupStart_[k];
+      {
         for (int gi = begin + gb; gi < begin + ge; ++gi) {
           SoftRowGroup& g = groups_[gi];
           for (int lane = 0; lane < kLanes; ++lane) {
@@ -274,8 +283,8 @@ class SoftStepSolver final : public ContactSolverBase {
             }
           }
         }
-      });
-    }
+      }
+    });
   }
 
   // supported_[i] = 1 for every dynamic body with a contact against a static or kinematic one
@@ -347,20 +356,27 @@ class SoftStepSolver final : public ContactSolverBase {
         for (int lane = 0; lane < kLanes; ++lane) fn(Real{}, groups_[gi], lane);
       }
     };
-    const int minGroups = std::max(1, MinColorItems(run) / kLanes);
-    for (int color = 0; color < kColors; ++color) {
+    // One region per pass, a stage per colour (ForEachColor says why); the overflow colour's
+    // groups are one chunk, run row by row.
+    stagePlan_.clear();
+    stageFirst_.clear();
+    for (int color = 0; color <= kColors; ++color) {
       const int begin = groupStart_[color], count = groupStart_[color + 1] - begin;
       if (count == 0) continue;
-      run.For(Stage::kSolve, count, minGroups, [&](int b, int e, int) { rows(begin + b, begin + e); });
+      stagePlan_.push_back({count, color < kColors ? kColorGrain / kLanes : count});
+      stageFirst_.push_back(begin);
     }
-    const int begin = groupStart_[kColors], end = groupStart_[kColors + 1];
-    if (begin < end) {
-      run.Serial(Stage::kSolve, [&] {
-        for (int gi = begin; gi < end; ++gi) {
-          for (int lane = 0; lane < kLanes; ++lane) fn(Real{}, groups_[gi], lane);
-        }
-      });
-    }
+    const int overflow = groupStart_[kColors];
+    run.Stages(Stage::kSolve, stagePlan_, std::max(1, run.MinHeavyItems() / kLanes), [&](int s, int b, int e) {
+      const int gb = stageFirst_[s] + b, ge = stageFirst_[s] + e;
+      if (stageFirst_[s] < overflow) {
+        rows(gb, ge);
+        return;
+      }
+      for (int gi = gb; gi < ge; ++gi) {
+        for (int lane = 0; lane < kLanes; ++lane) fn(Real{}, groups_[gi], lane);
+      }
+    });
   }
 
   // RestitutionPolicy::kBox2d (restitution_policy.h): Box2D's restitution as a velocity target
