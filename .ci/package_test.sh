@@ -11,10 +11,10 @@ WORK="$(mktemp -d "${TMPDIR:-/tmp}/quadrant-package.XXXXXX")"
 trap 'rm -rf "$WORK"' EXIT
 
 hidden=()
-for pkg in box2d fmt benchmark GTest PkgConfig OpenMP; do
+for pkg in box2d fmt benchmark GTest PkgConfig OpenMP MPI; do
   hidden+=("-DCMAKE_DISABLE_FIND_PACKAGE_${pkg}=ON")
 done
-echo "-- engine-only configure (peers, fmt, benchmark, GTest hidden)"
+echo "-- engine-only configure (peers, fmt, benchmark, GTest, MPI hidden)"
 cmake --no-warn-unused-cli -S "$ROOT" -B "$WORK/build" -G Ninja -DCMAKE_BUILD_TYPE=Release -DQUADRANT_WERROR=ON \
   -DQUADRANT_BUILD_TESTS=OFF -DQUADRANT_BUILD_BENCHMARKS=OFF "${hidden[@]}" >"$WORK/configure.log" \
   || { cat "$WORK/configure.log"; exit 1; }

@@ -1,13 +1,16 @@
 // Quadrant's variants and the scene -> WorldDef mapping.
 //
-// Variants ("quadrant:<tokens>", tokens joined by '+'): solver "thesis", "pgs" or "soft_step",
+// Variants ("quadrant:<tokens>", tokens joined by '+'): solver "thesis", "pgs", "soft_step" or
+// "jacobi" (the distributed world's solver, here in one process),
 // broad phase "quadtree" or "grid", parallel scheme "deterministic" or "quadrants", "b2rest" for
-// Box2D 2.4.1's restitution (RestitutionPolicy::kBox2d, pgs only), "b2skin" for its 0.01 m polygon
+// Box2D 2.4.1's restitution (RestitutionPolicy::kBox2d, pgs and soft_step), "b2skin" for its 0.01 m polygon
 // skin (WorldDef::polygonSkin), "coupled" for the thesis solver's coupled impulse
-// (WorldDef::thesisCoupledImpulse), "b3soft" for soft_step with Box2D 3's settings (one relax
-// pass, no mass-ratio limit, damping ratio 10). The default is the engine's own (WorldDef:
-// soft_step with two relax passes and a mass-ratio limit of 10) with the uniform grid and the
-// deterministic scheme.
+// (WorldDef::thesisCoupledImpulse), "points" for its impulse at each touching point
+// (WorldDef::thesisPointImpulses), "passes<N>" for its passes (WorldDef::thesisPasses),
+// "relaxfriction" for soft_step's friction in every relax pass, "b3soft"
+// for soft_step with Box2D 3's settings (one relax pass, no mass-ratio limit, damping ratio 10).
+// The default is the engine's own (WorldDef: soft_step with two relax passes and a mass-ratio
+// limit of 10) with the uniform grid and the deterministic scheme.
 // relax<N> and ratio<N> override the engine's defaults; "pgs" alone is Box2D 2.4's solver.
 //
 // Solver budget for soft_step: a scene states the budget a case needs as pgs velocity
@@ -57,6 +60,8 @@ QuadrantVariant QuadrantVariant::Parse(std::string_view variant) {
       v.solver = SolverType::kPgs;
     } else if (token == "soft_step") {
       v.solver = SolverType::kSoftStep;
+    } else if (token == "jacobi") {
+      v.solver = SolverType::kJacobi;
     } else if (token.size() > 3 && token.starts_with("sub") && ParseCount(token.substr(3), &v.softSubSteps)) {
     } else if (token.size() > 2 && token.starts_with("it") && ParseCount(token.substr(2), &v.iterations)) {
     } else if (token.size() > 3 && token.starts_with("pos") && ParseCount(token.substr(3), &v.positionIterations)) {
@@ -64,14 +69,20 @@ QuadrantVariant QuadrantVariant::Parse(std::string_view variant) {
       // soft_step's WorldDef::softRelaxIterations.
     } else if (token.size() > 5 && token.starts_with("ratio") && ParseCount(token.substr(5), &v.massRatioLimit)) {
       // soft_step's WorldDef::softMassRatioLimit (issue #13 item 3: a heavy body on a light one).
+    } else if (token.size() > 6 && token.starts_with("passes") && ParseCount(token.substr(6), &v.thesisPasses)) {
+      // the thesis solver's WorldDef::thesisPasses.
     } else if (token == "b3soft") {
       // soft_step as Box2D 3 sets it (one relax pass, no mass-ratio limit, damping ratio 10): the
       // engine's soft_step before issue #13 changed its defaults.
       v.box2d3Soft = true;
+    } else if (token == "relaxfriction") {
+      v.frictionEveryRelax = true;
     } else if (token == "b2rest") {
       v.restitution = RestitutionPolicy::kBox2d;
     } else if (token == "coupled") {
       v.thesisCoupled = true;
+    } else if (token == "points") {
+      v.thesisPoints = true;
     } else if (token == "b2skin") {
       v.polygonSkin = Real(0.01);  // Box2D 2.4.1's b2_polygonRadius
     } else if (token == "quadtree") {
@@ -84,8 +95,8 @@ QuadrantVariant QuadrantVariant::Parse(std::string_view variant) {
       v.scheme = ParallelScheme::kQuadrants;
     } else {
       throw Error("unknown quadrant variant '" + std::string(token) +
-                  "' (known: thesis, pgs, soft_step, quadtree, grid, deterministic, quadrants, sub<N>, it<N>, pos<N>, "
-                  "relax<N>, ratio<N>, b3soft, b2rest, b2skin, coupled)");
+                  "' (known: thesis, pgs, soft_step, jacobi, quadtree, grid, deterministic, quadrants, sub<N>, it<N>, "
+                  "pos<N>, relax<N>, ratio<N>, passes<N>, b3soft, relaxfriction, b2rest, b2skin, coupled, points)");
     }
     if (end == std::string_view::npos) break;
     start = end + 1;
@@ -110,6 +121,8 @@ WorldDef QuadrantVariant::MakeWorldDef(const Scene& scene, int threads) const {
   def.restitution = restitution;
   def.polygonSkin = polygonSkin;
   def.thesisCoupledImpulse = thesisCoupled;
+  def.thesisPointImpulses = thesisPoints;
+  if (thesisPasses > 0) def.thesisPasses = thesisPasses;
   if (box2d3Soft) {
     def.softRelaxIterations = 1;
     def.softMassRatioLimit = 0;
@@ -117,6 +130,7 @@ WorldDef QuadrantVariant::MakeWorldDef(const Scene& scene, int threads) const {
   }
   if (massRatioLimit > 0) def.softMassRatioLimit = Real(massRatioLimit);
   if (relaxIterations > 0) def.softRelaxIterations = relaxIterations;
+  def.softFrictionEveryRelaxPass = frictionEveryRelax;
   def.threadCount = threads;
   def.scheme = scheme;
   def.effects = scene.effects;  // one type (scene.h); sleep with Box2D 2.4's tolerances, WorldDef's defaults
@@ -125,7 +139,10 @@ WorldDef QuadrantVariant::MakeWorldDef(const Scene& scene, int threads) const {
 
 std::string QuadrantVariant::Describe() const {
   return std::string("solver ") +
-         (solver == SolverType::kThesis ? "thesis" : solver == SolverType::kPgs ? "pgs" : "soft_step") +
+         (solver == SolverType::kThesis  ? "thesis"
+          : solver == SolverType::kPgs   ? "pgs"
+          : solver == SolverType::kJacobi ? "jacobi"
+                                          : "soft_step") +
          ", broad phase " + (broadPhase == BroadPhaseType::kQuadTree ? "quad-tree" : "uniform grid");
 }
 

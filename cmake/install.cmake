@@ -8,8 +8,9 @@ install(TARGETS quadrant EXPORT quadrantTargets
         LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
         RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR}
         INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
+# The distributed world's header is left out: quadrant_mpi (it needs MPI) is not installed.
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/engine/include/quadrant
-        DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
+        DESTINATION ${CMAKE_INSTALL_INCLUDEDIR} PATTERN distributed_world.h EXCLUDE)
 
 set(_quadrant_cmake_dir ${CMAKE_INSTALL_LIBDIR}/cmake/quadrant)
 install(EXPORT quadrantTargets NAMESPACE quadrant:: DESTINATION ${_quadrant_cmake_dir})

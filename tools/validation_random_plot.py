@@ -67,7 +67,10 @@ def main():
     import matplotlib.pyplot as plt
 
     compared = [r for r in runs if r in to_box2d]
-    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    # tab20's dark shades, then its light ones: the campaign has 16 runs, and the default cycle's
+    # 10 colours drew two runs alike.
+    tab20 = plt.get_cmap("tab20").colors
+    colours = list(tab20[0::2]) + list(tab20[1::2])
     colour = {run: colours[k % len(colours)] for k, run in enumerate(runs)}
     fig = plt.figure(figsize=(16, 10))
     top = fig.add_subplot(2, 1, 1)

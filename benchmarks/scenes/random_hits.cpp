@@ -335,9 +335,18 @@ std::vector<CampaignRun> DefaultCampaignRuns() {
       {"quadrant:thesis", "default", "quadrant:thesis"},
       {"quadrant:pgs", "box2d_restitution", "quadrant:pgs+b2rest"},
       {"quadrant:pgs", "box2d_skin", "quadrant:pgs+b2skin"},
-      {"quadrant:pgs", "box2d_restitution+skin", "quadrant:pgs+b2rest+b2skin"},
-      {"quadrant:soft_step", "sub1", "quadrant:soft_step+sub1"},
+      {"quadrant:pgs", "box2d_restitution+box2d_skin", "quadrant:pgs+b2rest+b2skin"},
+      {"quadrant:soft_step", "box2d_restitution", "quadrant:soft_step+b2rest"},
+      {"quadrant:soft_step", "box2d_skin", "quadrant:soft_step+b2skin"},
+      {"quadrant:soft_step", "relaxfriction", "quadrant:soft_step+relaxfriction"},
+      {"quadrant:soft_step", "box2d_restitution+box2d_skin", "quadrant:soft_step+b2rest+b2skin"},
+      {"quadrant:soft_step", "box2d_restitution+box2d_skin+relaxfriction", "quadrant:soft_step+b2rest+b2skin+relaxfriction"},
+      {"quadrant:soft_step", "box2d_restitution+box2d_skin+relax4+relaxfriction",
+       "quadrant:soft_step+b2rest+b2skin+relax4+relaxfriction"},
       {"quadrant:thesis", "coupled", "quadrant:thesis+coupled"},
+      {"quadrant:thesis", "coupled+points", "quadrant:thesis+coupled+points"},
+      {"quadrant:thesis", "coupled+box2d_skin", "quadrant:thesis+coupled+b2skin"},
+      {"quadrant:thesis", "coupled+points+box2d_skin", "quadrant:thesis+coupled+points+b2skin"},
   };
 }
 

@@ -123,8 +123,11 @@ struct Campaign {
 
 /// The runs of the committed campaign: Box2D; Quadrant's pgs, soft_step and thesis at their
 /// defaults; and the single-choice switches that trace each difference (README "validation"):
-/// pgs with Box2D 2.4.1's restitution, with its polygon skin, and with both (the
-/// Box2D-compatible setting); soft_step with one sub-step; thesis with its impulse coupled.
+/// pgs with Box2D 2.4.1's restitution, with its polygon skin, and with both (pgs's
+/// Box2D-compatible setting); soft_step with each of those, with friction in every relax pass, with
+/// the first two, with all three (soft_step's Box2D-compatible setting) and that with four relax
+/// passes; thesis with its impulse coupled, and that with an impulse per touching point, with the
+/// skin, and with both.
 std::vector<CampaignRun> DefaultCampaignRuns();
 
 /// Runs hits 0..count-1 of the campaign seeded `seed` on every run. A hit is single-point, and

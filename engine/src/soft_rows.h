@@ -54,7 +54,7 @@ struct SoftPointRows {
   Real separation[kLanes];  // at collision time (the padding point: kPadSeparation)
   Real normalMass[kLanes], tangentMass[kLanes];
   Real normalImpulse[kLanes], tangentImpulse[kLanes];
-  Real collisionImpulse[kLanes];  // this step's collisions (ApplyCollisions), for the friction bound
+  Real collisionImpulse[kLanes];  // a sub-step's share of the step's collisions, for the friction bound
 };
 
 // Four rows of one colour. Softness is per row: contacts with a static or kinematic body are
@@ -315,9 +315,10 @@ inline void SolveRows(SolverBody* states, SoftRowGroup& g, int lane, const SoftS
       }
       const V vt = dvx * tx + dvy * ty;
       // Coulomb over the whole impact, as pgs: the step's collision impulse (ApplyCollisions)
-      // counts. Bounded by the sub-steps' normal impulse alone, a bouncing hit got almost no
-      // friction: the random campaign's p90 difference to Box2D was 49 %, then 9.5 % (2000
-      // hits, seed 17; README "validation").
+      // counts, a 1/n share per sub-step (solver_soft_step.cpp says why). Bounded by the
+      // sub-steps' normal impulse alone, a bouncing hit got almost no friction: the random
+      // campaign's p90 difference to Box2D was 49 %, then 9.5 %, 6.7 % with the share (2000 hits,
+      // seed 17).
       const V maxFriction = friction * (Load(p.normalImpulse, lane, V{}) + Load(p.collisionImpulse, lane, V{}));
       const V ti = Load(p.tangentImpulse, lane, V{});
       const V newImpulse = Min(Max(ti - Load(p.tangentMass, lane, V{}) * vt, Neg(maxFriction)), maxFriction);

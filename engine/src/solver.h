@@ -22,6 +22,7 @@ class Solver {
 std::unique_ptr<Solver> MakeThesisSolver();
 std::unique_ptr<Solver> MakePgsSolver();
 std::unique_ptr<Solver> MakeSoftStepSolver();
+std::unique_ptr<Solver> MakeJacobiSolver();
 std::unique_ptr<Solver> MakeSolver(SolverType type);
 
 }  // namespace quadrant

@@ -58,9 +58,9 @@ class PgsSolver final : public ContactSolverBase {
     const Real invDt = Real(1) / dt;
     const bool collisions = def.effects.restitution && def.restitution == RestitutionPolicy::kCollisions;
     if (collisions) ApplyCollisionPasses<kRotation>(run, bodies, def, invDt, Vec2{});
-    for (int it = 0; it < def.velocityIterations; ++it) {
-      ForEachColor(run, [&](int b, int e) { SolveVelocities<kRotation, kFriction>(bodies, invDt, b, e); });
-    }
+    // Every iteration's colours in one region (ForEachColor): the same order of passes.
+    ForEachColor(run, [&](int b, int e) { SolveVelocities<kRotation, kFriction>(bodies, invDt, b, e); },
+                 def.velocityIterations);
     run.For(Stage::kSolve, m, run.MinHeavyItems(), [&](int b, int e, int) { StoreImpulses(ctx.contacts, b, e); });
     auto t2 = Clock::now();
 
@@ -167,6 +167,7 @@ std::unique_ptr<Solver> MakeSolver(SolverType type) {
     case SolverType::kThesis: return MakeThesisSolver();
     case SolverType::kPgs: return MakePgsSolver();
     case SolverType::kSoftStep: return MakeSoftStepSolver();
+    case SolverType::kJacobi: return MakeJacobiSolver();
   }
   return MakePgsSolver();
 }

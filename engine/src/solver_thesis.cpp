@@ -36,6 +36,7 @@
 #include <vector>
 
 #include "integrate.h"
+#include "restitution_policy.h"
 #include "solver.h"
 
 namespace quadrant {
@@ -116,7 +117,11 @@ class ThesisSolver final : public Solver {
       height_[i] = Dot(up, contacts[i].manifold.points[0].point);
     }
     std::stable_sort(order_.begin(), order_.end(), [&](uint32_t x, uint32_t y) { return height_[x] < height_[y]; });
-    for (uint32_t i : order_) Resolve<kRotation>(bodies, def, contacts[i], start_, up, true);
+    // WorldDef::thesisPasses: the thesis makes one pass; more repeat it (a second pass finds no
+    // depth left to push, only the approach the later contacts' impulses left at the earlier ones).
+    for (int pass = 0; pass < def.thesisPasses; ++pass) {
+      for (uint32_t i : order_) Resolve<kRotation>(bodies, def, contacts[i], start_, up, true);
+    }
     for (Contact& c : contacts) {
       if (bodies.inv[c.a].invMass == 0 || bodies.inv[c.b].invMass == 0) {
         Resolve<kRotation>(bodies, def, c, start_, up, false);
@@ -183,17 +188,33 @@ class ThesisSolver final : public Solver {
 
     // 2. One impulse per contact, as the thesis's one-point contacts: at the centroid of the
     // touching points, with restitution along the normal and Coulomb friction along the tangent.
+    // WorldDef::thesisPointImpulses: one impulse at each touching point in turn instead.
+    Vec2 points[2];
+    int index[2] = {0, 0};
+    int count = 0;
     Vec2 point{0, 0};
     int touching = 0;
+    // WorldDef::polygonSkin (Box2D 2.4.1's polygon radius): points within the pair's skins touch
+    // too. Shapes are read only with a skin (the quadrants scheme's body copies carry none).
+    const Real skin = def.polygonSkin > 0 ? PolygonSkin(def, bodies.shape[a].type == ShapeType::kPolygon,
+                                                        bodies.shape[b].type == ShapeType::kPolygon)
+                                          : Real(0);
     for (int k = 0; k < m.pointCount; ++k) {
-      if (m.points[k].separation > def.linearSlop) continue;
+      if (m.points[k].separation - skin > def.linearSlop) continue;
       point += m.points[k].point;
+      index[count] = k;
+      points[count++] = m.points[k].point;
       ++touching;
     }
     if (touching == 0) return;
     point = (Real(1) / Real(touching)) * point;
+    if (!def.thesisPointImpulses) {
+      points[0] = point;
+      count = 1;
+    }
     const Vec2 t = RightPerp(n);
-    {
+    for (int k = 0; k < count; ++k) {
+      point = points[k];
       const Vec2 rA = point - bodies.center[a];
       const Vec2 rB = point - bodies.center[b];
       BodyVelocity& va = bodies.vel[a];
@@ -201,7 +222,7 @@ class ThesisSolver final : public Solver {
       Vec2 dv = vb.v - va.v;
       if constexpr (kRotation) dv += Cross(vb.w, rB) - Cross(va.w, rA);
       const Real vn = Dot(dv, n);
-      if (vn >= 0) return;  // already separating
+      if (vn >= 0) continue;  // already separating
       const Real e = def.effects.restitution && vn < -def.restitutionThreshold ? c.restitution : Real(0);
       Real kn = mSum;
       if constexpr (kRotation) kn += iA * Cross(rA, n) * Cross(rA, n) + iB * Cross(rB, n) * Cross(rB, n);
@@ -229,9 +250,10 @@ class ThesisSolver final : public Solver {
         const Real rise = Dot(u, bodies.vel[upper].v) - std::max(Dot(u, bodies.vel[lower].v), Real(0));
         if (rise > 0) bodies.vel[upper].v -= rise * u;
       }
-      // Reported on the first point: the thesis has one impulse per contact.
-      c.manifold.points[0].normalImpulse = jn;
-      c.manifold.points[0].tangentImpulse = jt;
+      // Reported on the first point: the thesis has one impulse per contact (per point with
+      // thesisPointImpulses: the manifold's touching points in order).
+      c.manifold.points[index[k]].normalImpulse = jn;
+      c.manifold.points[index[k]].tangentImpulse = jt;
     }
   }
 };

@@ -6,8 +6,9 @@
 // the machine's core count. There are as many blocks as threads, but any thread may run any
 // block (task_system.h), so the times are kept per block index, never per thread.
 //
-// Which clock: with more threads than cores, blocks are timed with the thread's own CPU clock,
-// so a worker that the OS preempts in favour of another of the pool is not charged for the
+// Which clock: with more running threads than cores (TaskSystem::ThreadCount: the default pool
+// starts no more threads than cores, oneTBB's arena does), blocks are timed with the thread's
+// own CPU clock, so a worker that the OS preempts in favour of another of the pool is not charged for the
 // wait. That clock is a system call: 930 ns per read on the 2-core VMs here (steady_clock, read
 // in user space, 39 ns), and a step at 2 threads reads it about 190 times: 0.09 ms of a 1.3 ms
 // step of 16000 circles on the critical path. With no more threads than cores no worker waits
@@ -40,7 +41,7 @@ class StageRunner {
         minItems_(minParallelItems),
         workerMs_(tasks.WorkerCount(), 0.0),
         measure_(tasks.WorkerCount() > 1),
-        threadClock_(static_cast<unsigned>(tasks.WorkerCount()) > std::max(1u, std::thread::hardware_concurrency())),
+        threadClock_(static_cast<unsigned>(tasks.ThreadCount()) > std::max(1u, std::thread::hardware_concurrency())),
         readMs_(measure_ ? ClockReadMs() : 0.0) {}
 
   int Workers() const { return tasks_.WorkerCount(); }
@@ -74,6 +75,55 @@ class StageRunner {
       largest = std::max(largest, ms);
     }
     Add(stage, sum, largest);
+  }
+
+  /// Runs the stages of `plan` in order as one region (TaskSystem::ParallelStages): fn(stage,
+  /// begin, end) over each stage's items, which must be independent of each other within a
+  /// stage. A region of fewer than minParallel items in all runs inline on the caller. The
+  /// load-balance bound counts per stage the larger of its largest chunk and its work shared
+  /// evenly (chunks are claimed dynamically, so no thread's share is fixed in advance). A pool
+  /// that runs a region on the caller alone (a busy machine) still calls it chunk by chunk.
+  template <class Fn>
+  void Stages(Stage stage, const std::vector<TaskSystem::StagePlan>& plan, int minParallel, Fn&& fn) {
+    long long total = 0;
+    for (const TaskSystem::StagePlan& p : plan) total += p.count;
+    if (total <= 0) return;
+    const int stages = static_cast<int>(plan.size());
+    if (tasks_.WorkerCount() == 1 || total < std::max<long long>(2, minParallel)) {
+      Serial(stage, [&] {
+        for (int s = 0; s < stages; ++s) {
+          if (plan[s].count > 0) fn(s, 0, plan[s].count);
+        }
+      });
+      return;
+    }
+    if (!measure_) {
+      tasks_.ParallelStages(stages, plan.data(), [&](int s, int b, int e, int) { fn(s, b, e); });
+      return;
+    }
+    chunkOffset_.resize(stages + 1);
+    chunkOffset_[0] = 0;
+    for (int s = 0; s < stages; ++s) {
+      chunkOffset_[s + 1] = chunkOffset_[s] + std::max(1, StageChunks(plan[s].count, plan[s].grain, Workers()));
+    }
+    chunkMs_.assign(chunkOffset_[stages], 0.0);
+    tasks_.ParallelStages(stages, plan.data(), [&](int s, int b, int e, int chunk) {
+      const double t0 = NowMs();
+      fn(s, b, e);
+      // (A task system that calls a whole stage at once passes chunk 0.)
+      chunkMs_[chunkOffset_[s] + std::min(chunk, chunkOffset_[s + 1] - chunkOffset_[s] - 1)] += Elapsed(t0);
+    });
+    double work = 0, critical = 0;
+    for (int s = 0; s < stages; ++s) {
+      double sum = 0, largest = 0;
+      for (int c = chunkOffset_[s]; c < chunkOffset_[s + 1]; ++c) {
+        sum += chunkMs_[c];
+        largest = std::max(largest, chunkMs_[c]);
+      }
+      work += sum;
+      critical += std::max(largest, sum / Workers());
+    }
+    Add(stage, work, critical);
   }
 
   /// Runs fn on the calling thread; all of it is on the critical path.
@@ -120,6 +170,8 @@ class StageRunner {
   TaskSystem& tasks_;
   int minItems_;
   std::vector<double> workerMs_;  // per block index
+  std::vector<int> chunkOffset_;  // Stages: the first chunk slot of each stage
+  std::vector<double> chunkMs_;   // Stages: per chunk
   bool measure_;      // more than one worker: a single one's bound is 1 by definition
   bool threadClock_;  // more workers than cores: time blocks by thread CPU time
   double readMs_;     // the cost of one clock read, subtracted from every timed block

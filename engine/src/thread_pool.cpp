@@ -17,37 +17,78 @@
 // scheduler preempts, mid-block; and a caller spinning on its core keeps the scheduler from
 // moving the waiting worker there.
 //
-// With this pool, interleaved with the first one and with oneTBB (README) in one run, one busy
-// loop, load average 10-19 (first pool / this pool, ms per step at 1, 2, 3, 4 threads):
-// circles 16000 3.92 / 4.17, 234 / 4.91, 113 / 3.32, 73.0 / 2.67; pyramid 23.0 / 24.9,
+// With the second pool (8b5591b), interleaved with the first one and with oneTBB (README) in one
+// run, one busy loop, load average 10-19 (first pool / second pool, ms per step at 1, 2, 3, 4
+// threads): circles 16000 3.92 / 4.17, 234 / 4.91, 113 / 3.32, 73.0 / 2.67; pyramid 23.0 / 24.9,
 // 681 / 9.49, 445 / 42.9, 34.4 / 9.67. (Under that much foreign load the figures are noisy;
 // the busy-machine table of speedup.md is the measurement on an otherwise quiet machine.)
 //
-// What this pool does instead:
-// - Any thread takes any block. Blocks are claimed from one atomic counter (tagged with the job
-//   number, so a late worker cannot claim a block of the next job); the caller claims too. A
-//   worker that the scheduler has not run simply takes no block: the caller does its share.
-//   The block boundaries and the `worker` argument (the block index) stay what they were, so
-//   per-block outputs concatenated in block order are unchanged (determinism).
-// - Waiting adapts to contention. A spinning thread reads the clock every few pause
-//   instructions; a jump of more than kPreemptedMicros between two reads means the scheduler
-//   took its core for something else, and a caller whose wait for the other blocks outlasts
-//   twice its own blocks plus kMaxSpinMicros means a worker holding one was not running. Two
-//   such signs within kSignWindowMillis mark the pool contended for kContendedMillis: then no
-//   thread spins for long. The caller spins at most as long as its own blocks took, then waits
-//   on a futex; a worker between jobs naps kPollMicros at a time and looks for a job (so
-//   starting a job costs the caller no system call), and after kPollMillis without one waits
-//   on a futex. No spinner takes the core from the thread it waits for, and a napping thread
-//   keeps its scheduler credit for the moment it has work. On a quiet machine nothing
-//   is ever preempted and waiting is what it was: up to kMaxSpinMicros of pause spinning,
-//   because a sleeping worker takes about 100 us to wake on these VMs and a step's serial gaps
-//   are of that order (2000 circles at 2 threads: 0.65 ms per step with a 100 us spin, 0.24 ms
-//   with 1 ms; 1 thread 0.22, measured with the first pool).
-// - An exception thrown by a block is caught, the blocks not yet started are skipped, and the
-//   first exception is rethrown to the caller once every started block has finished; the pool
-//   stays usable.
-// - A ParallelFor called from inside a block runs inline on that thread, block by block (the
-//   same partition), instead of deadlocking.
+// Why the second pool (dynamic blocks, contention detection, naps) still lost, traced with the
+// pool's counters (QUADRANT_POOL_STATS=1 prints them when a pool is destroyed) at 8b5591b, base-100
+// pyramid, 2 threads, 30 + 10 steps, beside other helpers' nice -n 19 builds (load 2.9): pgs ran
+// 2844 jobs (71 per step), soft_step 3656 (91 per step: 4 sub-steps x 3 passes x ~7 colours, each
+// colour a job of 20-50 us). The caller ran every block alone in 1912 (pgs) and 3195 (soft_step)
+// of them, and the pool was "contended" for 2149 and 2875 of them after only 17 and 2 signs: a
+// niced neighbour's time slice is enough to preempt a spinner twice in 50 ms. Contended, a worker
+// napped 50 us (plus 50 us of timer slack) between jobs, so it came too late for jobs shorter than
+// that and the caller did their work plus every hand-over; pgs at 2 threads took 16.6 ms per step
+// against about 8 on 1. Where the worker did come, each colour cost a hand-over and a join.
+//
+// What this pool does:
+// - Regions of stages. ParallelStages (task_system.h) runs a list of stages as one job: every
+//   stage's chunks are claimed from one 64-bit claim word (job tag, stage, next chunk, chunk
+//   count), and the thread that finishes a stage's last chunk publishes the next stage in the
+//   same word. A thread with nothing left in the current stage spins (then sleeps) until the
+//   word moves on. The solver's colours are such a region (one per pass; pgs's 8 velocity
+//   iterations are one region), so a pass costs one hand-over instead of one per colour, and
+//   chunks of 64 constraints (ContactSolverBase::kColorGrain, at most four per thread and stage)
+//   balance the threads and leave a late thread little to wait on. A ParallelFor is a region of
+//   one stage whose chunks are the blocks of the static partition (their indices index per-block
+//   outputs, so determinism is unchanged). Any thread takes any chunk, the caller included: a
+//   worker that the scheduler has not run takes none, and no chunk waits for it.
+// - The caller runs jobs alone while the machine is busy. A preempted worker that holds a chunk
+//   stalls the stage until the scheduler runs it again, a time slice later; with one busy loop
+//   on two cores that happens every few milliseconds, and no chunk size avoids it (a claimed
+//   chunk cannot be taken back: its rows write bodies). So the caller measures, per window of
+//   kWindowMillis, how long it waited beyond twice its own chunk, and how many chunks the
+//   workers ran. A window stalled more than kStallShare, or one where the workers ran under
+//   kMinHelpShare of the chunks (descheduled: waking them only costs a system call per job),
+//   makes the pool serial for kContendedMillis: every job then runs on the caller, stage by
+//   stage and chunk by chunk (so StageRunner's load-balance bound still describes the
+//   partition), with no hand-over at all: the one-thread step plus a clock read per job.
+//   Then the workers are tried again; a window that fails right after a serial period doubles
+//   the next one (up to kMaxContendedMillis), so a machine that stays busy costs a failed probe
+//   of about 40 ms every 1.6 s. Which thread runs a chunk never changes the arithmetic, so the
+//   results are bit-identical whichever way a job runs.
+// - No more threads than cores: a pool asked for more threads than the process may run on
+//   (its affinity mask) starts only as many; the blocks and chunks are the same, fewer threads
+//   claim them. Threads beyond the cores could only take turns, each preempting the others
+//   mid-chunk.
+// - Waiting on a quiet machine: up to kMaxSpinMicros of pause spinning, then a futex, because
+//   a sleeping worker takes about 100 us to wake on these VMs and a step's serial gaps are of
+//   that order (2000 circles at 2 threads: 0.65 ms per step with a 100 us spin, 0.24 ms with
+//   1 ms; 1 thread 0.22, measured with the first pool).
+// - An exception thrown by a chunk is caught, the chunks not yet started (of this and every
+//   later stage) are skipped, and the first exception is rethrown to the caller once every
+//   started chunk has finished; the pool stays usable.
+// - A ParallelFor or ParallelStages called from inside a chunk runs inline on that thread.
+//
+// Measured with this pool (quadrant_bench runs, this pool and 8b5591b's alternated, 5 rounds,
+// medians, ms per step at 1 / 2 / 3 / 4 threads) beside one busy loop while other users' niced
+// builds also loaded the VM (load average 11-15, so 1-thread steps ran 4-5x slower than on a
+// quiet machine): circles 16000 (60 + 10 steps) 5.45 / 5.66 / 5.97 / 5.57 against 5.08 / 6.21 /
+// 3.25 / 3.34 at 8b5591b; pyramid 5050 (30 + 10 steps) 29.9 / 31.4 / 29.9 / 30.4 against 29.5 /
+// 34.7 / 16.3 / 12.0. The pool ran 95-98 % of the pyramid's jobs serially (four runs).
+// (8b5591b's fast 3- and 4-thread cells are its threads outnumbering the busy loop and the niced
+// builds for the cores; on an otherwise quiet machine with one busy loop it measured 7.03 / 8.78
+// / 9.31 / 8.83 on the pyramid, README.)
+//
+// Quiet (no niced process running, checked from /proc/stat around each run), 8b5591b / this pool,
+// medians of 5-8 alternated runs, 60 + 10 steps, ms per step at 1, 2, 3, 4 threads: pyramid 5050
+// pgs 7.5 / 6.97, 4.90 / 4.44, 6.37 / 4.46, 7.12 / 4.16; soft_step 4.06 / 3.76, 2.79 / 2.78,
+// 4.09 / 2.74, 3.99 / 2.81; circles 16000 1.25 / 1.21, 0.845 / 0.811, 1.21 / 0.952, 1.39 / 0.822;
+// polygons 16000 2.52 / 2.87, 1.54 / 1.62, 2.17 / 1.81, 2.18 / 1.65. The pyramid ran 71 jobs per
+// step at 8b5591b (pgs) and 26 now; soft_step 91 and 45.
 //
 // Why not the compiler's OpenMP or oneTBB: benchmarks/task_overhead.cpp measures the cost of
 // one parallel-for over 2 threads for this pool and for OpenMP (see the README's table); GCC's
@@ -58,9 +99,12 @@
 #include <chrono>
 #include <climits>
 #include <cstdint>
+#include <cstdio>
+#include <cstdlib>
 #include <exception>
 #include <limits>
 #include <mutex>
+#include <stdexcept>
 #include <thread>
 #include <utility>
 #include <vector>
@@ -72,11 +116,28 @@
 #endif
 #if defined(__linux__)
 #include <linux/futex.h>
+#include <sched.h>
 #include <sys/syscall.h>
 #include <unistd.h>
 #endif
 
 namespace quadrant {
+
+// The default region: one ParallelFor per stage over the stage's chunks. Task systems with a
+// cheaper way (the pool below) override it.
+void TaskSystem::ParallelStages(int stages, const StagePlan* plan, const StageFn& fn) {
+  for (int s = 0; s < stages; ++s) {
+    const int count = plan[s].count, chunks = StageChunks(count, plan[s].grain, WorkerCount());
+    if (chunks == 0) continue;
+    ParallelFor(chunks, [&](int cb, int ce, int) {
+      for (int c = cb; c < ce; ++c) {
+        const int begin = BlockBegin(count, chunks, c), end = BlockBegin(count, chunks, c + 1);
+        if (begin < end) fn(s, begin, end, c);
+      }
+    });
+  }
+}
+
 namespace {
 
 using Clock = std::chrono::steady_clock;
@@ -84,27 +145,43 @@ using Clock = std::chrono::steady_clock;
 class InlineTaskSystem final : public TaskSystem {
  public:
   int WorkerCount() const override { return 1; }
+  int ThreadCount() const override { return 1; }
   void ParallelFor(int count, const RangeFn& fn) override {
     if (count > 0) fn(0, count, 0);
+  }
+  void ParallelStages(int stages, const StagePlan* plan, const StageFn& fn) override {
+    for (int s = 0; s < stages; ++s) {
+      if (plan[s].count > 0) fn(s, 0, plan[s].count, 0);
+    }
   }
 };
 
 // Longest spin on a quiet machine (see the head comment for the measurement behind 1 ms).
 constexpr int kMaxSpinMicros = 1000;
-// Spin before a futex wait when the pool is contended: about one futex system call.
-constexpr int kContendedSpinMicros = 5;
-// A gap this long between two clock reads of a spin loop means the spinner was descheduled for
-// another thread. The loop reads the clock every 32 pause instructions (1-5 us on x86-64); a
-// scheduler time slice is 0.75 ms or more, while interrupts and a VM's short steals are tens of
-// microseconds and must not count.
-constexpr int kPreemptedMicros = 200;
-// How long contention (two signs within kSignWindowMillis) keeps the pool from spinning.
+// Contention is judged by the caller's stalls: the part of each wait at a stage's end beyond
+// twice its longest chunk of the job plus kStallSlackMicros (a worker that runs finishes its
+// chunk within about that), summed over windows of kWindowMillis of parallel running (judged from
+// kFirstJudgeMillis on, see Judge). A window with more than kStallShare of it stalled makes the
+// pool serial (the caller alone) for kContendedMillis; a window that is stalled again right
+// after such a period doubles the next one, up to kMaxContendedMillis, so a machine that stays
+// busy pays for a probe rarely.
+constexpr int kStallSlackMicros = 50;
+constexpr int kWindowMillis = 40;
+constexpr int kFirstJudgeMillis = 10;
+constexpr double kStallShare = 0.2;
+// A window in which the workers took part in fewer than this share of the jobs (at least
+// kMinJobs of them) also makes the pool serial: the workers were not running when the jobs came
+// (another process had their cores), so waking them only cost the caller a system call per job.
+// Counted in jobs, not chunks: one job of pgs's velocity iterations has hundreds of chunks, and
+// a worker that arrived for one such job in ten (measured beside niced builds: 44 of 637 jobs)
+// outweighed the rest. Every job counts, however short: a job that is over before a worker
+// could join gains nothing from the workers either (counting only jobs of 200 us or more kept
+// 5050 circles beside a busy loop parallel, the worker in 13 of 595 jobs, each job paying a
+// futex wake).
+constexpr double kMinHelpShare = 0.5;
+constexpr int kMinJobs = 8;
 constexpr int kContendedMillis = 200;
-constexpr int kSignWindowMillis = 50;
-// A contended worker between jobs sleeps this long at a time and then looks for a job (plus the
-// timer slack, 50 us by default), for up to kPollMillis before it waits on the futex; see Poll.
-constexpr int kPollMicros = 50;
-constexpr int kPollMillis = 20;
+constexpr int kMaxContendedMillis = 1600;
 
 // Sleeps while *word == expected (or returns at once if it differs). Linux: the futex system
 // call itself, because libstdc++'s std::atomic::wait first calls sched_yield four times, and a
@@ -128,19 +205,50 @@ void WakeAll(std::atomic<uint32_t>& word) {
 #endif
 }
 
-// The pool thread (or caller) that is running a block of some pool right now, for nesting.
+// The cores this process may run on (its affinity mask on Linux, so `taskset -c 0` counts 1).
+int UsableCores() {
+#if defined(__linux__)
+  cpu_set_t set;
+  if (sched_getaffinity(0, sizeof(set), &set) == 0) return std::max(1, CPU_COUNT(&set));
+#endif
+  return static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+}
+
+// The pool thread (or caller) that is running a chunk of some pool right now, for nesting.
 thread_local const TaskSystem* tRunning = nullptr;
+
+// The claim word of the current region: job tag, stage, next chunk to claim, chunks of the
+// stage, 16 bits each. Everything a thread needs to claim a chunk is in the one word, so a
+// thread reads the job's other fields only after a successful claim, when the job cannot end
+// before the chunk it holds does.
+constexpr uint32_t kDoneStage = 0xFFFF;
+constexpr int kMaxThreads = 0xFFFF / 4;
+constexpr int kMaxStagesPerJob = 0xFFFE;
+constexpr uint64_t Pack(uint32_t tag, uint32_t stage, uint32_t next, uint32_t chunks) {
+  return uint64_t(tag & 0xFFFF) << 48 | uint64_t(stage & 0xFFFF) << 32 | uint64_t(next & 0xFFFF) << 16 | (chunks & 0xFFFF);
+}
+constexpr uint32_t TagOf(uint64_t w) { return uint32_t(w >> 48); }
+constexpr uint32_t StageOf(uint64_t w) { return uint32_t(w >> 32) & 0xFFFF; }
+constexpr uint32_t NextOf(uint64_t w) { return uint32_t(w >> 16) & 0xFFFF; }
+constexpr uint32_t ChunksOf(uint64_t w) { return uint32_t(w) & 0xFFFF; }
 
 class ThreadPool final : public TaskSystem {
  public:
-  explicit ThreadPool(int threads)
-      : workers_(threads),
-        oversubscribed_(static_cast<unsigned>(threads) > std::max(1u, std::thread::hardware_concurrency())) {
-    threads_.reserve(threads - 1);
-    for (int w = 1; w < threads; ++w) threads_.emplace_back([this] { WorkerLoop(); });
+  explicit ThreadPool(int threads) : workers_(threads) {
+    // The claim word holds a stage's chunk count (up to 4 per thread) in 16 bits.
+    if (threads > kMaxThreads) throw std::invalid_argument("MakeThreadPool: at most 16383 threads");
+    // More threads than cores would only take turns on them: the extra ones are not started
+    // (every block still exists and is run by the threads that are).
+    const int running = std::min(threads, UsableCores());
+    threads_.reserve(running - 1);
+    for (int w = 1; w < running; ++w) threads_.emplace_back([this] { WorkerLoop(); });
   }
 
   ~ThreadPool() override {
+    if (std::getenv("QUADRANT_POOL_STATS")) {
+      std::fprintf(stderr, "pool %d: jobs %lld, serial %lld, caller alone %lld, wait %.3f ms, waits>1ms %lld, marks %d\n",
+                   workers_, statJobs_, statSerial_, statAlone_, statWaitNs_ * 1e-6, statLong_, statMarks_);
+    }
     stop_.store(true, std::memory_order_seq_cst);
     jobWord_.fetch_add(1, std::memory_order_seq_cst);
     WakeAll(jobWord_);
@@ -148,57 +256,129 @@ class ThreadPool final : public TaskSystem {
   }
 
   int WorkerCount() const override { return workers_; }
+  int ThreadCount() const override { return static_cast<int>(threads_.size()) + 1; }
 
   void ParallelFor(int count, const RangeFn& fn) override {
     if (count <= 0) return;
-    if (tRunning == this) {  // called from one of this pool's blocks: run inline
-      for (int b = 0; b < workers_; ++b) {
-        const int begin = BlockBegin(count, workers_, b), end = BlockBegin(count, workers_, b + 1);
-        if (begin < end) fn(begin, end, b);
+    if (threads_.empty() || tRunning == this || Serial()) {
+      const TaskSystem* outer = std::exchange(tRunning, this);
+      try {
+        for (int b = 0; b < workers_; ++b) {
+          const int begin = BlockBegin(count, workers_, b), end = BlockBegin(count, workers_, b + 1);
+          if (begin < end) fn(begin, end, b);
+        }
+      } catch (...) {
+        tRunning = outer;
+        throw;
       }
+      tRunning = outer;
       return;
     }
-    // Publish the job: its fields first, then the claim word (release), then the wake word.
-    fn_ = &fn;
-    count_ = count;
-    failed_.store(false, std::memory_order_relaxed);
-    remaining_.store(static_cast<uint32_t>(workers_), std::memory_order_relaxed);
-    const uint32_t job = ++job_;
-    claim_.store(uint64_t(job) << 32, std::memory_order_seq_cst);
-    jobWord_.store(job, std::memory_order_seq_cst);
-    if (sleepers_.load(std::memory_order_seq_cst) > 0) WakeAll(jobWord_);
+    rangeFn_ = &fn;
+    stageFn_ = nullptr;
+    oneStage_ = {count, 1};
+    plan_ = &oneStage_;
+    chunks_.assign(1, workers_);
+    Run(1);
+  }
 
-    const Clock::time_point start = Clock::now();
-    RunBlocks();
-    WaitForBlocks(Clock::now() - start);
-    fn_ = nullptr;
-    if (error_) {
-      std::exception_ptr error = std::exchange(error_, nullptr);
-      std::rethrow_exception(error);
+  void ParallelStages(int stages, const StagePlan* plan, const StageFn& fn) override {
+    if (threads_.empty() || tRunning == this || Serial()) {
+      const TaskSystem* outer = std::exchange(tRunning, this);
+      // Chunk by chunk, as the threads would run them, so that StageRunner's load-balance bound
+      // describes the partition whichever way the region ran.
+      try {
+        for (int s = 0; s < stages; ++s) {
+          const int count = plan[s].count, chunks = StageChunks(count, plan[s].grain, workers_);
+          for (int c = 0; c < chunks; ++c) {
+            const int begin = BlockBegin(count, chunks, c), end = BlockBegin(count, chunks, c + 1);
+            if (begin < end) fn(s, begin, end, c);
+          }
+        }
+      } catch (...) {
+        tRunning = outer;
+        throw;
+      }
+      tRunning = outer;
+      return;
+    }
+    for (int first = 0; first < stages; first += kMaxStagesPerJob) {
+      const int n = std::min(stages - first, kMaxStagesPerJob);
+      StageFn shifted;
+      const StageFn* f = &fn;
+      if (first > 0) {
+        shifted = [&fn, first](int s, int b, int e, int c) { fn(first + s, b, e, c); };
+        f = &shifted;
+      }
+      rangeFn_ = nullptr;
+      stageFn_ = f;
+      plan_ = plan + first;
+      chunks_.resize(n);
+      for (int s = 0; s < n; ++s) chunks_[s] = StageChunks(plan_[s].count, plan_[s].grain, workers_);
+      Run(n);
     }
   }
 
  private:
-  bool Contended(Clock::time_point now) const {
-    return oversubscribed_ || now.time_since_epoch().count() < contendedUntil_.load(std::memory_order_relaxed);
-  }
-  // One sign of contention (a descheduled spinner, an overlong wait). Two within
-  // kSignWindowMillis make the pool contended: a competing process preempts a spinner every
-  // time slice (a few ms), while a lone sign on a quiet machine (a kernel thread, a cron job)
-  // must not cost the next 200 ms of spinning.
-  void MarkContended(Clock::time_point now) {
-    const Clock::rep previous = lastSign_.exchange(now.time_since_epoch().count(), std::memory_order_relaxed);
-    if (now.time_since_epoch().count() - previous > Clock::duration(std::chrono::milliseconds(kSignWindowMillis)).count()) return;
-    const auto until = now + std::chrono::milliseconds(kContendedMillis);
-    contendedUntil_.store(until.time_since_epoch().count(), std::memory_order_relaxed);
+  // True while the pool runs every job on the caller alone (contention, see Judge).
+  bool Serial() {
+    const Clock::time_point now = Clock::now();
+    if (now < serialUntil_) {
+      ++statSerial_;
+      return true;
+    }
+    if (!windowOpen_) {  // the first parallel job after a serial period (or ever)
+      windowOpen_ = true;
+      windowStart_ = now;
+      stalled_ = {};
+      windowJobs_ = windowHelped_ = 0;
+    } else if (now - windowStart_ >= std::chrono::milliseconds(kFirstJudgeMillis)) {
+      Judge(now);
+    }
+    return now < serialUntil_;
   }
 
-  // Spins until done() or the budget runs out; true if done() became true. Marks the pool
-  // contended if the spinner was descheduled while spinning.
+  // The window of parallel jobs so far. More than kStallShare of it spent waiting for chunks
+  // whose threads were not running means another process wants these cores: every stage end
+  // then waits a time slice for a preempted worker, and the caller alone is faster. Stalls are
+  // judged from kFirstJudgeMillis on, as soon as they exceed kStallShare of a whole window (a
+  // benchmark run of 16000 circles is 70 steps of about 1.2 ms: waiting for the end of a 40 ms
+  // window at the 2-thread busy speed would be half of it); idle workers, and a clean window,
+  // only after kWindowMillis.
+  void Judge(Clock::time_point now) {
+    // Over at least a whole window: a lone preemption of 2-3 ms in the first 10 ms of a run on an
+    // otherwise quiet machine (another process's burst) must not make the run serial.
+    const double share =
+        std::chrono::duration<double>(stalled_).count() /
+        std::chrono::duration<double>(std::max<Clock::duration>(now - windowStart_, std::chrono::milliseconds(kWindowMillis))).count();
+    const bool full = now - windowStart_ >= std::chrono::milliseconds(kWindowMillis);
+    // Idle workers are judged on full windows only: a worker woken at a run's start can be late
+    // for a few milliseconds behind a niced neighbour's time slice (seen: 53 of the first 105
+    // jobs of a 16000-circle run on an otherwise quiet machine, which then ran serially), and
+    // idle workers cost the caller little (a spinning worker needs no wake-up).
+    const bool idle = full && windowJobs_ >= kMinJobs && windowHelped_ < kMinHelpShare * windowJobs_;
+    if (share <= kStallShare && !idle) {
+      if (!full) return;
+      probing_ = false;
+      windowStart_ = now;
+      stalled_ = {};
+      windowJobs_ = windowHelped_ = 0;
+      contendedMillis_ = kContendedMillis;
+      return;
+    }
+    const bool probe = probing_;  // the first window after a serial period
+    probing_ = false;
+    ++statMarks_;
+    contendedMillis_ = probe ? std::min(2 * contendedMillis_, kMaxContendedMillis) : kContendedMillis;
+    serialUntil_ = now + std::chrono::milliseconds(contendedMillis_);
+    windowOpen_ = false;
+    probing_ = true;
+  }
+
+  // Spins until done() or `budget` runs out; true if done() became true.
   template <class Done>
-  bool Spin(Done done, Clock::duration contendedBudget = std::chrono::microseconds(kContendedSpinMicros)) {
-    Clock::time_point last = Clock::now();
-    const Clock::time_point end = last + (Contended(last) ? contendedBudget : std::chrono::microseconds(kMaxSpinMicros));
+  bool Spin(Done done, Clock::duration budget) {
+    const Clock::time_point end = Clock::now() + budget;
     for (;;) {
       for (int k = 0; k < 4; ++k) {
         if (done()) return true;
@@ -208,42 +388,119 @@ class ThreadPool final : public TaskSystem {
         std::this_thread::yield();
 #endif
       }
-      const Clock::time_point now = Clock::now();
-      if (now - last > std::chrono::microseconds(kPreemptedMicros)) {
-        MarkContended(now);
-        return done();
-      }
-      if (now >= end) return done();
-      last = now;
+      if (Clock::now() >= end) return done();
     }
   }
 
-  // Claims and runs blocks of the current job until none is left.
-  void RunBlocks() {
+  // The caller: publishes the job (its fields first, then the claim word, then the wake word),
+  // runs chunks with the workers and returns when the last stage is done.
+  void Run(int stages) {
+    stages_ = stages;
+    int first = 0;
+    while (first < stages && chunks_[first] == 0) ++first;
+    if (first == stages) return;
+    ++statJobs_;
+    failed_.store(false, std::memory_order_relaxed);
+    done_.store(0, std::memory_order_relaxed);
+    tag_ = (tag_ + 1) & 0xFFFF;
+    claim_.store(Pack(tag_, first, 0, chunks_[first]), std::memory_order_seq_cst);
+    jobWord_.fetch_add(1, std::memory_order_seq_cst);
+    if (jobSleepers_.load(std::memory_order_seq_cst) > 0) WakeAll(jobWord_);
+    const int mine = Claim(tag_, true), total = TotalChunks();
+    if (mine == total) ++statAlone_;
+    ++windowJobs_;
+    windowHelped_ += mine < total;
+    rangeFn_ = nullptr;
+    stageFn_ = nullptr;
+    if (error_) {
+      std::exception_ptr error = std::exchange(error_, nullptr);
+      std::rethrow_exception(error);
+    }
+  }
+  int TotalChunks() const {
+    int total = 0;
+    for (int s = 0; s < stages_; ++s) total += chunks_[s];
+    return total;
+  }
+
+  // Claims and runs chunks of job `tag` until its last stage is done (the caller) or it has
+  // ended or moved on (a worker). A thread whose stage has no chunk left waits for the stage to
+  // finish: it spins briefly, then sleeps on the progress word. The thread that finishes a
+  // stage's last chunk publishes the next stage. Returns the chunks this thread ran.
+  int Claim(uint32_t tag, bool caller) {
     const TaskSystem* outer = std::exchange(tRunning, this);
-    uint64_t c = claim_.load(std::memory_order_acquire);
+    int ran = 0;
+    uint64_t w = claim_.load(std::memory_order_acquire);
+    Clock::duration lastChunk{};  // the caller's longest chunk of this job so far
     for (;;) {
-      const uint32_t block = static_cast<uint32_t>(c);
-      if (block >= static_cast<uint32_t>(workers_)) break;
-      // The tag in the high half keeps a worker that read an old job's word from claiming a
-      // block of a newer one with the old job's index.
-      if (!claim_.compare_exchange_weak(c, c + 1, std::memory_order_acq_rel, std::memory_order_acquire)) continue;
-      RunBlock(static_cast<int>(block));
-      if (remaining_.fetch_sub(1, std::memory_order_seq_cst) == 1 &&
-          callerSleeping_.load(std::memory_order_seq_cst)) {
-        WakeAll(remaining_);
+      if (TagOf(w) != tag || StageOf(w) == kDoneStage) break;
+      if (NextOf(w) < ChunksOf(w)) {
+        if (!claim_.compare_exchange_weak(w, w + (uint64_t(1) << 16), std::memory_order_acq_rel, std::memory_order_acquire)) {
+          continue;
+        }
+        const Clock::time_point t0 = caller ? Clock::now() : Clock::time_point{};
+        RunChunk(static_cast<int>(StageOf(w)), static_cast<int>(NextOf(w)));
+        if (caller) lastChunk = std::max<Clock::duration>(lastChunk, Clock::now() - t0);
+        ++ran;
+        if (done_.fetch_add(1, std::memory_order_acq_rel) + 1 == ChunksOf(w)) Advance(tag, StageOf(w));
+        w = claim_.load(std::memory_order_acquire);
+        continue;
       }
-      c = claim_.load(std::memory_order_acquire);
+      w = WaitForChange(w, caller, lastChunk);
     }
     tRunning = outer;
+    return ran;
   }
 
-  void RunBlock(int b) {
-    if (failed_.load(std::memory_order_relaxed)) return;  // an earlier block threw: skip
-    const int begin = BlockBegin(count_, workers_, b), end = BlockBegin(count_, workers_, b + 1);
+  // The stage's last chunk is done: publish the next non-empty stage, or the end of the job.
+  void Advance(uint32_t tag, uint32_t stage) {
+    done_.store(0, std::memory_order_relaxed);
+    uint32_t next = stage + 1;
+    while (next < uint32_t(stages_) && chunks_[next] == 0) ++next;
+    const uint64_t w = next < uint32_t(stages_) ? Pack(tag, next, 0, chunks_[next]) : Pack(tag, kDoneStage, 0, 0);
+    claim_.store(w, std::memory_order_seq_cst);
+    progress_.fetch_add(1, std::memory_order_seq_cst);
+    if (progressSleepers_.load(std::memory_order_seq_cst) > 0) WakeAll(progress_);
+  }
+
+  // Waits until the claim word is no longer w (the stage was finished by the threads that hold
+  // its last chunks). Spins up to kMaxSpinMicros, then sleeps. A caller whose wait outlasts a
+  // few tens of microseconds more than twice its own last chunk was (in that excess) waiting
+  // on a chunk whose thread was not running: a stall (Judge).
+  uint64_t WaitForChange(uint64_t w, bool caller, Clock::duration ownChunk) {
+    auto changed = [&] { return claim_.load(std::memory_order_acquire) != w; };
+    const Clock::time_point start = Clock::now();
+    if (!Spin(changed, std::chrono::microseconds(kMaxSpinMicros))) {
+      progressSleepers_.fetch_add(1, std::memory_order_seq_cst);
+      for (;;) {
+        const uint32_t seen = progress_.load(std::memory_order_seq_cst);
+        if (changed()) break;
+        WaitWhileEqual(progress_, seen);
+      }
+      progressSleepers_.fetch_sub(1, std::memory_order_seq_cst);
+    }
+    if (caller) {
+      const Clock::time_point now = Clock::now();
+      const Clock::duration waited = now - start;
+      statWaitNs_ += std::chrono::duration_cast<std::chrono::nanoseconds>(waited).count();
+      if (waited > std::chrono::milliseconds(1)) ++statLong_;
+      const Clock::duration normal = 2 * ownChunk + std::chrono::microseconds(kStallSlackMicros);
+      if (waited > normal) stalled_ += waited - normal;
+    }
+    return claim_.load(std::memory_order_acquire);
+  }
+
+  void RunChunk(int stage, int chunk) {
+    if (failed_.load(std::memory_order_relaxed)) return;  // an earlier chunk threw: skip
+    const int count = plan_[stage].count, chunks = chunks_[stage];
+    const int begin = BlockBegin(count, chunks, chunk), end = BlockBegin(count, chunks, chunk + 1);
     if (begin >= end) return;
     try {
-      (*fn_)(begin, end, b);
+      if (rangeFn_) {
+        (*rangeFn_)(begin, end, chunk);
+      } else {
+        (*stageFn_)(stage, begin, end, chunk);
+      }
     } catch (...) {
       std::lock_guard<std::mutex> lock(errorMutex_);
       if (!error_) error_ = std::current_exception();
@@ -251,78 +508,56 @@ class ThreadPool final : public TaskSystem {
     }
   }
 
-  // A worker of a contended pool, between jobs: sleeps kPollMicros at a time and looks for a
-  // job, for up to kPollMillis. The caller then starts a job with no system call: waking a
-  // futex sleeper costs the waker 7.5 us here (measured: mean of 2000 wakes, loaded VM), and a
-  // step of 16000 circles runs 49 parallel-fors in about 1.2 ms. A sleeping poller keeps its
-  // scheduler credit, so when it finds a block it is not the thread preempted mid-block. True if
-  // the job arrived; false when the pool is no longer contended or the polling time is up.
-  template <class Done>
-  bool Poll(Done arrived) {
-    const Clock::time_point end = Clock::now() + std::chrono::milliseconds(kPollMillis);
-    for (Clock::time_point now = Clock::now(); Contended(now) && now < end; now = Clock::now()) {
-      std::this_thread::sleep_for(std::chrono::microseconds(kPollMicros));
-      if (arrived()) return true;
-    }
-    return arrived();
-  }
-
-  // The caller, after its own blocks (which took `own`): waits until every claimed block has
-  // finished.
-  void WaitForBlocks(Clock::duration own) {
-    auto done = [this] { return remaining_.load(std::memory_order_acquire) == 0; };
-    const Clock::time_point start = Clock::now();
-    // Contended, the caller still spins as long as its own blocks took (at most 1 ms): a worker
-    // that is running finishes its block within about that, and a futex round trip costs the
-    // caller a wake-up latency; one that is not running costs the caller at most that much.
-    const Clock::duration budget =
-        std::clamp<Clock::duration>(own, std::chrono::microseconds(kContendedSpinMicros), std::chrono::microseconds(kMaxSpinMicros));
-    if (Spin(done, budget)) return;
-    callerSleeping_.store(true, std::memory_order_seq_cst);
-    for (uint32_t left; (left = remaining_.load(std::memory_order_seq_cst)) != 0;) WaitWhileEqual(remaining_, left);
-    callerSleeping_.store(false, std::memory_order_relaxed);
-    // Blocks are about equal, so a worker's block that ends much later than the caller's own
-    // (twice as long, and a whole spin budget more) was one the scheduler was not running:
-    // another process wants these cores.
-    const Clock::time_point now = Clock::now();
-    if (now - start > 2 * own + std::chrono::microseconds(kMaxSpinMicros)) MarkContended(now);
-  }
-
   void WorkerLoop() {
     uint32_t seen = 0;
     for (;;) {
       auto arrived = [&] { return jobWord_.load(std::memory_order_acquire) != seen; };
-      if (!Spin(arrived) && !Poll(arrived)) {
-        sleepers_.fetch_add(1, std::memory_order_seq_cst);
+      if (!Spin(arrived, std::chrono::microseconds(kMaxSpinMicros))) {
+        jobSleepers_.fetch_add(1, std::memory_order_seq_cst);
         while (jobWord_.load(std::memory_order_seq_cst) == seen) WaitWhileEqual(jobWord_, seen);
-        sleepers_.fetch_sub(1, std::memory_order_relaxed);
+        jobSleepers_.fetch_sub(1, std::memory_order_relaxed);
       }
       if (stop_.load(std::memory_order_acquire)) return;
       seen = jobWord_.load(std::memory_order_acquire);
-      RunBlocks();
+      Claim(TagOf(claim_.load(std::memory_order_acquire)), false);
     }
   }
 
   const int workers_;
-  const bool oversubscribed_;  // more threads than cores: the pool always waits on futexes
   std::vector<std::thread> threads_;
 
-  // The current job: written by the caller before the claim word is published.
-  const RangeFn* fn_ = nullptr;
-  int count_ = 0;
-  uint32_t job_ = 0;
+  // The current job: written by the caller before the claim word is published, read by the
+  // others only while they hold a chunk.
+  const RangeFn* rangeFn_ = nullptr;  // ParallelFor: one stage whose chunks are the blocks
+  const StageFn* stageFn_ = nullptr;
+  const StagePlan* plan_ = nullptr;
+  StagePlan oneStage_;
+  std::vector<int> chunks_;
+  int stages_ = 0;
+  uint32_t tag_ = 0;
 
-  std::atomic<uint64_t> claim_{0};       // job number << 32 | next block to claim
-  std::atomic<uint32_t> jobWord_{0};     // the job number, for workers to wait on
-  std::atomic<uint32_t> remaining_{0};   // blocks of the current job not yet finished
-  std::atomic<int> sleepers_{0};         // workers in a futex wait for the next job
-  std::atomic<bool> callerSleeping_{false};
+  std::atomic<uint64_t> claim_{Pack(0, kDoneStage, 0, 0)};
+  std::atomic<uint32_t> done_{0};            // chunks of the current stage finished
+  std::atomic<uint32_t> jobWord_{0};         // bumped per job, for workers to wait on
+  std::atomic<uint32_t> progress_{0};        // bumped per stage, for waiters inside a job
+  std::atomic<int> jobSleepers_{0};
+  std::atomic<int> progressSleepers_{0};
   std::atomic<bool> stop_{false};
-  std::atomic<Clock::rep> contendedUntil_{0};
-  std::atomic<Clock::rep> lastSign_{std::numeric_limits<Clock::rep>::min() / 2};
+
+  // Contention (the caller's alone): see Serial and Judge.
+  Clock::time_point serialUntil_{};
+  Clock::time_point windowStart_{};
+  Clock::duration stalled_{};
+  bool windowOpen_ = false;
+  bool probing_ = false;
+  long long windowJobs_ = 0, windowHelped_ = 0;  // this window's jobs, those a worker took part in
+  int contendedMillis_ = kContendedMillis;
+
+  long long statJobs_ = 0, statSerial_ = 0, statAlone_ = 0, statWaitNs_ = 0, statLong_ = 0;
+  int statMarks_ = 0;
 
   std::mutex errorMutex_;
-  std::exception_ptr error_;             // the first exception of the current job
+  std::exception_ptr error_;  // the first exception of the current job
   std::atomic<bool> failed_{false};
 };
 

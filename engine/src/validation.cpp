@@ -11,7 +11,8 @@ namespace quadrant {
 
 void ValidateWorldDef(const WorldDef& d) {
   Require(IsFinite(d.gravity), "WorldDef.gravity is not finite");
-  Require(d.solver == SolverType::kThesis || d.solver == SolverType::kPgs || d.solver == SolverType::kSoftStep,
+  Require(d.solver == SolverType::kThesis || d.solver == SolverType::kPgs || d.solver == SolverType::kSoftStep ||
+              d.solver == SolverType::kJacobi,
           "WorldDef.solver is unknown");
   Require(d.softSubSteps >= 1, "WorldDef.softSubSteps must be >= 1");
   Require(d.softSubSteps <= kMaxIterations, "WorldDef.softSubSteps must be <= 1000");
@@ -30,6 +31,8 @@ void ValidateWorldDef(const WorldDef& d) {
   Require(d.velocityIterations <= kMaxIterations, "WorldDef.velocityIterations must be <= 1000");
   Require(d.positionIterations >= 0, "WorldDef.positionIterations must be >= 0");
   Require(d.positionIterations <= kMaxIterations, "WorldDef.positionIterations must be <= 1000");
+  Require(d.thesisPasses >= 1, "WorldDef.thesisPasses must be >= 1");
+  Require(d.thesisPasses <= kMaxIterations, "WorldDef.thesisPasses must be <= 1000");
   Require(d.restitutionIterations >= 1, "WorldDef.restitutionIterations must be >= 1");
   Require(d.restitutionIterations <= kMaxIterations, "WorldDef.restitutionIterations must be <= 1000");
   Require(IsFinite(d.linearSlop) && d.linearSlop >= 0, "WorldDef.linearSlop must be finite and >= 0");
@@ -41,8 +44,8 @@ void ValidateWorldDef(const WorldDef& d) {
           "WorldDef.restitutionThreshold must be finite and >= 0");
   Require(d.restitution == RestitutionPolicy::kCollisions || d.restitution == RestitutionPolicy::kBox2d,
           "WorldDef.restitution is unknown");
-  Require(d.restitution == RestitutionPolicy::kCollisions || d.solver == SolverType::kPgs,
-          "WorldDef.restitution = kBox2d needs SolverType::kPgs");
+  Require(d.restitution == RestitutionPolicy::kCollisions || d.solver != SolverType::kThesis,
+          "WorldDef.restitution = kBox2d needs SolverType::kPgs or kSoftStep");
   Require(IsFinite(d.polygonSkin) && d.polygonSkin >= 0 && 2 * d.polygonSkin <= d.speculativeDistance,
           "WorldDef.polygonSkin must be in [0, speculativeDistance / 2]");
   // The quadrants scheme solves private copies of its bodies without their shapes (quadrants_scheme.cpp).
@@ -55,6 +58,9 @@ void ValidateWorldDef(const WorldDef& d) {
   Require(d.minParallelItems >= 1, "WorldDef.minParallelItems must be >= 1");
   Require(d.scheme == ParallelScheme::kDeterministic || d.scheme == ParallelScheme::kQuadrants,
           "WorldDef.scheme is unknown");
+  // The quadrants scheme runs the thesis or pgs kernels on its private body copies.
+  Require(d.solver != SolverType::kJacobi || d.scheme == ParallelScheme::kDeterministic,
+          "WorldDef.solver = kJacobi is not supported with ParallelScheme::kQuadrants (use kDeterministic)");
   Require(IsFinite(d.linearSleepTolerance) && d.linearSleepTolerance >= 0,
           "WorldDef.linearSleepTolerance must be finite and >= 0");
   Require(IsFinite(d.angularSleepTolerance) && d.angularSleepTolerance >= 0,

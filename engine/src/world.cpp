@@ -98,22 +98,8 @@ struct World::Impl {
     return denseOf[id.index];
   }
 
-  // The broad-phase box of a body: its shape's AABB grown by half the speculative distance on
-  // every side (so two shapes closer than that distance pair up), and for moving bodies swept
-  // by this step's displacement, so a pair that can meet within the step is found before it
-  // touches and the speculative contact stops it at the surface.
-  void UpdateAABB(int i, Real dt) {
-    const ShapeDef& s = bodies.shape[i];
-    AABB box = s.type == ShapeType::kCircle ? ComputeAABB(s.circle, bodies.xf[i]) : ComputeAABB(s.polygon, bodies.xf[i]);
-    const BodyVelocity& bv = bodies.vel[i];
-    // Without continuous collision the box is not swept (dt 0 below): only the base margin.
-    const Real sweep = def.effects.continuous ? dt : Real(0);
-    const Real margin = Real(0.5) * def.speculativeDistance + sweep * std::abs(bv.w) * bodies.boundRadius[i];
-    const Vec2 d = sweep * bv.v;
-    box.lower = box.lower + Vec2{std::min(d.x, Real(0)) - margin, std::min(d.y, Real(0)) - margin};
-    box.upper = box.upper + Vec2{std::max(d.x, Real(0)) + margin, std::max(d.y, Real(0)) + margin};
-    bodies.aabb[i] = box;
-  }
+  // The broad-phase box (world_internal.h, BroadPhaseBox: shared with the distributed world).
+  void UpdateAABB(int i, Real dt) { bodies.aabb[i] = BroadPhaseBox(bodies, i, def, dt); }
 
   // Sleep (effects.sleep on only): wakes the islands of sleeping bodies that body i's box
   // overlaps, and body i's own island.
@@ -147,10 +133,9 @@ World::~World() = default;
 World::World(World&&) noexcept = default;
 World& World::operator=(World&&) noexcept = default;
 
-BodyId World::CreateBody(const BodyDef& def) {
-  Impl& w = *impl_;
+int AppendBody(Bodies& b, const BodyDef& def, const WorldDef& worldDef, uint32_t slot) {
   const ShapeDef shape = ValidateBodyDef(def);  // throws before anything changes
-  Require(w.def.scheme != ParallelScheme::kQuadrants || def.filter == Filter{},
+  Require(worldDef.scheme != ParallelScheme::kQuadrants || def.filter == Filter{},
           "CreateBody: a non-default collision filter needs ParallelScheme::kDeterministic");
 
   MassData md{};
@@ -166,19 +151,7 @@ BodyId World::CreateBody(const BodyDef& def) {
   }
   const bool dynamic = def.type == BodyType::kDynamic;  // its mass was checked by ValidateBodyDef
 
-  uint32_t slot;
-  if (!w.freeSlots.empty()) {
-    slot = w.freeSlots.back();
-    w.freeSlots.pop_back();
-  } else {
-    slot = static_cast<uint32_t>(w.generation.size());
-    w.generation.push_back(1);
-    w.denseOf.push_back(-1);
-  }
-  const int i = w.bodies.Count();
-  w.denseOf[slot] = i;
-
-  Bodies& b = w.bodies;
+  const int i = b.Count();
   b.ForEachArray([](auto& v) { v.emplace_back(); });
   const Transform xf{def.position, MakeRot(def.angle)};
   b.type[i] = def.type;
@@ -186,7 +159,7 @@ BodyId World::CreateBody(const BodyDef& def) {
   b.center[i] = TransformPoint(xf, md.center);
   b.localCenter[i] = md.center;
   const bool moves = def.type != BodyType::kStatic;
-  b.vel[i] = moves ? BodyVelocity{def.linearVelocity, w.def.effects.rotation ? def.angularVelocity : Real(0)}
+  b.vel[i] = moves ? BodyVelocity{def.linearVelocity, worldDef.effects.rotation ? def.angularVelocity : Real(0)}
                    : BodyVelocity{};
   b.inv[i] = dynamic ? BodyInverseMass{Real(1) / md.mass,
                                        md.rotationalInertia > 0 ? Real(1) / md.rotationalInertia : Real(0)}
@@ -205,9 +178,24 @@ BodyId World::CreateBody(const BodyDef& def) {
   b.islandOf[i] = 0;
   b.filter[i] = def.filter;
   b.userData[i] = def.userData;
+  b.aabb[i] = BroadPhaseBox(b, i, worldDef, 0);
+  return i;
+}
+
+BodyId World::CreateBody(const BodyDef& def) {
+  Impl& w = *impl_;
+  // The slot is taken only once the body is accepted (AppendBody validates before it adds).
+  const uint32_t slot = w.freeSlots.empty() ? static_cast<uint32_t>(w.generation.size()) : w.freeSlots.back();
+  const int i = AppendBody(w.bodies, def, w.def, slot);
+  if (!w.freeSlots.empty()) {
+    w.freeSlots.pop_back();
+  } else {
+    w.generation.push_back(1);
+    w.denseOf.push_back(-1);
+  }
+  w.denseOf[slot] = i;
   w.customFilters += def.filter == Filter{} ? 0 : 1;
   w.queryStale = true;
-  w.UpdateAABB(i, 0);
   w.WakeAround(i);  // a body created touching a sleeping pile wakes it
   return BodyId{slot, w.generation[slot]};
 }

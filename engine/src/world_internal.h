@@ -3,6 +3,8 @@
 // integration `center`, `xf`, `vel`, and the broad phase only `aabb` and `dynamic`.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -75,6 +77,34 @@ struct Contact {
 };
 
 struct CandidatePair;
+
+/// Validates `def` (throws quadrant::Error and adds nothing on bad input), computes its mass
+/// data and appends the body to `bodies` with id slot `slot`; returns its dense index. The one
+/// place a body row is made: World::CreateBody and the distributed world both use it.
+int AppendBody(Bodies& bodies, const BodyDef& def, const WorldDef& worldDef, uint32_t slot);
+
+// The broad-phase box of a body: its shape's AABB grown by half the speculative distance on
+// every side (so two shapes closer than that distance pair up), and for moving bodies swept
+// by this step's displacement, so a pair that can meet within the step is found before it
+// touches and the speculative contact stops it at the surface. Shared with the distributed
+// world, which must find exactly the World's pairs.
+inline AABB SweptBox(const ShapeDef& s, const Transform& xf, const BodyVelocity& bv, Real boundRadius,
+                     const WorldDef& def, Real dt) {
+  AABB box = s.type == ShapeType::kCircle ? ComputeAABB(s.circle, xf) : ComputeAABB(s.polygon, xf);
+  // Without continuous collision the box is not swept (dt 0 below): only the base margin.
+  const Real sweep = def.effects.continuous ? dt : Real(0);
+  const Real margin = Real(0.5) * def.speculativeDistance + sweep * std::abs(bv.w) * boundRadius;
+  const Vec2 d = sweep * bv.v;
+  box.lower = box.lower + Vec2{std::min(d.x, Real(0)) - margin, std::min(d.y, Real(0)) - margin};
+  box.upper = box.upper + Vec2{std::max(d.x, Real(0)) + margin, std::max(d.y, Real(0)) + margin};
+  return box;
+}
+
+/// The same for body i of `bodies`.
+inline AABB BroadPhaseBox(const Bodies& bodies, int i, const WorldDef& def, Real dt) {
+  return SweptBox(bodies.shape[i], bodies.xf[i], bodies.vel[i], bodies.boundRadius[i], def, dt);
+}
+
 
 /// Narrow phase for a list of pairs: manifolds with material mixing, speculative points kept
 /// only where the gap can close within the step. Appends to `out` in pair order.

@@ -2,7 +2,8 @@
 // of seed 17 (under a second in a release build), the same code tools/quadrant validate --random
 // runs. Bounds are the committed campaign's figures on this sample (README "validation") with a
 // margin of about a third, so a solver change that moves responses away from Box2D or from the
-// analytic impact fails here; the Box2D-compatible setting must stay below 1 % (issue #17).
+// analytic impact fails here; the Box2D-compatible settings of pgs and soft_step must stay below
+// 1 % (issue #17).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -47,34 +48,57 @@ TEST(RandomHits, BadCampaignsAreRefused) {
   EXPECT_THROW(RunCampaign(17, 5, {{"quadrant:pgs", "default", "quadrant:pgs"}}), Error);
 }
 
+constexpr const char* kClasses[] = {"polygon-polygon e=0",   "polygon-polygon e=0.5", "polygon-polygon e=1",
+                                    "circle-polygon e=0",    "circle-polygon e=0.5",  "circle-polygon e=1",
+                                    "circle-circle e=0",     "circle-circle e=0.5",   "circle-circle e=1"};
+
 TEST(RandomHits, Box2dCompatibleSettingStaysBelowOnePercent) {
   const std::vector<CampaignRow> rows = Sample().Box2dRows();
-  const CampaignRow& compat = Find(rows, "all", "quadrant:pgs", "box2d_restitution+skin");
+  const CampaignRow& compat = Find(rows, "all", "quadrant:pgs", "box2d_restitution+box2d_skin");
   EXPECT_EQ(compat.n, 300);
   EXPECT_LT(compat.p90, 0.01);
   // Restitution alone already brings the whole campaign below 1 %; the skin removes the polygon
   // classes that stay above 5 % without it.
   EXPECT_LT(Find(rows, "all", "quadrant:pgs", "box2d_restitution").p90, 0.012);
-  for (const char* cls : {"polygon-polygon e=0", "polygon-polygon e=0.5", "polygon-polygon e=1", "circle-polygon e=0",
-                          "circle-polygon e=0.5", "circle-polygon e=1", "circle-circle e=0", "circle-circle e=0.5",
-                          "circle-circle e=1"}) {
+  for (const char* cls : kClasses) {
     // About 33 hits per class here: the 2000-hit campaign has every class below 2.1 %.
-    EXPECT_LT(Find(rows, cls, "quadrant:pgs", "box2d_restitution+skin").p90, 0.1) << cls;
+    EXPECT_LT(Find(rows, cls, "quadrant:pgs", "box2d_restitution+box2d_skin").p90, 0.1) << cls;
+  }
+}
+
+TEST(RandomHits, SoftStepBox2dCompatibleSettingStaysBelowOnePercent) {
+  // soft_step's Box2D-compatible setting: Box2D's restitution, its skin and friction in each of four
+  // relax passes (0.76 % here, 0.69 % on the 2000 hits; with the default two passes 1.06 % here and
+  // 0.82 % there). Each alone leaves it far above (README "validation").
+  const std::vector<CampaignRow> rows = Sample().Box2dRows();
+  const char* compat = "box2d_restitution+box2d_skin+relax4+relaxfriction";
+  EXPECT_LT(Find(rows, "all", "quadrant:soft_step", compat).p90, 0.01);
+  EXPECT_GT(Find(rows, "all", "quadrant:soft_step", "box2d_restitution").p90, 0.015);
+  EXPECT_GT(Find(rows, "all", "quadrant:soft_step", "box2d_skin").p90, 0.04);
+  EXPECT_GT(Find(rows, "all", "quadrant:soft_step", "relaxfriction").p90, 0.04);
+  EXPECT_GT(Find(rows, "all", "quadrant:soft_step", "box2d_restitution+box2d_skin").p90, 0.015);
+  for (const char* cls : kClasses) {
+    // The largest class here is polygon-polygon e=1 at 9.4 % (33 hits; 2000 hits: 2.8 % at most).
+    EXPECT_LT(Find(rows, cls, "quadrant:soft_step", compat).p90, 0.125) << cls;
   }
 }
 
 TEST(RandomHits, EverySolverWithinItsBoundOfBox2d) {
   const std::vector<CampaignRow> rows = Sample().Box2dRows();
   EXPECT_LT(Find(rows, "all", "quadrant:pgs", "default").p90, 0.07);
-  EXPECT_LT(Find(rows, "all", "quadrant:soft_step", "default").p90, 0.14);
+  EXPECT_LT(Find(rows, "all", "quadrant:soft_step", "default").p90, 0.09);
   EXPECT_LT(Find(rows, "all", "quadrant:thesis", "default").p90, 0.26);
   // The thesis's difference is its separate normal and friction formulas: coupled, it is within
   // 1.5 % of Box2D at p90 (2000 hits: 22.3 % -> 0.89 %).
   EXPECT_LT(Find(rows, "all", "quadrant:thesis", "coupled").p90, 0.015);
-  // Circle pairs are one point with no skin in either engine: pgs agrees with Box2D exactly
-  // (within float rounding) whatever the restitution.
+  EXPECT_LT(Find(rows, "all", "quadrant:thesis", "coupled+points+box2d_skin").p90, 0.0125);
+  // Circle pairs are one point with no skin in either engine: pgs and soft_step agree with Box2D
+  // exactly (within float rounding) whatever the restitution. soft_step did not while a sub-step's
+  // friction was bounded by the whole step's collision impulse (circle-circle e=0.5: 81 % at most).
   for (const char* cls : {"circle-circle e=0", "circle-circle e=0.5", "circle-circle e=1"}) {
     EXPECT_LT(Find(rows, cls, "quadrant:pgs", "default").max, 1e-4) << cls;
+    EXPECT_LT(Find(rows, cls, "quadrant:soft_step", "default").max, 1e-4) << cls;
+    EXPECT_LT(Find(rows, cls, "quadrant:soft_step", "box2d_restitution+box2d_skin+relax4+relaxfriction").max, 1e-4) << cls;
   }
 }
 
@@ -85,6 +109,9 @@ TEST(RandomHits, AnalyticReferenceAgreesWithBox2dAndTheCompatibleSetting) {
   EXPECT_GT(box2d.n, 200) << "most hits are single-point";
   EXPECT_LT(box2d.p90, 0.01);
   EXPECT_LT(Find(rows, "all", "quadrant:pgs", "box2d_restitution").p90, 0.01);
+  // soft_step's compatible setting is as near the mechanics (0.05 % here, Box2D 0.54 %).
+  EXPECT_LT(Find(rows, "all", "quadrant:soft_step", "box2d_restitution+box2d_skin+relax4+relaxfriction").p90, 0.005);
+  EXPECT_GT(Find(rows, "all", "quadrant:soft_step", "default").p90, 3 * box2d.p90);
   // Quadrant's default restitution (a frictionless collision before the iterations) is the
   // farther from the mechanics: its p90 distance is several times Box2D's.
   EXPECT_GT(Find(rows, "all", "quadrant:pgs", "default").p90, 3 * box2d.p90);
@@ -101,9 +128,11 @@ TEST(RandomHits, MomentumIsConservedByEveryRun) {
 
 TEST(RandomHits, Box2dSettingsAreRefusedWhereTheyDoNotApply) {
   WorldDef def;
-  def.solver = SolverType::kSoftStep;
+  def.solver = SolverType::kThesis;
   def.restitution = RestitutionPolicy::kBox2d;
   EXPECT_THROW(World{def}, Error);
+  def.solver = SolverType::kSoftStep;
+  EXPECT_NO_THROW(World{def});
   def = WorldDef{};
   def.polygonSkin = Real(-0.01);
   EXPECT_THROW(World{def}, Error);
@@ -111,7 +140,7 @@ TEST(RandomHits, Box2dSettingsAreRefusedWhereTheyDoNotApply) {
   EXPECT_THROW(World{def}, Error);
   def.polygonSkin = Real(0.01);
   def.restitution = RestitutionPolicy::kBox2d;
-  EXPECT_THROW(World{def}, Error);  // the default solver is soft_step
+  EXPECT_NO_THROW(World{def});  // the default solver, soft_step, takes kBox2d too
   def.solver = SolverType::kPgs;
   EXPECT_NO_THROW(World{def});
   def.scheme = ParallelScheme::kQuadrants;

@@ -69,6 +69,15 @@ TEST(ThreadPoolTest, EveryIndexRunsOnceInTheStaticBlocks) {
   }
 }
 
+TEST(ThreadPoolTest, TooManyThreadsIsAClearError) {
+  try {
+    MakeThreadPool(20000);
+    ADD_FAILURE() << "no exception";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(), "MakeThreadPool: at most 16383 threads");
+  }
+}
+
 TEST(ThreadPoolTest, ZeroAndNegativeCountsCallNothing) {
   for (int threads : {1, 2, 4}) {
     auto tasks = MakeThreadPool(threads);
@@ -173,9 +182,10 @@ void BuildBusyScene(World& world) {
   }
 }
 
-uint64_t HashAfterSteps(int threads, int steps) {
+uint64_t HashAfterSteps(int threads, int steps, SolverType solver = SolverType::kPgs) {
   WorldDef def;
   def.threadCount = threads;
+  def.solver = solver;
   def.minParallelItems = 8;
   World world(def);
   BuildBusyScene(world);
@@ -188,15 +198,86 @@ TEST(ThreadPoolTest, MoreThreadsThanFreeCoresGiveTheOneThreadHash) {
   // machine has cores, so the pool's workers are descheduled mid-step and blocks move between
   // threads; the result must still be the one-thread result, bit for bit.
   const int hardware = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  const uint64_t serial = HashAfterSteps(1, 90);
-  uint64_t busy2 = 0, busyMany = 0;
-  {
-    BusyCores busy(hardware);
-    busy2 = HashAfterSteps(2, 90);
-    busyMany = HashAfterSteps(hardware + 2, 90);
+  for (SolverType solver : {SolverType::kPgs, SolverType::kSoftStep}) {
+    SCOPED_TRACE(solver == SolverType::kPgs ? "pgs" : "soft_step");
+    const uint64_t serial = HashAfterSteps(1, 90, solver);
+    uint64_t busy2 = 0, busyMany = 0;
+    {
+      BusyCores busy(hardware);
+      busy2 = HashAfterSteps(2, 90, solver);
+      busyMany = HashAfterSteps(hardware + 2, 90, solver);
+    }
+    EXPECT_EQ(busy2, serial);
+    EXPECT_EQ(busyMany, serial);
   }
-  EXPECT_EQ(busy2, serial);
-  EXPECT_EQ(busyMany, serial);
+}
+
+// ParallelStages: every item of every stage once, in chunks of the StageChunks partition (or a
+// whole stage in one call, when the pool runs the region on the caller alone), and no call of a
+// stage before every call of the previous stages has returned.
+TEST(ThreadPoolTest, StagesRunInOrderAndCoverEveryItemOnce) {
+  const int hardware = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  const std::vector<TaskSystem::StagePlan> plan = {{1000, 16}, {0, 1}, {1, 1}, {7, 1}, {4099, 64}, {64, 1000}, {300, 1}};
+  std::vector<int> first(plan.size() + 1, 0);
+  for (size_t s = 0; s < plan.size(); ++s) first[s + 1] = first[s] + plan[s].count;
+  for (int threads : {1, 2, 3, 4, hardware + 3}) {
+    auto tasks = MakeThreadPool(threads);
+    for (int round = 0; round < 50; ++round) {
+      SCOPED_TRACE(testing::Message() << threads << " threads, round " << round);
+      std::vector<std::atomic<int>> hits(size_t(first.back()));
+      std::atomic<int> finished{0};  // items of all stages whose calls have returned
+      std::atomic<bool> outOfOrder{false}, badChunk{false};
+      tasks->ParallelStages(static_cast<int>(plan.size()), plan.data(), [&](int s, int begin, int end, int chunk) {
+        if (finished.load() < first[size_t(s)]) outOfOrder.store(true);
+        const int count = plan[size_t(s)].count;
+        const int chunks = StageChunks(count, plan[size_t(s)].grain, threads);
+        const bool whole = begin == 0 && end == count;
+        const bool partition = chunk >= 0 && chunk < chunks && begin == BlockBegin(count, chunks, chunk) &&
+                               end == BlockBegin(count, chunks, chunk + 1);
+        if (!whole && !partition) badChunk.store(true);
+        for (int i = begin; i < end; ++i) hits[size_t(first[size_t(s)] + i)].fetch_add(1);
+        finished.fetch_add(end - begin);
+      });
+      EXPECT_FALSE(outOfOrder.load());
+      EXPECT_FALSE(badChunk.load());
+      EXPECT_TRUE(std::all_of(hits.begin(), hits.end(), [](const std::atomic<int>& h) { return h.load() == 1; }));
+    }
+  }
+}
+
+TEST(ThreadPoolTest, AnExceptionInAStageReachesTheCallerSkipsLaterStagesAndThePoolStaysUsable) {
+  for (int threads : {1, 2, 4}) {
+    SCOPED_TRACE(testing::Message() << threads << " threads");
+    auto tasks = MakeThreadPool(threads);
+    const std::vector<TaskSystem::StagePlan> plan = {{500, 8}, {500, 8}, {500, 8}};
+    for (int round = 0; round < 20; ++round) {
+      std::atomic<int> lastStageCalls{0};
+      EXPECT_THROW(tasks->ParallelStages(3, plan.data(),
+                                         [&](int s, int, int end, int) {
+                                           if (s == 1 && end == 500) throw std::runtime_error("stage failed");
+                                           if (s == 2) lastStageCalls.fetch_add(1);
+                                         }),
+                   std::runtime_error);
+      EXPECT_EQ(lastStageCalls.load(), 0);
+      std::atomic<int> items{0};
+      tasks->ParallelStages(3, plan.data(), [&](int, int begin, int end, int) { items.fetch_add(end - begin); });
+      EXPECT_EQ(items.load(), 1500);
+    }
+  }
+}
+
+TEST(ThreadPoolTest, StagesNestedInABlockRunInline) {
+  auto tasks = MakeThreadPool(2);
+  std::vector<std::atomic<int>> hits(20 * 100);
+  const TaskSystem::StagePlan plan[2] = {{60, 4}, {40, 4}};
+  tasks->ParallelFor(20, [&](int begin, int end, int) {
+    for (int i = begin; i < end; ++i) {
+      tasks->ParallelStages(2, plan, [&](int s, int b, int e, int) {
+        for (int j = b; j < e; ++j) hits[size_t(i * 100 + s * 60 + j)].fetch_add(1);
+      });
+    }
+  });
+  for (const auto& h : hits) EXPECT_EQ(h.load(), 1);
 }
 
 }  // namespace

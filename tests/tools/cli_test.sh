@@ -59,6 +59,11 @@ expect_refusal "--busy measures a loaded machine" "$DRIVER" bench --busy 1 --com
 expect_refusal "--steps needs a value" "$DRIVER" bench --out "$OUT" --steps=
 expect_refusal "--counts needs a value" "$DRIVER" bench --out "$OUT" --counts
 expect_refusal "exclude each other" "$DRIVER" bench --baseline --compare --out "$OUT"
+# bench --ranks (the distributed runs): its own options only, rank counts in [1, 64].
+expect_refusal "--ranks '0'" "$DRIVER" bench --ranks 0 --out "$OUT"
+expect_refusal "--ranks '1,,2'" "$DRIVER" bench --ranks 1,,2 --out "$OUT"
+expect_refusal "only --steps and --out" "$DRIVER" bench --ranks 1,2 --threads 2 --out "$OUT"
+expect_refusal "--steps '0'" "$DRIVER" bench --ranks 1 --steps 0 --out "$OUT"
 expect_refusal "unknown command 'benhc'" "$DRIVER" benhc
 expect_refusal "unknown engine 'nosuchengine'" "$DRIVER" hardcases --peers nosuchengine --out "$OUT"
 expect_refusal "--soak-steps" "$DRIVER" hardcases --soak-steps 0 --out "$OUT"

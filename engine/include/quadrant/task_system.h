@@ -13,6 +13,13 @@
 // - If fn throws, blocks not yet started are skipped and the first exception is rethrown to
 //   the caller once every started block has returned; the task system stays usable.
 // - A ParallelFor called from inside a block runs inline on that thread, block by block.
+// - ParallelStages(stages, plan, fn) runs stage 0, then stage 1, ... in order (every call of a
+//   stage returns before any call of the next begins), each stage's [0, plan[s].count) cut into
+//   StageChunks(plan[s].count, plan[s].grain, WorkerCount()) contiguous chunks, fn(stage, begin,
+//   end, chunk) once per chunk. It is for stages whose items are independent of each other
+//   (a solver colour's constraints, a body range): which thread runs a chunk is never fixed, and
+//   a pool may run a whole region on the caller alone, so fn's results must not depend on who
+//   runs it. One region costs one hand-over to the workers, however many stages it has.
 #pragma once
 
 #include <functional>
@@ -26,15 +33,41 @@ class TaskSystem {
   virtual ~TaskSystem() = default;
   /// Threads that run blocks, the caller included (>= 1); also the number of blocks.
   virtual int WorkerCount() const = 0;
+  /// Threads that actually run blocks, the caller included: at most WorkerCount(), fewer when a
+  /// pool starts no more threads than the process has cores.
+  virtual int ThreadCount() const { return WorkerCount(); }
   virtual void ParallelFor(int count, const RangeFn& fn) = 0;
+
+  /// One stage of a ParallelStages region: `count` items, at least `grain` of them a chunk
+  /// (grain >= count keeps the stage on one thread).
+  struct StagePlan {
+    int count = 0;
+    int grain = 1;
+  };
+  using StageFn = std::function<void(int stage, int begin, int end, int chunk)>;
+  /// Runs `stages` stages in order (see the contract above). The default runs one ParallelFor
+  /// over each stage's chunks; the thread pool runs the whole region as one job.
+  virtual void ParallelStages(int stages, const StagePlan* plan, const StageFn& fn);
 };
 
-/// A pool of threadCount - 1 worker threads plus the caller, which claim blocks from a shared
-/// counter. On a quiet machine waiting threads spin up to 1 ms, so back-to-back stages start
-/// within microseconds; once a spinner is seen to be descheduled (another process wants the
-/// cores) they wait on a futex instead, so the pool never takes a core from the thread it waits
-/// for. threadCount 1 runs everything inline with no threading at all.
+/// A pool of threadCount blocks run by the caller and up to threadCount - 1 worker threads (no
+/// more threads than the process has cores), which claim blocks and chunks from a shared word.
+/// On a quiet machine waiting threads spin up to 1 ms, then sleep on a futex. When the caller
+/// finds itself waiting on preempted workers (another process wants the cores), it runs the
+/// jobs alone for a while (thread_pool.cpp). threadCount 1 runs everything inline with no
+/// threading at all; more than 16383 throws std::invalid_argument.
 std::unique_ptr<TaskSystem> MakeThreadPool(int threadCount);
+
+/// The chunks ParallelStages cuts a stage of `count` items into: one per `grain` items (at
+/// least one), at most four per worker, so that a thread that starts late or is preempted
+/// leaves little for the others to wait on, and a claim (one atomic operation) stays cheap
+/// against the chunk's work.
+inline int StageChunks(int count, int grain, int workers) {
+  if (count <= 0) return 0;
+  const long long byGrain = (static_cast<long long>(count) + (grain > 1 ? grain : 1) - 1) / (grain > 1 ? grain : 1);
+  const long long most = 4LL * (workers > 1 ? workers : 1);
+  return static_cast<int>(byGrain < most ? byGrain : most);
+}
 
 /// First index of block `worker` of `count` items over `workers` blocks (the block's end is
 /// BlockBegin(count, workers, worker + 1)).

@@ -104,6 +104,15 @@ enum class SolverType : uint8_t {
   kThesis,  ///< the 2013 thesis: mass-ratio separation + one impulse per contact, no iterations
   kPgs,     ///< sequential impulses, warm starting, velocity iterations, position pass (Box2D 2.4)
   kSoftStep,  ///< sub-steps with soft contacts and a relax pass (Box2D 3)
+  /// Jacobi velocity iterations with mass splitting (engine/src/jacobi_solve.h): every contact
+  /// solved from the velocities at the start of the iteration, each body's changes summed in
+  /// contact-key order, penetration removed by a Baumgarte velocity bias (no position pass),
+  /// restitution as a velocity bias (kBox2d's, also for speculative points closing within the
+  /// step). velocityIterations applies; positionIterations and restitutionIterations do not.
+  /// Its result does not depend on how bodies are split
+  /// among processes: it is the solver of quadrant::DistributedWorld, whose state equals a
+  /// World's with this solver. Softer than pgs on stacks (README "More than one machine").
+  kJacobi,
 };
 
 enum class BroadPhaseType : uint8_t {
@@ -132,17 +141,20 @@ struct Effects {
   bool sleep = false;
 };
 
-/// How the pgs solver applies restitution (WorldDef::restitution).
+/// How the pgs and soft_step solvers apply restitution (WorldDef::restitution).
 enum class RestitutionPolicy : uint8_t {
-  /// Pairwise collisions before the velocity iterations (contact_solver.h, ApplyCollisions): each
+  /// Pairwise collisions before the velocity iterations or sub-steps (contact_solver.h, ApplyCollisions): each
   /// approaching contact gets the impulse of a collision of its two bodies alone, sequentially, so
   /// a row of touching balls passes the impulse on as Newton's cradle does. The default.
   kCollisions,
   /// Box2D 2.4.1's way, to reproduce its responses: each point's normal approach speed vn is
   /// captured before the solve (after gravity, before warm starting); where vn < -threshold the
   /// normal row's target becomes -e vn (a velocity bias) inside the velocity iterations, solved
-  /// simultaneously with friction and the other rows. pgs only (World refuses it with another
-  /// solver). README "validation" gives what it changes against Box2D and the analytic answer.
+  /// simultaneously with friction and the other rows. soft_step: vn is captured before the step's
+  /// sub-steps (before their gravity), and rigid rows with that target and friction act after the
+  /// first sub-step's relax pass, the bodies moving as if they had from its start
+  /// (solver_soft_step.cpp). pgs and soft_step (World refuses it with thesis). README "validation"
+  /// gives what it changes against Box2D and the analytic answer.
   kBox2d,
 };
 
@@ -193,6 +205,10 @@ struct WorldDef {
   /// cost of one pass over the rows per sub-step (friction is solved in the last one only; base-100
   /// pyramid: +4.3M instructions a step).
   int softRelaxIterations = 2;
+  /// soft_step: solve friction in every relax pass, not only the last. Where a lever arm couples
+  /// friction and the normal row (an oblique corner hit), the passes then converge both as Box2D
+  /// 2.4.1's iterations do; part of soft_step's Box2D-compatible setting (README "validation").
+  bool softFrictionEveryRelaxPass = false;
   /// soft_step: 0 (off) or the largest mass ratio a contact between two dynamic bodies sees, >= 1.
   /// Where two bodies' masses differ by more, the lighter one takes part in their contact as if it
   /// were only this many times lighter (inverse mass and inertia scaled alike): a heavy body then
@@ -206,8 +222,8 @@ struct WorldDef {
   Real maxLinearCorrection = Real(0.2); ///< most a position iteration moves a contact (m)
   Real speculativeDistance = Real(0.02);///< contacts are created this far before touching (m)
   Real restitutionThreshold = Real(1);  ///< approach speed (m/s) below which no bounce is added
-  RestitutionPolicy restitution = RestitutionPolicy::kCollisions;  ///< pgs's restitution model
-  /// Skin (m) around every polygon as the pgs and soft_step solvers see contacts, 0..speculativeDistance/2:
+  RestitutionPolicy restitution = RestitutionPolicy::kCollisions;  ///< pgs's and soft_step's restitution model
+  /// Skin (m) around every polygon as the solvers see contacts, 0..speculativeDistance/2:
   /// a point is solved as if its separation were smaller by the skins of the pair's polygons, so
   /// points within them are touching rows and bodies rest that far apart. 0 (the default): shapes
   /// are exactly their vertices. Box2D 2.4.1's b2_polygonRadius is 0.01; with it and
@@ -218,6 +234,14 @@ struct WorldDef {
   /// (the 2x2 effective mass and the Coulomb cone) instead of by two separate formulas. Off (the
   /// default): the thesis's method. README "validation" gives what it changes.
   bool thesisCoupledImpulse = false;
+  /// thesis solver: one impulse at each touching point of a contact, in turn, instead of the
+  /// thesis's one impulse at their centroid. Off (the default): the thesis's method. README
+  /// "validation" gives what it changes.
+  bool thesisPointImpulses = false;
+  /// thesis solver: passes over the contacts per step, >= 1. 1 (the default): the thesis's one
+  /// pass; more let the impulses of a contact's two points, or of neighbouring contacts, settle
+  /// as an iterative solver's do. README "validation" gives what it changes.
+  int thesisPasses = 1;
   Real maxLinearSpeed = Real(400);      ///< m/s; a numerical guard, as Box2D 3's default
   /// Most a body turns in one step (rad), as Box2D 3's 0.25 pi: a numerical guard. Speculative
   /// contacts see where a corner is, not where a fast spin takes it within the step; without

@@ -1,0 +1,232 @@
+// quadrant_distributed: one distributed run under mpirun, for tools/quadrant bench --ranks.
+//
+//   mpirun -np R quadrant_distributed --scene circle_stress --count N [--per-rank] [--steps S]
+//          [--warmup W] [--tiles T] [--iterations K]
+//
+// Rank 0 prints one JSON object (a run of distributed.json): ms per step (the slowest rank's wall
+// time over the measured steps), neighbour rounds per step, payload bytes sent per step (all
+// ranks), bytes per shadow body, shadow fraction (shadows / bodies), imbalance (max / mean over the
+// ranks of owned bodies plus their contacts, averaged over the steps; a work measure, not a time),
+// the state hash, and peak resident memory summed over the ranks (and per body).
+// Bad options: one line on stderr, exit 2 (every rank parses the same arguments).
+#include <mpi.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "quadrant/distributed_world.h"
+#include "quadrant/error.h"
+#include "scenes.h"
+
+using namespace quadrant;
+
+namespace {
+
+std::vector<BodyDef> ToBodyDefs(const scene::Scene& s) {
+  std::vector<BodyDef> out;
+  out.reserve(s.bodies.size());
+  for (const scene::BodyDesc& b : s.bodies) {
+    BodyDef bd;
+    bd.type = b.dynamic ? BodyType::kDynamic : b.kinematic ? BodyType::kKinematic : BodyType::kStatic;
+    bd.position = b.position;
+    bd.angle = b.angle;
+    bd.linearVelocity = b.velocity;
+    bd.angularVelocity = b.angularVelocity;
+    bd.shape = b.shape == scene::ShapeKind::kCircle ? ShapeDef::MakeCircle(b.radius)
+                                                    : ShapeDef::FromPolygon(MakePolygon(b.vertices));
+    bd.shape.density = b.density;
+    bd.shape.friction = b.friction;
+    bd.shape.restitution = b.restitution;
+    out.push_back(bd);
+  }
+  return out;
+}
+
+[[noreturn]] void Usage(int rank, const std::string& message) {
+  if (rank == 0) std::fprintf(stderr, "quadrant_distributed: %s\n", message.c_str());
+  MPI_Finalize();
+  std::exit(2);
+}
+
+int ParseInt(int rank, const char* name, const char* text, int lo, int hi) {
+  char* end = nullptr;
+  const long v = std::strtol(text, &end, 10);
+  if (end == text || *end != '\0' || v < lo || v > hi) {
+    Usage(rank, std::string(name) + " must be an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+  }
+  return static_cast<int>(v);
+}
+
+// Peak resident memory of this process (kB, Linux VmHWM), 0 where unknown.
+long PeakRssKb() {
+  std::FILE* f = std::fopen("/proc/self/status", "r");
+  if (f == nullptr) return 0;
+  char line[256];
+  long kb = 0;
+  while (std::fgets(line, sizeof line, f) != nullptr) {
+    if (std::strncmp(line, "VmHWM:", 6) == 0) kb = std::strtol(line + 6, nullptr, 10);
+  }
+  std::fclose(f);
+  return kb;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  MPI_Init(&argc, &argv);
+  int rank = 0, size = 1;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &size);
+  std::string sceneName = "circle_stress";
+  int count = 16000, steps = 100, warmup = 10, tiles = 0, iterations = 8;
+  bool perRank = false;
+  std::string ownersPath;  // --owners FILE: every body's position, radius and owner rank as CSV
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto value = [&]() -> const char* {
+      if (i + 1 >= argc) Usage(rank, a + " needs a value");
+      return argv[++i];
+    };
+    if (a == "--scene") {
+      sceneName = value();
+    } else if (a == "--count") {
+      count = ParseInt(rank, "--count", value(), 1, 10000000);
+    } else if (a == "--per-rank") {
+      perRank = true;
+    } else if (a == "--steps") {
+      steps = ParseInt(rank, "--steps", value(), 1, 1000000);
+    } else if (a == "--warmup") {
+      warmup = ParseInt(rank, "--warmup", value(), 0, 1000000);
+    } else if (a == "--tiles") {
+      tiles = ParseInt(rank, "--tiles", value(), 1, 1024);
+    } else if (a == "--owners") {
+      ownersPath = value();
+    } else if (a == "--iterations") {
+      iterations = ParseInt(rank, "--iterations", value(), 1, 1000);
+    } else {
+      Usage(rank, "unknown option '" + a + "' (accepted: --scene, --count, --per-rank, --steps, --warmup, --tiles, --iterations, --owners)");
+    }
+  }
+  if (sceneName != "circle_stress" && sceneName != "pyramid") {
+    Usage(rank, "--scene must be circle_stress or pyramid");
+  }
+  int code = 0;
+  try {
+    scene::Scene s;
+    DistributedDef dist;
+    if (sceneName == "circle_stress") {
+      scene::StressParams p;
+      p.count = perRank ? count * size : count;
+      s = scene::MakeStressScene(p);
+      dist.bounds = s.bounds;
+      // Tiles of about 14 m (a circle reaches 0.51 m from its centre): at 64000 bodies 32 x 32.
+      if (tiles == 0) tiles = std::clamp(int((s.bounds.upper.x - s.bounds.lower.x) / 14), 2, 64);
+    } else {
+      // The pyramid of the hard cases with `count` as its base (default 20 when --count is not
+      // below 200), centred on the corner of four tiles.
+      const int base = count >= 200 ? 20 : count;
+      s = scene::MakePyramid(base);
+      Real lo = 1e9, hi = -1e9, top = -1e9, bottom = 1e9;
+      for (const scene::BodyDesc& b : s.bodies) {
+        if (!b.dynamic) continue;
+        lo = std::min(lo, b.position.x), hi = std::max(hi, b.position.x);
+        top = std::max(top, b.position.y), bottom = std::min(bottom, b.position.y);
+      }
+      const Vec2 mid{(lo + hi) / 2, (bottom + top) / 2};
+      const Real half = std::max(Real(20), (hi - lo));
+      dist.bounds = AABB{mid - Vec2{half, half}, mid + Vec2{half, half}};
+      if (tiles == 0) tiles = 2;
+    }
+    dist.tilesX = dist.tilesY = tiles;
+    WorldDef def;
+    def.gravity = s.gravity;
+    def.solver = SolverType::kJacobi;
+    def.velocityIterations = iterations;
+    def.restitutionThreshold = s.restitutionThreshold;
+    def.effects = s.effects;
+    const std::vector<BodyDef> bodies = ToBodyDefs(s);
+    DistributedWorld dw(def, dist, MPI_COMM_WORLD);
+    dw.Load(bodies);
+    for (int i = 0; i < warmup; ++i) dw.Step(s.timeStep);
+    double bytes = 0, shadows = 0, imbalance = 0;
+    int rounds = 0;
+    MPI_Barrier(MPI_COMM_WORLD);
+    const double t0 = MPI_Wtime();
+    for (int i = 0; i < steps; ++i) {
+      dw.Step(s.timeStep);
+      const DistributedStats& st = dw.GetStats();
+      double mine[2] = {double(st.bytesSent), double(st.shadowBodies)}, sum[2];
+      // A statistics reduction between timed steps: a small, equal cost in every run.
+      MPI_Allreduce(mine, sum, 2, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
+      bytes += sum[0];
+      shadows += sum[1];
+      imbalance += st.imbalance;  // the same on every rank
+      rounds = st.rounds;
+    }
+    const double mine = MPI_Wtime() - t0;
+    double slowest = 0;
+    MPI_Allreduce(&mine, &slowest, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+    const uint64_t hash = dw.StateHash();
+    // Memory: peak resident size summed over the ranks (each rank also holds the whole scene's
+    // BodyDefs, as Load takes them, and the MPI library's buffers).
+    const long rssKb = PeakRssKb();
+    long rssTotalKb = 0;
+    MPI_Allreduce(&rssKb, &rssTotalKb, 1, MPI_LONG, MPI_SUM, MPI_COMM_WORLD);
+    if (!ownersPath.empty()) {
+      // The thesis's Figure 13 by rank (tools/figure13_ranks.py): owners gathered to rank 0.
+      const std::vector<BodyState> states = dw.GatherStates();
+      const std::vector<uint32_t> mine = dw.OwnedIds();
+      const int n = static_cast<int>(mine.size());
+      std::vector<int> counts(static_cast<size_t>(size)), displs(static_cast<size_t>(size));
+      MPI_Gather(&n, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, MPI_COMM_WORLD);
+      int total = 0;
+      for (int r = 0; r < size; ++r) displs[size_t(r)] = total, total += counts[size_t(r)];
+      std::vector<uint32_t> ids(size_t(std::max(total, 1)));
+      MPI_Gatherv(mine.data(), n, MPI_UINT32_T, ids.data(), counts.data(), displs.data(), MPI_UINT32_T, 0, MPI_COMM_WORLD);
+      if (rank == 0) {
+        std::vector<int> owner(bodies.size(), -1);  // -1: static (on every rank)
+        for (int r = 0; r < size; ++r) {
+          for (int k = 0; k < counts[size_t(r)]; ++k) owner[ids[size_t(displs[size_t(r)] + k)]] = r;
+        }
+        std::FILE* f = std::fopen(ownersPath.c_str(), "w");
+        if (f == nullptr) throw Error("cannot write '" + ownersPath + "'");
+        const std::vector<int> tileOwners = dw.TileOwners();
+        std::fprintf(f, "# bounds %g %g %g %g tiles %d %d ranks %d steps %d owners", double(dist.bounds.lower.x),
+                     double(dist.bounds.lower.y), double(dist.bounds.upper.x), double(dist.bounds.upper.y), dist.tilesX,
+                     dist.tilesY, size, warmup + steps);
+        for (int o : tileOwners) std::fprintf(f, " %d", o);
+        std::fprintf(f, "\nx,y,radius,rank\n");
+        for (const BodyState& b : states) {
+          if (owner[b.id] < 0 || bodies[b.id].shape.type != ShapeType::kCircle) continue;
+          std::fprintf(f, "%.4f,%.4f,%.4f,%d\n", double(b.position.x), double(b.position.y),
+                       double(bodies[b.id].shape.circle.radius), owner[b.id]);
+        }
+        std::fclose(f);
+      }
+    }
+    if (rank == 0) {
+      const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
+      std::printf(
+          "{\"scene\": \"%s\", \"ranks\": %d, \"bodies\": %zu, \"steps\": %d, \"warmup\": %d, \"tiles\": %d, "
+          "\"iterations\": %d, \"weak\": %s, \"ms_per_step\": %.4f, \"rounds_per_step\": %d, \"bytes_per_step\": %.1f, "
+          "\"bytes_per_boundary_body\": %.1f, \"shadow_fraction\": %.5f, \"imbalance\": %.4f, "
+          "\"state_hash\": \"%016llx\", \"oversubscribed\": %s, \"cores\": %u, \"peak_rss_mb\": %.1f, "
+          "\"rss_bytes_per_body\": %.0f}\n",
+          sceneName.c_str(), size, bodies.size(), steps, warmup, tiles, iterations, perRank ? "true" : "false",
+          1000.0 * slowest / steps, rounds, bytes / steps, shadows > 0 ? bytes / shadows : 0.0,
+          shadows / steps / double(bodies.size()), imbalance / steps, (unsigned long long)hash,
+          unsigned(size) > cores ? "true" : "false", cores, rssTotalKb / 1024.0,
+          1024.0 * double(rssTotalKb) / double(bodies.size()));
+    }
+  } catch (const Error& e) {
+    std::fprintf(stderr, "quadrant_distributed: rank %d: error: %s\n", rank, e.what());
+    code = 1;
+  }
+  MPI_Finalize();
+  return code;
+}

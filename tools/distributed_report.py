@@ -1,0 +1,103 @@
+#!/usr/bin/env python3
+"""distributed.json and distributed.md from quadrant_distributed's runs (one JSON object a line).
+
+Usage: distributed_report.py RUNS.jsonl --machine M --commit C --load L --json OUT.json --md OUT.md
+
+distributed.json: {"context": {...}, "runs": [{"scene", "ranks", "bodies", "ms_per_step",
+"rounds_per_step", "bytes_per_step", "shadow_fraction", "imbalance", "state_hash", ...}]}.
+distributed.md: one table per kind of run (weak scaling, strong scaling per scene) with the
+weak-scaling efficiency (1-rank ms / R-rank ms at equal bodies per rank) and the strong-scaling
+speed-up; oversubscribed rows (more ranks than cores) are marked, and rows whose state hash
+differs from the 1-rank run of the same scene and size are flagged (they must not exist).
+"""
+import argparse
+import json
+import sys
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("runs")
+    ap.add_argument("--machine", required=True)
+    ap.add_argument("--commit", required=True)
+    ap.add_argument("--load", default="unknown")
+    ap.add_argument("--json", required=True)
+    ap.add_argument("--md", required=True)
+    ap.add_argument("--png", help="also draw ms per step against ranks, one line per kind of run")
+    args = ap.parse_args()
+    runs = []
+    with open(args.runs) as f:
+        for number, line in enumerate(f, 1):
+            line = line.strip()
+            if not line:
+                continue
+            try:
+                runs.append(json.loads(line))
+            except json.JSONDecodeError as e:
+                sys.exit(f"distributed_report: {args.runs}:{number}: not JSON ({e})")
+    if not runs:
+        sys.exit("distributed_report: no runs")
+    context = {"machine": args.machine, "commit": args.commit, "load_before": args.load,
+               "solver": "jacobi (SolverType::kJacobi)",
+               "ms_per_step": "slowest rank's wall time over the timed steps",
+               "imbalance": "max / mean over ranks of owned bodies plus their contacts, averaged over the steps"}
+    with open(args.json, "w") as f:
+        json.dump({"context": context, "runs": runs}, f, indent=1)
+        f.write("\n")
+
+    groups = {}
+    for r in runs:
+        groups.setdefault((("weak" if r.get("weak") else "strong"), r["scene"]), []).append(r)
+    out = [f"# The distributed world (MPI)\n",
+           f"Machine {args.machine}, commit {args.commit}, load average before the runs {args.load}. "
+           "Solver: Jacobi (the distributed world's; the single-process World gives the same state hashes). "
+           "`*`: more ranks than cores (oversubscribed). Imbalance: max / mean over the ranks of owned bodies plus their contacts (a work count).\n"]
+    for (kind, scene), rows in sorted(groups.items(), key=lambda g: (g[0][0] != "weak", g[0][1])):
+        rows.sort(key=lambda r: r["ranks"])
+        base = rows[0]
+        if kind == "weak":
+            out.append(f"\n## Weak scaling: {scene}, {base['bodies'] // base['ranks']} bodies per rank\n")
+            out.append("| ranks | bodies | ms/step | efficiency | rounds/step | bytes/step | bytes/boundary body | shadow fraction | imbalance | peak MB (all ranks) | state hash |")
+        else:
+            out.append(f"\n## Strong scaling: {scene}, {base['bodies']} bodies, {base['iterations']} iterations\n")
+            out.append("| ranks | bodies | ms/step | speed-up | rounds/step | bytes/step | bytes/boundary body | shadow fraction | imbalance | peak MB (all ranks) | state hash |")
+        out.append("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|")
+        for r in rows:
+            ratio = base["ms_per_step"] / r["ms_per_step"] if r["ms_per_step"] > 0 else 0.0
+            ranks = f"{r['ranks']}{'*' if r.get('oversubscribed') else ''}"
+            figure = f"{100 * ratio:.0f} %" if kind == "weak" else f"{ratio:.2f}"
+            same = "" if kind == "weak" or r["state_hash"] == base["state_hash"] else " (differs!)"
+            out.append(f"| {ranks} | {r['bodies']} | {r['ms_per_step']:.2f} | {figure} | {r['rounds_per_step']} | "
+                       f"{r['bytes_per_step']:.0f} | {r['bytes_per_boundary_body']:.0f} | {r['shadow_fraction']:.4f} | "
+                       f"{r['imbalance']:.3f} | {r.get('peak_rss_mb', 0):.0f} | `{r['state_hash']}`{same} |")
+    with open(args.md, "w") as f:
+        f.write("\n".join(out) + "\n")
+    if args.png:
+        plot(groups, args)
+
+
+def plot(groups, args):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    for (kind, scene), rows in sorted(groups.items(), key=lambda g: (g[0][0] != "weak", g[0][1])):
+        rows = sorted(rows, key=lambda r: r["ranks"])
+        size = f"{rows[0]['bodies'] // rows[0]['ranks']} per rank" if kind == "weak" else f"{rows[0]['bodies']} bodies"
+        ax.plot([r["ranks"] for r in rows], [r["ms_per_step"] for r in rows], marker="o",
+                label=f"{kind} scaling, {scene}, {size}")
+        for r in rows:
+            if r.get("oversubscribed"):
+                ax.annotate("*", (r["ranks"], r["ms_per_step"]), textcoords="offset points", xytext=(4, 4))
+    ax.set_xlabel("ranks (* oversubscribed)")
+    ax.set_ylabel("ms per step (slowest rank)")
+    ax.set_yscale("log")
+    ax.set_xticks(sorted({r["ranks"] for rows in groups.values() for r in rows}))
+    ax.set_title(f"Quadrant distributed world, {args.machine}, {args.commit}")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(args.png, dpi=120)
+
+
+if __name__ == "__main__":
+    main()
