@@ -575,10 +575,10 @@ class SoftStepSolver final : public ContactSolverBase {
     // count; each body's operations are its own, so the order changes no bit anyway). The sub-step
     // passes and StoreStates walk this list instead of every body: on the sparse stress scenes
     // about 95 % of the bodies are free. Eight flags at a time: most words are all zero there.
-    // With MoveFour and the states loaded only where rows read them (callgrind, 1 thread, same
-    // state hashes): circle stress N = 4000, 20 steps, 57.27M -> 50.75M instructions (pgs 47.17M);
-    // polygon stress 102.18M -> 94.35M (pgs 89.38M); base-100 pyramid, 10 steps, 431.56M ->
-    // 431.69M. What is left over pgs is mostly MoveFour's own arithmetic (about 66 instructions a
+    // With MoveFour and the states loaded only where rows read them (callgrind on quadrant_icount,
+    // 1 thread, same state hashes; before = d776c64): circle stress N = 4000, 20 steps, 56.37M ->
+    // 49.94M instructions (pgs 46.30M); polygon stress 101.25M -> 93.62M (pgs 88.48M); base-100
+    // pyramid, 10 steps, 430.35M -> 431.53M. What is left over pgs is mostly MoveFour's own arithmetic (about 66 instructions a
     // free body a step, kept operation for operation so the bits stay).
     active_.clear();
     active_.reserve(count);
