@@ -128,10 +128,14 @@ class SoftStepSolver final : public ContactSolverBase {
     integrateMs += Ms(ti, Clock::now());
     const SoftSolveParams prm{invH, def.contactPushMaxDepth, def.contactPushMaxVelocity};
     const bool simd = def.softSimd;
+    // Each sub-step is one region of stages (TaskSystem::ParallelStages): gravity, the warm start
+    // and the soft solve colour by colour, the positions, the relax passes colour by colour; the
+    // threads go from stage to stage inside one job instead of one hand-over per pass (base-100
+    // pyramid, default engine: 52 jobs a step before). Which thread runs which chunk never
+    // changes the arithmetic. The sub-steps' integration is therefore timed as part of the solve.
     for (int sub = 0; sub < n; ++sub) {
-      ti = Clock::now();
+      BeginRegion();
       IntegrateStateVelocities(run, bodies, def, h, sub == 0 ? ctx.dt : Real(0));
-      integrateMs += Ms(ti, Clock::now());
       if (def.effects.warmStarting) {
         ForEachGroup(run, simd, [&](auto lanes, SoftRowGroup& g, int lane) {
           WarmStartRows<decltype(lanes), kRotation>(states_.data(), g, lane);
@@ -140,11 +144,9 @@ class SoftStepSolver final : public ContactSolverBase {
       ForEachGroup(run, simd, [&](auto lanes, SoftRowGroup& g, int lane) {
         SolveRows<decltype(lanes), kRotation, kFriction, true>(states_.data(), g, lane, prm);
       });
-      ti = Clock::now();
       // The rotation guard is per world step: per sub-step it allowed n times the turn (188 rad/s
       // instead of 47 at 4 sub-steps), and spinning triangles of the soak left the box.
       IntegrateStatePositions(run, bodies, def, h, ctx.dt);
-      integrateMs += Ms(ti, Clock::now());
       // Friction only in the last relax pass: the earlier ones settle the normal impulses that
       // bound it. Base-100 pyramid: 44.7M -> 43.2M instructions a step, and the 16 hard cases hold
       // as with friction in both (tall_stack top 0.034 m; with friction in the first pass only
@@ -160,6 +162,7 @@ class SoftStepSolver final : public ContactSolverBase {
           });
         }
       }
+      EndRegion(run);
       if (box2dRestitution && sub == 0 && m > 0) ApplyBox2dRestitution<kRotation, kFriction>(run, def, h);
     }
     if (def.effects.restitution && m > 0) ForEachColor(run, [&](int b, int e) { ApplyStateBounceShifts(b, e); });
@@ -343,6 +346,10 @@ class SoftStepSolver final : public ContactSolverBase {
   // thread.
   template <class Fn>
   void ForEachGroup(StageRunner& run, bool simd, Fn&& fn) {
+    if (collecting_) {
+      QueueGroups(simd, std::forward<Fn>(fn));
+      return;
+    }
     auto rows = [&](int gb, int ge) {
 #if QUADRANT_SOFT_SIMD
       if (simd) {
@@ -613,7 +620,7 @@ class SoftStepSolver final : public ContactSolverBase {
     // pad word exactly as they are (x + -0 is x for every x, signed zeros included).
     if (!damp && def.softSimd) {
       const __m128 add = _mm_set_ps(-0.0f, -0.0f, dv.y, dv.x);
-      run.For(Stage::kIntegrate, ActiveCount(), run.MinItems(), [&](int b, int e, int) {
+      BodyPass(run, [this, &bodies, add](int b, int e, int) {
         for (int k = b; k < e; ++k) {
           const int i = active_[k];
           if (bodies.inv[i].invMass == 0) continue;
@@ -624,7 +631,7 @@ class SoftStepSolver final : public ContactSolverBase {
       return;
     }
 #endif
-    run.For(Stage::kIntegrate, ActiveCount(), run.MinItems(), [&](int b, int e, int) {
+    BodyPass(run, [this, &bodies, dv, damp, dampDt](int b, int e, int) {
       for (int k = b; k < e; ++k) {
         const int i = active_[k];
         if (bodies.inv[i].invMass == 0) continue;
@@ -645,25 +652,29 @@ class SoftStepSolver final : public ContactSolverBase {
     const Real maxAngularSpeed = def.maxRotation / stepDt;
     const bool rotation = def.effects.rotation, sleep = def.effects.sleep;
     // Only the bodies in rows (active_): StoreStates moves the free ones over the whole step.
-    run.For(Stage::kIntegrate, ActiveCount(), run.MinItems(), [&](int b, int e, int) {
+    const bool simd = def.softSimd;
+    const Real maxLinearSpeed = def.maxLinearSpeed;
+    BodyPass(run, [this, &bodies, simd, sleep, rotation, h, maxSpeed2, maxLinearSpeed, maxAngularSpeed](int b, int e, int) {
       int k = b;
 #if QUADRANT_SOFT_SIMD
       // Four bodies at a time: the same operations per body as the loop below (IntegrateRot's
       // small-angle branch is TurnBy), so the same bits. Circle stress (N = 4000, soft_step):
       // this pass was a third of the step's instructions, most of them IntegrateRot calls.
-      if (def.softSimd) {
+      if (simd) {
         for (; k + kLanes <= e; k += kLanes) {
           const int* idx = &active_[k];
-          if (!IntegrateFour(bodies, idx, sleep, rotation, h, maxSpeed2, def.maxLinearSpeed, maxAngularSpeed)) {
+          if (!IntegrateFour(bodies, idx, sleep, rotation, h, maxSpeed2, maxLinearSpeed, maxAngularSpeed)) {
             for (int l = 0; l < kLanes; ++l) {
-              IntegrateOne(bodies, idx[l], sleep, rotation, h, maxSpeed2, def.maxLinearSpeed, maxAngularSpeed);
+              IntegrateOne(bodies, idx[l], sleep, rotation, h, maxSpeed2, maxLinearSpeed, maxAngularSpeed);
             }
           }
         }
       }
+#else
+      (void)simd;
 #endif
       for (; k < e; ++k) {
-        IntegrateOne(bodies, active_[k], sleep, rotation, h, maxSpeed2, def.maxLinearSpeed, maxAngularSpeed);
+        IntegrateOne(bodies, active_[k], sleep, rotation, h, maxSpeed2, maxLinearSpeed, maxAngularSpeed);
       }
     });
   }
@@ -936,10 +947,78 @@ class SoftStepSolver final : public ContactSolverBase {
   }
 #endif
 
+  // A sub-step's passes as one region (Run says why): between BeginRegion and EndRegion the
+  // passes are queued as stages, in order, and EndRegion runs them as one job.
+  void BeginRegion() {
+    collecting_ = true;
+    regionPlan_.clear();
+    regionFirst_.clear();
+    regionPass_.clear();
+    regionFns_.clear();
+  }
+
+  void EndRegion(StageRunner& run) {
+    collecting_ = false;
+    run.Stages(Stage::kSolve, regionPlan_, std::max(1, run.MinHeavyItems() / kLanes), [&](int s, int b, int e) {
+      regionFns_[regionPass_[s]](regionFirst_[s] + b, regionFirst_[s] + e);
+    });
+  }
+
+  // A pass over the bodies in rows (active_): run now, or queued as one stage of the region.
+  // A chunk of kBodyGrain bodies is a few microseconds of integration.
+  static constexpr int kBodyGrain = 256;
+  template <class Fn>
+  void BodyPass(StageRunner& run, Fn fn) {
+    const int count = ActiveCount();
+    if (count <= 0) return;
+    if (!collecting_) {
+      run.For(Stage::kIntegrate, count, run.MinItems(), fn);
+      return;
+    }
+    regionPass_.push_back(static_cast<int>(regionFns_.size()));
+    regionFns_.emplace_back([fn](int b, int e) { fn(b, e, 0); });
+    regionPlan_.push_back({count, kBodyGrain});
+    regionFirst_.push_back(0);
+  }
+
+  // ForEachGroup's pass queued in the region: a stage per colour over absolute group indices
+  // (the overflow colour one chunk, row by row). fn is kept by value; what it refers to lives
+  // in Run until EndRegion.
+  template <class Fn>
+  void QueueGroups(bool simd, Fn fn) {
+    const int overflow = groupStart_[kColors];
+    const int pass = static_cast<int>(regionFns_.size());
+    regionFns_.emplace_back([this, simd, fn, overflow](int gb, int ge) mutable {
+#if QUADRANT_SOFT_SIMD
+      if (simd && gb < overflow) {
+        for (int gi = gb; gi < ge; ++gi) fn(F4{}, groups_[gi], 0);
+        return;
+      }
+#else
+      (void)simd;
+      (void)overflow;
+#endif
+      for (int gi = gb; gi < ge; ++gi) {
+        for (int lane = 0; lane < kLanes; ++lane) fn(Real{}, groups_[gi], lane);
+      }
+    });
+    for (int color = 0; color <= kColors; ++color) {
+      const int begin = groupStart_[color], count = groupStart_[color + 1] - begin;
+      if (count == 0) continue;
+      regionPlan_.push_back({count, color < kColors ? kColorGrain / kLanes : count});
+      regionFirst_.push_back(begin);
+      regionPass_.push_back(pass);
+    }
+  }
+
   int ActiveCount() const { return static_cast<int>(active_.size()); }
 
   static constexpr int kFlagPad = 8;
   std::vector<uint8_t> inRows_;  // per body (+ kFlagPad of padding): integrated by the sub-steps
+  bool collecting_ = false;  // between BeginRegion and EndRegion
+  std::vector<TaskSystem::StagePlan> regionPlan_;
+  std::vector<int> regionFirst_, regionPass_;
+  std::vector<std::function<void(int, int)>> regionFns_;
   std::vector<int> active_;      // the bodies with inRows_ set, ascending
   std::vector<uint8_t> supported_;
   Real collisionShare_ = 1;  // a sub-step's share of the step's collision impulses (Run says why)
