@@ -47,12 +47,15 @@ def main():
 
     groups = {}
     for r in runs:
-        groups.setdefault((("weak" if r.get("weak") else "strong"), r["scene"]), []).append(r)
+        # Strong-scaling runs of one scene at different sizes (the 1,000,000-body run beside the
+        # 64000-body series) are separate series: their hashes and times are not comparable.
+        weak = bool(r.get("weak"))
+        groups.setdefault(("weak" if weak else "strong", r["scene"], 0 if weak else r["bodies"]), []).append(r)
     out = [f"# The distributed world (MPI)\n",
            f"Machine {args.machine}, commit {args.commit}, load average before the runs {args.load}. "
            "Solver: Jacobi (the distributed world's; the single-process World gives the same state hashes). "
            "`*`: more ranks than cores (oversubscribed). Imbalance: max / mean over the ranks of owned bodies plus their contacts (a work count).\n"]
-    for (kind, scene), rows in sorted(groups.items(), key=lambda g: (g[0][0] != "weak", g[0][1])):
+    for (kind, scene, _), rows in sorted(groups.items(), key=lambda g: (g[0][0] != "weak", g[0][1], g[0][2])):
         rows.sort(key=lambda r: r["ranks"])
         base = rows[0]
         if kind == "weak":
@@ -81,7 +84,7 @@ def plot(groups, args):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     fig, ax = plt.subplots(figsize=(7, 4.5))
-    for (kind, scene), rows in sorted(groups.items(), key=lambda g: (g[0][0] != "weak", g[0][1])):
+    for (kind, scene, _), rows in sorted(groups.items(), key=lambda g: (g[0][0] != "weak", g[0][1], g[0][2])):
         rows = sorted(rows, key=lambda r: r["ranks"])
         size = f"{rows[0]['bodies'] // rows[0]['ranks']} per rank" if kind == "weak" else f"{rows[0]['bodies']} bodies"
         ax.plot([r["ranks"] for r in rows], [r["ms_per_step"] for r in rows], marker="o",
