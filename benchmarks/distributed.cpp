@@ -27,23 +27,11 @@ using namespace quadrant;
 
 namespace {
 
+// The scene's bodies through the scene API's own mapping (scene::ToBodyDef).
 std::vector<BodyDef> ToBodyDefs(const scene::Scene& s) {
   std::vector<BodyDef> out;
   out.reserve(s.bodies.size());
-  for (const scene::BodyDesc& b : s.bodies) {
-    BodyDef bd;
-    bd.type = b.dynamic ? BodyType::kDynamic : b.kinematic ? BodyType::kKinematic : BodyType::kStatic;
-    bd.position = b.position;
-    bd.angle = b.angle;
-    bd.linearVelocity = b.velocity;
-    bd.angularVelocity = b.angularVelocity;
-    bd.shape = b.shape == scene::ShapeKind::kCircle ? ShapeDef::MakeCircle(b.radius)
-                                                    : ShapeDef::FromPolygon(MakePolygon(b.vertices));
-    bd.shape.density = b.density;
-    bd.shape.friction = b.friction;
-    bd.shape.restitution = b.restitution;
-    out.push_back(bd);
-  }
+  for (const scene::BodyDesc& b : s.bodies) out.push_back(scene::ToBodyDef(b));
   return out;
 }
 
