@@ -95,6 +95,7 @@
 // libgomp is not instrumented for ThreadSanitizer, so the tsan preset would report its internal
 // synchronisation as races, while this pool uses only std::atomic and std::mutex.
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <climits>
@@ -142,8 +143,35 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
+// This thread's time on a CPU and waiting on a run queue (ns) and its time slices, from
+// /proc/thread-self/schedstat (zeros where unavailable): QUADRANT_POOL_STATS.
+void ReadSchedStat(std::array<long long, 3>& out) {
+  out = {};
+#if defined(__linux__)
+  if (FILE* f = std::fopen("/proc/thread-self/schedstat", "r")) {
+    if (std::fscanf(f, "%lld %lld %lld", &out[0], &out[1], &out[2]) != 3) out = {};
+    std::fclose(f);
+  }
+#endif
+}
+
 class InlineTaskSystem final : public TaskSystem {
  public:
+  InlineTaskSystem() {
+    if (std::getenv("QUADRANT_POOL_STATS")) {
+      stats_ = true;
+      born_ = Clock::now();
+      ReadSchedStat(sched_);
+    }
+  }
+  ~InlineTaskSystem() override {
+    if (!stats_) return;
+    std::array<long long, 3> now{};
+    ReadSchedStat(now);
+    std::fprintf(stderr, "pool 1: life %.1f ms; caller cpu %.1f ms runq %.1f ms slices %lld\n",
+                 std::chrono::duration<double, std::milli>(Clock::now() - born_).count(), (now[0] - sched_[0]) * 1e-6,
+                 (now[1] - sched_[1]) * 1e-6, now[2] - sched_[2]);
+  }
   int WorkerCount() const override { return 1; }
   int ThreadCount() const override { return 1; }
   void ParallelFor(int count, const RangeFn& fn) override {
@@ -154,6 +182,11 @@ class InlineTaskSystem final : public TaskSystem {
       if (plan[s].count > 0) fn(s, 0, plan[s].count, 0);
     }
   }
+
+ private:
+  bool stats_ = false;
+  Clock::time_point born_;
+  std::array<long long, 3> sched_{};
 };
 
 // Longest spin on a quiet machine (see the head comment for the measurement behind 1 ms).
@@ -240,19 +273,36 @@ class ThreadPool final : public TaskSystem {
     // More threads than cores would only take turns on them: the extra ones are not started
     // (every block still exists and is run by the threads that are).
     const int running = std::min(threads, UsableCores());
+    stats_ = std::getenv("QUADRANT_POOL_STATS") != nullptr;
+    born_ = Clock::now();
+    if (stats_) ReadSchedStat(callerSched_);
+    workerSched_.assign(running, {});
     threads_.reserve(running - 1);
-    for (int w = 1; w < running; ++w) threads_.emplace_back([this] { WorkerLoop(); });
+    for (int w = 1; w < running; ++w) threads_.emplace_back([this, w] { WorkerLoop(w); });
   }
 
   ~ThreadPool() override {
-    if (std::getenv("QUADRANT_POOL_STATS")) {
-      std::fprintf(stderr, "pool %d: jobs %lld, serial %lld, caller alone %lld, wait %.3f ms, waits>1ms %lld, marks %d\n",
-                   workers_, statJobs_, statSerial_, statAlone_, statWaitNs_ * 1e-6, statLong_, statMarks_);
-    }
     stop_.store(true, std::memory_order_seq_cst);
     jobWord_.fetch_add(1, std::memory_order_seq_cst);
     WakeAll(jobWord_);
     for (std::thread& t : threads_) t.join();
+    if (stats_) {
+      std::array<long long, 3> now{};
+      ReadSchedStat(now);
+      for (int k = 0; k < 3; ++k) callerSched_[k] = now[k] - callerSched_[k];
+      std::fprintf(stderr,
+                   "pool %d: life %.1f ms, jobs %lld, serial %lld, caller alone %lld, parallel-job time %.3f ms, wait %.3f ms, "
+                   "waits>1ms %lld, first job at %.1f ms, marks %d (first at %.1f ms), probes %d, failed probes %d; caller cpu %.1f ms runq %.1f ms "
+                   "slices %lld",
+                   workers_, std::chrono::duration<double, std::milli>(Clock::now() - born_).count(), statJobs_, statSerial_,
+                   statAlone_, statJobNs_ * 1e-6, statWaitNs_ * 1e-6, statLong_, statFirstJobMs_, statMarks_, statFirstMarkMs_, statProbes_,
+                   statFailedProbes_, callerSched_[0] * 1e-6, callerSched_[1] * 1e-6, callerSched_[2]);
+      for (size_t w = 1; w < workerSched_.size(); ++w) {
+        std::fprintf(stderr, "; worker %zu cpu %.1f ms runq %.1f ms slices %lld", w, workerSched_[w][0] * 1e-6,
+                     workerSched_[w][1] * 1e-6, workerSched_[w][2]);
+      }
+      std::fprintf(stderr, "\n");
+    }
   }
 
   int WorkerCount() const override { return workers_; }
@@ -328,6 +378,7 @@ class ThreadPool final : public TaskSystem {
       return true;
     }
     if (!windowOpen_) {  // the first parallel job after a serial period (or ever)
+      statProbes_ += probing_;
       windowOpen_ = true;
       windowStart_ = now;
       stalled_ = {};
@@ -369,6 +420,8 @@ class ThreadPool final : public TaskSystem {
     const bool probe = probing_;  // the first window after a serial period
     probing_ = false;
     ++statMarks_;
+    statFailedProbes_ += probe;
+    if (statFirstMarkMs_ < 0) statFirstMarkMs_ = std::chrono::duration<double, std::milli>(now - born_).count();
     contendedMillis_ = probe ? std::min(2 * contendedMillis_, kMaxContendedMillis) : kContendedMillis;
     serialUntil_ = now + std::chrono::milliseconds(contendedMillis_);
     windowOpen_ = false;
@@ -400,6 +453,8 @@ class ThreadPool final : public TaskSystem {
     while (first < stages && chunks_[first] == 0) ++first;
     if (first == stages) return;
     ++statJobs_;
+    const Clock::time_point jobStart = Clock::now();
+    if (statFirstJobMs_ < 0) statFirstJobMs_ = std::chrono::duration<double, std::milli>(jobStart - born_).count();
     failed_.store(false, std::memory_order_relaxed);
     done_.store(0, std::memory_order_relaxed);
     tag_ = (tag_ + 1) & 0xFFFF;
@@ -410,6 +465,7 @@ class ThreadPool final : public TaskSystem {
     if (mine == total) ++statAlone_;
     ++windowJobs_;
     windowHelped_ += mine < total;
+    statJobNs_ += std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now() - jobStart).count();
     rangeFn_ = nullptr;
     stageFn_ = nullptr;
     if (error_) {
@@ -508,7 +564,9 @@ class ThreadPool final : public TaskSystem {
     }
   }
 
-  void WorkerLoop() {
+  void WorkerLoop(int index) {
+    std::array<long long, 3> start{};
+    if (stats_) ReadSchedStat(start);
     uint32_t seen = 0;
     for (;;) {
       auto arrived = [&] { return jobWord_.load(std::memory_order_acquire) != seen; };
@@ -517,7 +575,13 @@ class ThreadPool final : public TaskSystem {
         while (jobWord_.load(std::memory_order_seq_cst) == seen) WaitWhileEqual(jobWord_, seen);
         jobSleepers_.fetch_sub(1, std::memory_order_relaxed);
       }
-      if (stop_.load(std::memory_order_acquire)) return;
+      if (stop_.load(std::memory_order_acquire)) {
+        if (stats_) {
+          ReadSchedStat(workerSched_[index]);
+          for (int k = 0; k < 3; ++k) workerSched_[index][k] -= start[k];
+        }
+        return;
+      }
       seen = jobWord_.load(std::memory_order_acquire);
       Claim(TagOf(claim_.load(std::memory_order_acquire)), false);
     }
@@ -553,8 +617,15 @@ class ThreadPool final : public TaskSystem {
   long long windowJobs_ = 0, windowHelped_ = 0;  // this window's jobs, those a worker took part in
   int contendedMillis_ = kContendedMillis;
 
-  long long statJobs_ = 0, statSerial_ = 0, statAlone_ = 0, statWaitNs_ = 0, statLong_ = 0;
-  int statMarks_ = 0;
+  long long statJobs_ = 0, statSerial_ = 0, statAlone_ = 0, statWaitNs_ = 0, statLong_ = 0, statJobNs_ = 0;
+  int statMarks_ = 0, statProbes_ = 0, statFailedProbes_ = 0;
+  double statFirstMarkMs_ = -1, statFirstJobMs_ = -1;
+  bool stats_ = false;
+  Clock::time_point born_;
+  std::array<long long, 3> callerSched_{};
+  std::vector<std::array<long long, 3>> workerSched_;
+
+
 
   std::mutex errorMutex_;
   std::exception_ptr error_;  // the first exception of the current job
