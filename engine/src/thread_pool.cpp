@@ -98,10 +98,13 @@
 #include <array>
 #include <atomic>
 #include <chrono>
+#include <cerrno>
 #include <climits>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
+#include <ctime>
 #include <exception>
 #include <limits>
 #include <mutex>
@@ -116,8 +119,10 @@
 #include <immintrin.h>
 #endif
 #if defined(__linux__)
+#include <fcntl.h>
 #include <linux/futex.h>
 #include <sched.h>
+#include <sys/resource.h>
 #include <sys/syscall.h>
 #include <unistd.h>
 #endif
@@ -154,6 +159,30 @@ void ReadSchedStat(std::array<long long, 3>& out) {
   }
 #endif
 }
+
+#if defined(__linux__)
+// A thread's schedstat file, opened once per thread and closed when the thread ends.
+struct SchedFile {
+  int fd = -2;  // -2: not opened yet, -1: unavailable
+  ~SchedFile() {
+    if (fd >= 0) close(fd);
+  }
+};
+// The second field of a schedstat file: the thread's time waiting on a run queue, in ns.
+long long RunqNanos(int fd) {
+  if (fd < 0) return -1;
+  char buf[128];
+  const ssize_t n = pread(fd, buf, sizeof(buf) - 1, 0);
+  if (n <= 0) return -1;
+  buf[n] = 0;
+  char* end = nullptr;
+  std::strtoll(buf, &end, 10);
+  if (end == buf) return -1;
+  char* end2 = nullptr;
+  const long long runq = std::strtoll(end, &end2, 10);
+  return end2 == end ? -1 : runq;
+}
+#endif
 
 class InlineTaskSystem final : public TaskSystem {
  public:
@@ -213,6 +242,12 @@ constexpr double kStallShare = 0.2;
 // futex wake).
 constexpr double kMinHelpShare = 0.5;
 constexpr int kMinJobs = 8;
+// The pool's threads together waiting on run queues for more than this share of a window: more
+// runnable threads than cores (see Judge).
+constexpr double kQueueShare = 0.25;
+// Other processes using more than cores - threads + this many cores over a serial period keep
+// the pool serial without a probe (OthersHoldCores).
+constexpr double kOthersMargin = 0.5;
 constexpr int kContendedMillis = 200;
 constexpr int kMaxContendedMillis = 1600;
 
@@ -277,6 +312,27 @@ class ThreadPool final : public TaskSystem {
     born_ = Clock::now();
     if (stats_) ReadSchedStat(callerSched_);
     workerSched_.assign(running, {});
+    schedFds_ = std::vector<std::atomic<int>>(running);
+    for (auto& fd : schedFds_) fd.store(-1, std::memory_order_relaxed);
+#if defined(__linux__)
+    // /proc/stat covers every core of the machine: it describes this process's cores only when
+    // the process may run on all of them.
+    if (UsableCores() == static_cast<int>(std::thread::hardware_concurrency())) machineCores_ = UsableCores();
+    ticksPerSecond_ = sysconf(_SC_CLK_TCK);
+    if (ticksPerSecond_ <= 0) machineCores_ = 0;
+    // Niced processes count as others when this process is niced too, or when the kernel groups
+    // processes by session (sched_autogroup_enabled): nice then only orders the threads of one
+    // session, and a niced build in another session gets as much of a core as this process
+    // (measured on these VMs: one thread beside a busy loop and two other sessions' nice -n 19
+    // builds ran 120 ms of a 470 ms life, waiting 330 ms on the run queue).
+    errno = 0;
+    countNiced_ = getpriority(PRIO_PROCESS, 0) > 0;
+    if (FILE* f = std::fopen("/proc/sys/kernel/sched_autogroup_enabled", "r")) {
+      int on = 0;
+      if (std::fscanf(f, "%d", &on) == 1 && on != 0) countNiced_ = true;
+      std::fclose(f);
+    }
+#endif
     threads_.reserve(running - 1);
     for (int w = 1; w < running; ++w) threads_.emplace_back([this, w] { WorkerLoop(w); });
   }
@@ -286,17 +342,23 @@ class ThreadPool final : public TaskSystem {
     jobWord_.fetch_add(1, std::memory_order_seq_cst);
     WakeAll(jobWord_);
     for (std::thread& t : threads_) t.join();
+#if defined(__linux__)
+    for (auto& fd : schedFds_) {
+      if (fd.load() >= 0) close(fd.load());
+    }
+#endif
     if (stats_) {
       std::array<long long, 3> now{};
       ReadSchedStat(now);
       for (int k = 0; k < 3; ++k) callerSched_[k] = now[k] - callerSched_[k];
       std::fprintf(stderr,
-                   "pool %d: life %.1f ms, jobs %lld, serial %lld, caller alone %lld, parallel-job time %.3f ms, wait %.3f ms, "
+                   "pool %d: life %.1f ms, steps %lld (alone %lld), jobs %lld, serial %lld, caller alone %lld, parallel-job time %.3f ms, wait %.3f ms, "
                    "waits>1ms %lld, first job at %.1f ms, marks %d (first at %.1f ms), probes %d, failed probes %d; caller cpu %.1f ms runq %.1f ms "
-                   "slices %lld",
-                   workers_, std::chrono::duration<double, std::milli>(Clock::now() - born_).count(), statJobs_, statSerial_,
+                   "slices %lld; marks by stall %d idle %d queue %d, first queue share %.2f, max %.2f, extended %d, others %.2f cores",
+                   workers_, std::chrono::duration<double, std::milli>(Clock::now() - born_).count(), statSteps_, statAloneSteps_, statJobs_, statSerial_,
                    statAlone_, statJobNs_ * 1e-6, statWaitNs_ * 1e-6, statLong_, statFirstJobMs_, statMarks_, statFirstMarkMs_, statProbes_,
-                   statFailedProbes_, callerSched_[0] * 1e-6, callerSched_[1] * 1e-6, callerSched_[2]);
+                   statFailedProbes_, callerSched_[0] * 1e-6, callerSched_[1] * 1e-6, callerSched_[2], statMarkStall_, statMarkIdle_,
+                   statMarkQueued_, statFirstQueue_, statMaxQueue_, statExtended_, statOthers_);
       for (size_t w = 1; w < workerSched_.size(); ++w) {
         std::fprintf(stderr, "; worker %zu cpu %.1f ms runq %.1f ms slices %lld", w, workerSched_[w][0] * 1e-6,
                      workerSched_[w][1] * 1e-6, workerSched_[w][2]);
@@ -370,23 +432,50 @@ class ThreadPool final : public TaskSystem {
   }
 
  private:
+  // A step asks before it starts (StageRunner::BeginStep): while the pool is serial, the
+  // engine's one-thread path is cheaper than running the partition's blocks one by one.
+  bool RunsAlone() override {
+    if (threads_.empty()) return true;
+    if (tRunning == this) return false;
+    const Clock::time_point now = Clock::now();
+    const bool alone = now < serialUntil_ || (!windowOpen_ && StayOrProbe(now));
+    ++statSteps_;
+    statAloneSteps_ += alone;
+    return alone;
+  }
+
   // True while the pool runs every job on the caller alone (contention, see Judge).
   bool Serial() {
     const Clock::time_point now = Clock::now();
-    if (now < serialUntil_) {
+    if (now < serialUntil_ || (!windowOpen_ && StayOrProbe(now))) {
       ++statSerial_;
       return true;
     }
-    if (!windowOpen_) {  // the first parallel job after a serial period (or ever)
-      statProbes_ += probing_;
-      windowOpen_ = true;
-      windowStart_ = now;
-      stalled_ = {};
-      windowJobs_ = windowHelped_ = 0;
-    } else if (now - windowStart_ >= std::chrono::milliseconds(kFirstJudgeMillis)) {
-      Judge(now);
-    }
+    if (now - windowStart_ >= std::chrono::milliseconds(kFirstJudgeMillis)) Judge(now);
     return now < serialUntil_;
+  }
+
+  // No window is open: the pool has not run a parallel job yet, or a serial period has ended.
+  // If other processes kept the cores busy all through that period, a probe would only fail
+  // again: stay serial for another period (true). Otherwise open a window (false).
+  bool StayOrProbe(Clock::time_point now) {
+    if (probing_ && OthersHoldCores(now)) {
+      serialUntil_ = now + std::chrono::milliseconds(kContendedMillis);
+      ++statExtended_;
+      return true;
+    }
+    statProbes_ += probing_;
+    windowOpen_ = true;
+    OpenWindow(now);
+    return false;
+  }
+
+  void OpenWindow(Clock::time_point now) {
+    windowStart_ = now;
+    stalled_ = {};
+    windowJobs_ = windowHelped_ = 0;
+    runqStart_ = PoolRunqNanos();
+    runqCheck_ = now;
   }
 
   // The window of parallel jobs so far. More than kStallShare of it spent waiting for chunks
@@ -395,7 +484,9 @@ class ThreadPool final : public TaskSystem {
   // judged from kFirstJudgeMillis on, as soon as they exceed kStallShare of a whole window (a
   // benchmark run of 16000 circles is 70 steps of about 1.2 ms: waiting for the end of a 40 ms
   // window at the 2-thread busy speed would be half of it); idle workers, and a clean window,
-  // only after kWindowMillis.
+  // only after kWindowMillis. The pool's threads waiting on run queues for more than
+  // kQueueShare of the window (checked every kFirstJudgeMillis) also means more runnable threads
+  // than cores.
   void Judge(Clock::time_point now) {
     // Over at least a whole window: a lone preemption of 2-3 ms in the first 10 ms of a run on an
     // otherwise quiet machine (another process's burst) must not make the run serial.
@@ -408,24 +499,99 @@ class ThreadPool final : public TaskSystem {
     // jobs of a 16000-circle run on an otherwise quiet machine, which then ran serially), and
     // idle workers cost the caller little (a spinning worker needs no wake-up).
     const bool idle = full && windowJobs_ >= kMinJobs && windowHelped_ < kMinHelpShare * windowJobs_;
-    if (share <= kStallShare && !idle) {
+    bool queued = false;
+    if (runqStart_ >= 0 && now - runqCheck_ >= std::chrono::milliseconds(kFirstJudgeMillis)) {
+      runqCheck_ = now;
+      const long long runq = PoolRunqNanos();
+      if (runq >= 0) {
+        const double queue = double(runq - runqStart_) * 1e-9 / std::chrono::duration<double>(now - windowStart_).count();
+        if (statFirstQueue_ < 0) statFirstQueue_ = queue;
+        statMaxQueue_ = std::max(statMaxQueue_, queue);
+        queued = queue > kQueueShare;
+      }
+    }
+    if (share <= kStallShare && !idle && !queued) {
       if (!full) return;
       probing_ = false;
-      windowStart_ = now;
-      stalled_ = {};
-      windowJobs_ = windowHelped_ = 0;
+      OpenWindow(now);
       contendedMillis_ = kContendedMillis;
       return;
     }
     const bool probe = probing_;  // the first window after a serial period
     probing_ = false;
     ++statMarks_;
+    statMarkStall_ += share > kStallShare;
+    statMarkIdle_ += idle;
+    statMarkQueued_ += queued;
     statFailedProbes_ += probe;
     if (statFirstMarkMs_ < 0) statFirstMarkMs_ = std::chrono::duration<double, std::milli>(now - born_).count();
     contendedMillis_ = probe ? std::min(2 * contendedMillis_, kMaxContendedMillis) : kContendedMillis;
     serialUntil_ = now + std::chrono::milliseconds(contendedMillis_);
     windowOpen_ = false;
     probing_ = true;
+    machine_ = SampleMachine(now);
+  }
+
+  // Whether other processes used more of the machine's cores since machine_ was sampled than
+  // the pool's threads could spare (more than cores - threads + kOthersMargin of them), from
+  // /proc/stat's busy ticks less this process's own CPU time. /proc/stat counts in ticks of
+  // 10 ms per core, which is enough over a serial period of 200 ms. Niced processes count only
+  // where they compete with this one (countNiced_). False where /proc/stat cannot say.
+  bool OthersHoldCores(Clock::time_point now) {
+    const MachineSample before = machine_, after = SampleMachine(now);
+    machine_ = after;
+    if (before.busySeconds < 0 || after.busySeconds < 0) return false;
+    const double wall = std::chrono::duration<double>(after.at - before.at).count();
+    if (wall < 0.1) return false;
+    const double others = ((after.busySeconds - before.busySeconds) - (after.ownSeconds - before.ownSeconds)) / wall;
+    statOthers_ = others;
+    return others > double(machineCores_ - ThreadCount()) + kOthersMargin;
+  }
+
+  struct MachineSample {
+    double busySeconds = -1;  // every core's busy time (niced processes' only if this one is niced)
+    double ownSeconds = 0;    // this process's CPU time
+    Clock::time_point at;
+  };
+  MachineSample SampleMachine(Clock::time_point now) const {
+    MachineSample m;
+    m.at = now;
+#if defined(__linux__)
+    if (machineCores_ <= 0) return m;
+    FILE* f = std::fopen("/proc/stat", "r");
+    if (f == nullptr) return m;
+    // cpu user nice system idle iowait irq softirq steal
+    unsigned long long v[8] = {};
+    const int got = std::fscanf(f, "cpu %llu %llu %llu %llu %llu %llu %llu %llu", &v[0], &v[1], &v[2], &v[3], &v[4], &v[5],
+                                &v[6], &v[7]);
+    std::fclose(f);
+    if (got < 8) return m;
+    const unsigned long long busy = v[0] + (countNiced_ ? v[1] : 0) + v[2] + v[5] + v[6] + v[7];
+    timespec own{};
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &own);
+    m.busySeconds = double(busy) / double(ticksPerSecond_);
+    m.ownSeconds = double(own.tv_sec) + 1e-9 * double(own.tv_nsec);
+#endif
+    return m;
+  }
+
+  // The run-queue waits of the pool's threads (the calling thread and every started worker) so
+  // far, in ns, from /proc/thread-self/schedstat; -1 where unavailable.
+  long long PoolRunqNanos() {
+#if defined(__linux__)
+    thread_local SchedFile caller;
+    if (caller.fd == -2) caller.fd = open("/proc/thread-self/schedstat", O_RDONLY | O_CLOEXEC);
+    long long total = RunqNanos(caller.fd);
+    if (total < 0) return -1;
+    for (size_t w = 1; w < schedFds_.size(); ++w) {
+      const long long runq = RunqNanos(schedFds_[w].load(std::memory_order_acquire));
+      if (runq < 0) return -1;
+      total += runq;
+    }
+    return total;
+#else
+    return -1;
+#endif
   }
 
   // Spins until done() or `budget` runs out; true if done() became true.
@@ -567,6 +733,9 @@ class ThreadPool final : public TaskSystem {
   void WorkerLoop(int index) {
     std::array<long long, 3> start{};
     if (stats_) ReadSchedStat(start);
+#if defined(__linux__)
+    schedFds_[index].store(open("/proc/thread-self/schedstat", O_RDONLY | O_CLOEXEC), std::memory_order_release);
+#endif
     uint32_t seen = 0;
     for (;;) {
       auto arrived = [&] { return jobWord_.load(std::memory_order_acquire) != seen; };
@@ -616,9 +785,19 @@ class ThreadPool final : public TaskSystem {
   bool probing_ = false;
   long long windowJobs_ = 0, windowHelped_ = 0;  // this window's jobs, those a worker took part in
   int contendedMillis_ = kContendedMillis;
+  long long runqStart_ = -1;  // PoolRunqNanos at the window's start
+  Clock::time_point runqCheck_{};
+  MachineSample machine_;  // at the start of the serial period
+  int machineCores_ = 0;   // the machine's cores when /proc/stat describes this process's, else 0
+  long ticksPerSecond_ = 100;
+  bool countNiced_ = false;  // whether /proc/stat's niced time counts as others' (see the constructor)
+  std::vector<std::atomic<int>> schedFds_;  // each worker's schedstat file (-1 until it opens it)
 
   long long statJobs_ = 0, statSerial_ = 0, statAlone_ = 0, statWaitNs_ = 0, statLong_ = 0, statJobNs_ = 0;
-  int statMarks_ = 0, statProbes_ = 0, statFailedProbes_ = 0;
+  int statMarks_ = 0, statProbes_ = 0, statFailedProbes_ = 0, statMarkStall_ = 0, statMarkIdle_ = 0, statMarkQueued_ = 0;
+  int statExtended_ = 0;
+  long long statSteps_ = 0, statAloneSteps_ = 0;
+  double statFirstQueue_ = -1, statMaxQueue_ = 0, statOthers_ = -1;
   double statFirstMarkMs_ = -1, statFirstJobMs_ = -1;
   bool stats_ = false;
   Clock::time_point born_;

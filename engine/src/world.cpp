@@ -240,6 +240,7 @@ void World::StepRepeated(Real dt, int pipelineRepeats) {
   w.queryStale = true;
   w.profile = Profile{};
   w.run->Reset();
+  w.run->BeginStep();
   const auto start = Clock::now();
   const Real h = dt / Real(pipelineRepeats);
   for (int s = 0; s < pipelineRepeats; ++s) w.RunPipeline(h);

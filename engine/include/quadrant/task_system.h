@@ -48,6 +48,12 @@ class TaskSystem {
   /// Runs `stages` stages in order (see the contract above). The default runs one ParallelFor
   /// over each stage's chunks; the thread pool runs the whole region as one job.
   virtual void ParallelStages(int stages, const StagePlan* plan, const StageFn& fn);
+
+  /// Whether the jobs that the calling thread starts next would all run on it alone (a pool that
+  /// found the machine busy, or that could start no worker). The engine asks once per step and
+  /// then takes its one-thread path for the whole step, which gives the same results (see the
+  /// contract above) without the per-block bookkeeping of the partition. Default: false.
+  virtual bool RunsAlone() { return false; }
 };
 
 /// A pool of threadCount blocks run by the caller and up to threadCount - 1 worker threads (no
