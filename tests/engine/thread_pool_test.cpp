@@ -4,8 +4,13 @@
 // Nothing here is timed.
 #include <gtest/gtest.h>
 
+#if defined(__linux__)
+#include <sched.h>
+#endif
+
 #include <algorithm>
 #include <atomic>
+#include <memory>
 #include <mutex>
 #include <random>
 #include <stdexcept>
@@ -210,6 +215,64 @@ TEST(ThreadPoolTest, MoreThreadsThanFreeCoresGiveTheOneThreadHash) {
     EXPECT_EQ(busy2, serial);
     EXPECT_EQ(busyMany, serial);
   }
+}
+
+#if defined(__linux__)
+// Restricts the calling thread to its first allowed core while in scope.
+class OneCore {
+ public:
+  OneCore() {
+    ok_ = sched_getaffinity(0, sizeof(saved_), &saved_) == 0;
+    if (!ok_) return;
+    cpu_set_t one;
+    CPU_ZERO(&one);
+    for (int c = 0; c < CPU_SETSIZE; ++c) {
+      if (CPU_ISSET(c, &saved_)) {
+        CPU_SET(c, &one);
+        break;
+      }
+    }
+    ok_ = sched_setaffinity(0, sizeof(one), &one) == 0;
+  }
+  ~OneCore() {
+    if (ok_) sched_setaffinity(0, sizeof(saved_), &saved_);
+  }
+  bool ok() const { return ok_; }
+
+ private:
+  cpu_set_t saved_;
+  bool ok_ = false;
+};
+
+TEST(ThreadPoolTest, APoolWithoutWorkersRunsAloneAndStepsGiveTheOneThreadHash) {
+  // On one usable core the pool starts no worker: it says so (RunsAlone), every step takes the
+  // engine's one-thread path, and the state is the one-thread state, bit for bit.
+  const uint64_t serial = HashAfterSteps(1, 60, SolverType::kSoftStep);
+  uint64_t alone = 0;
+  {
+    OneCore pin;
+    ASSERT_TRUE(pin.ok());
+    std::unique_ptr<TaskSystem> pool = MakeThreadPool(3);
+    EXPECT_EQ(pool->WorkerCount(), 3);
+    EXPECT_EQ(pool->ThreadCount(), 1);
+    EXPECT_TRUE(pool->RunsAlone());
+    std::vector<int> hits;
+    const std::vector<Call> calls = RunOnce(*pool, 10, hits);
+    EXPECT_EQ(calls.size(), 3u);  // the partition is unchanged: three blocks, run by the caller
+    for (int h : hits) EXPECT_EQ(h, 1);
+    alone = HashAfterSteps(3, 60, SolverType::kSoftStep);
+  }
+  EXPECT_EQ(alone, serial);
+}
+#endif
+
+TEST(ThreadPoolTest, AFreshPoolWithWorkersDoesNotRunAlone) {
+  // Before it has run anything the pool has seen no contention: its first step is parallel.
+  if (std::thread::hardware_concurrency() < 2) GTEST_SKIP() << "one core: the pool starts no worker";
+  std::unique_ptr<TaskSystem> pool = MakeThreadPool(2);
+  if (pool->ThreadCount() < 2) GTEST_SKIP() << "the affinity mask allows one core";
+  EXPECT_FALSE(pool->RunsAlone());
+  EXPECT_FALSE(MakeThreadPool(1)->RunsAlone());  // one thread is no pool: the engine's own path
 }
 
 // ParallelStages: every item of every stage once, in chunks of the StageChunks partition (or a
