@@ -49,17 +49,21 @@
 // - The caller runs jobs alone while the machine is busy. A preempted worker that holds a chunk
 //   stalls the stage until the scheduler runs it again, a time slice later; with one busy loop
 //   on two cores that happens every few milliseconds, and no chunk size avoids it (a claimed
-//   chunk cannot be taken back: its rows write bodies). So the caller measures, per window of
-//   kWindowMillis, how long it waited beyond twice its own chunk, and how many chunks the
-//   workers ran. A window stalled more than kStallShare, or one where the workers ran under
-//   kMinHelpShare of the chunks (descheduled: waking them only costs a system call per job),
-//   makes the pool serial for kContendedMillis: every job then runs on the caller, stage by
-//   stage and chunk by chunk (so StageRunner's load-balance bound still describes the
-//   partition), with no hand-over at all: the one-thread step plus a clock read per job.
-//   Then the workers are tried again; a window that fails right after a serial period doubles
-//   the next one (up to kMaxContendedMillis), so a machine that stays busy costs a failed probe
-//   of about 40 ms every 1.6 s. Which thread runs a chunk never changes the arithmetic, so the
-//   results are bit-identical whichever way a job runs.
+//   chunk cannot be taken back: its rows write bodies). So the caller judges each window of
+//   parallel jobs (Judge) by three signs: how long it waited beyond twice its own chunk (more
+//   than kStallShare of the window), whether the workers took part in at least kMinHelpShare of
+//   the jobs (a full window), and how long the pool's threads waited on run queues (more than
+//   kQueueShare of the window, read from /proc/thread-self/schedstat every kFirstJudgeMillis:
+//   more runnable threads than cores, the direct sign). Any of them makes the pool serial for
+//   kContendedMillis. At the end of a serial period the pool looks at the machine instead of
+//   probing: if other processes used more of the cores over the period than the pool's threads
+//   could spare (/proc/stat's busy ticks less this process's CPU time, OthersHoldCores), it
+//   stays serial for another period without running a parallel job; otherwise it probes, and
+//   a probe that fails doubles the next period (up to kMaxContendedMillis). A serial job runs on
+//   the caller stage by stage and chunk by chunk, and a step that starts while the pool is
+//   serial (RunsAlone, asked once per step by StageRunner::BeginStep) takes the engine's
+//   one-thread path for the whole step. Which thread runs a chunk, and whether a step is split
+//   into blocks at all, never changes the arithmetic: the results are bit-identical either way.
 // - No more threads than cores: a pool asked for more threads than the process may run on
 //   (its affinity mask) starts only as many; the blocks and chunks are the same, fewer threads
 //   claim them. Threads beyond the cores could only take turns, each preempting the others
@@ -89,6 +93,42 @@
 // 4.09 / 2.74, 3.99 / 2.81; circles 16000 1.25 / 1.21, 0.845 / 0.811, 1.21 / 0.952, 1.39 / 0.822;
 // polygons 16000 2.52 / 2.87, 1.54 / 1.62, 2.17 / 1.81, 2.18 / 1.65. The pyramid ran 71 jobs per
 // step at 8b5591b (pgs) and 26 now; soft_step 91 and 45.
+//
+// Why the third pool (491c7fe) still lost 10-20 % beside one busy loop (2 threads against 1:
+// 0.80 on 16000 circles, 0.86 on the pyramid; pgs 0.90 and 0.91), found with the counters that
+// QUADRANT_POOL_STATS=1 now prints (each thread's CPU and run-queue time from schedstat, the
+// time of the first job and of the first mark, probes) on 16000 circles, 60 + 10 steps, four
+// runs beside one busy loop (load 3.7 from other sessions' builds):
+// - Detection came late. Only a full 40 ms window could show idle workers, so the pool marked
+//   itself serial 40 ms after its first job (first job 10.6-15.5 ms after the pool was made,
+//   first mark 50.6-59.1 ms), half of the run's 10 warm-up and 60 timed steps. In that window
+//   the caller ran 329-446 of 389-490 jobs alone, and the worker, woken for every job and
+//   spinning 1 ms after it, shared the caller's core: the caller waited 21-28 ms on the run
+//   queue per run, against 0.1-1.5 ms at one thread (the worker used 21-25 ms of CPU). The
+//   run-queue share of the pool's threads in that first 10 ms was 0.4-1.9 of the window (the
+//   two threads' waits added), so it is now judged every 10 ms: the first mark comes 10-20 ms
+//   after the first job, 1 to 5 of 70 steps run in parallel, the rest alone.
+// - Serial steps cost more than one thread. Running the 2-block partition on one thread did
+//   more work than the one-thread path (per-block outputs, their merges, the contact sort's
+//   parts): +4.8 % instructions on 16000 circles and +2.3 % on the pyramid (callgrind, 20 steps
+//   each), and in time, both pinned to one core with taskset (5 and 4 alternated runs, medians,
+//   ms per step, 1 thread / 2 threads): circles 1.228 / 1.302 (+6 %), pyramid 4.123 / 4.267
+//   (+3 %). With RunsAlone the caller's CPU time per run is the same as one thread's (100-120
+//   ms for both beside a busy loop).
+// - Probes did not matter for the suite's runs (a run is 0.1-0.5 s; the first serial period
+//   is 0.2 s), but a long run paid a failed probe of 10-40 ms every 1.6 s; now it pays a read of
+//   /proc/stat every 0.2 s while the other process runs (seen: others 1.46-1.78 cores, two to
+//   three periods extended per pyramid run, no failed probe).
+// - Nice is not what it was thought to be here: the kernel groups processes by session
+//   (/proc/sys/kernel/sched_autogroup_enabled = 1), so other sessions' nice -n 19 builds get a
+//   full group's share of the cores. One thread beside a busy loop and two such builds ran
+//   120 ms of CPU in a 470 ms life and waited 330 ms on the run queue. OthersHoldCores therefore
+//   counts niced time as other processes' under autogroup.
+// Measured after the change, old (491c7fe) and new alternated as separate processes beside one
+// busy loop while other sessions' builds also ran (load 6.3-7.6; ms per step, medians, 1 / 2
+// threads): 16000 circles, 5 rounds, old 4.44 / 5.02 (0.88), new 4.77 / 4.71 (1.01); pyramid
+// 5050, 4 rounds, old 13.3 / 15.6 (0.85), new 14.3 / 14.0 (1.02). Under that load every figure
+// moves by 20 %; the busy tables of results/ are the measurement on an otherwise quiet machine.
 //
 // Why not the compiler's OpenMP or oneTBB: benchmarks/task_overhead.cpp measures the cost of
 // one parallel-for over 2 threads for this pool and for OpenMP (see the README's table); GCC's
