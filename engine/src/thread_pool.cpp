@@ -285,6 +285,7 @@ constexpr int kMinJobs = 8;
 // The pool's threads together waiting on run queues for more than this share of a window: more
 // runnable threads than cores (see Judge).
 constexpr double kQueueShare = 0.25;
+constexpr int kQueueFloorMillis = 20;
 // Other processes using more than cores - threads + this many cores over a serial period keep
 // the pool serial without a probe (OthersHoldCores).
 constexpr double kOthersMargin = 0.5;
@@ -544,7 +545,11 @@ class ThreadPool final : public TaskSystem {
       runqCheck_ = now;
       const long long runq = PoolRunqNanos();
       if (runq >= 0) {
-        const double queue = double(runq - runqStart_) * 1e-9 / std::chrono::duration<double>(now - windowStart_).count();
+        // Over at least kQueueFloorMillis: one time slice of another process (about 3 ms) in
+        // the first 10 ms is a burst, not a busy machine (one busy loop queued the two threads
+        // for 0.4-1.9 of the first 10 ms: 4-19 ms).
+        const Clock::duration over = std::max<Clock::duration>(now - windowStart_, std::chrono::milliseconds(kQueueFloorMillis));
+        const double queue = double(runq - runqStart_) * 1e-9 / std::chrono::duration<double>(over).count();
         if (statFirstQueue_ < 0) statFirstQueue_ = queue;
         statMaxQueue_ = std::max(statMaxQueue_, queue);
         queued = queue > kQueueShare;
