@@ -53,8 +53,9 @@
 //   parallel jobs (Judge) by three signs: how long it waited beyond twice its own chunk (more
 //   than kStallShare of the window), whether the workers took part in at least kMinHelpShare of
 //   the jobs (a full window), and how long the pool's threads waited on run queues (more than
-//   kQueueShare of the window, read from /proc/thread-self/schedstat every kFirstJudgeMillis:
-//   more runnable threads than cores, the direct sign). Any of them makes the pool serial for
+//   kQueueShare of the window or of kQueueFloorMillis, whichever is longer, read from
+//   /proc/thread-self/schedstat every kFirstJudgeMillis: more runnable threads than cores, the
+//   direct sign). Any of them makes the pool serial for
 //   kContendedMillis. At the end of a serial period the pool looks at the machine instead of
 //   probing: if other processes used more of the cores over the period than the pool's threads
 //   could spare (/proc/stat's busy ticks less this process's CPU time, OthersHoldCores), it
@@ -106,8 +107,8 @@
 //   spinning 1 ms after it, shared the caller's core: the caller waited 21-28 ms on the run
 //   queue per run, against 0.1-1.5 ms at one thread (the worker used 21-25 ms of CPU). The
 //   run-queue share of the pool's threads in that first 10 ms was 0.4-1.9 of the window (the
-//   two threads' waits added), so it is now judged every 10 ms: the first mark comes 10-20 ms
-//   after the first job, 1 to 5 of 70 steps run in parallel, the rest alone.
+//   two threads' waits added), so it is now judged every 10 ms (over at least 20 ms): the first
+//   mark comes 10-21 ms after the first job, 1 to 5 of 70 steps run in parallel, the rest alone.
 // - Serial steps cost more than one thread. Running the 2-block partition on one thread did
 //   more work than the one-thread path (per-block outputs, their merges, the contact sort's
 //   parts): +4.8 % instructions on 16000 circles and +2.3 % on the pyramid (callgrind, 20 steps
