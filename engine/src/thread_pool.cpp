@@ -351,6 +351,10 @@ class ThreadPool final : public TaskSystem {
     // (every block still exists and is run by the threads that are).
     const int running = std::min(threads, UsableCores());
     stats_ = std::getenv("QUADRANT_POOL_STATS") != nullptr;
+    // QUADRANT_POOL_ALONE=0: serial steps still run the partition's blocks (on the caller), as
+    // determinism tests need, which must compare the partitioned path with one thread whatever
+    // the machine's load.
+    if (const char* alone = std::getenv("QUADRANT_POOL_ALONE")) splitSerialSteps_ = std::strcmp(alone, "0") == 0;
     born_ = Clock::now();
     if (stats_) ReadSchedStat(callerSched_);
     workerSched_.assign(running, {});
@@ -477,6 +481,7 @@ class ThreadPool final : public TaskSystem {
   // A step asks before it starts (StageRunner::BeginStep): while the pool is serial, the
   // engine's one-thread path is cheaper than running the partition's blocks one by one.
   bool RunsAlone() override {
+    if (splitSerialSteps_) return false;
     if (threads_.empty()) return true;
     if (tRunning == this) return false;
     const Clock::time_point now = Clock::now();
@@ -846,6 +851,7 @@ class ThreadPool final : public TaskSystem {
   double statFirstQueue_ = -1, statMaxQueue_ = 0, statOthers_ = -1;
   double statFirstMarkMs_ = -1, statFirstJobMs_ = -1;
   bool stats_ = false;
+  bool splitSerialSteps_ = false;  // QUADRANT_POOL_ALONE=0: RunsAlone is always false
   Clock::time_point born_;
   std::array<long long, 3> callerSched_{};
   std::vector<std::array<long long, 3>> workerSched_;

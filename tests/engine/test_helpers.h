@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <stdlib.h>
+
 #include <algorithm>
 #include <functional>
 #include <string>
@@ -17,6 +19,12 @@
 #include "quadrant/world.h"
 
 namespace quadrant::test {
+
+// On a busy machine the default pool runs whole steps on the one-thread path (RunsAlone), and a
+// determinism test would then compare one thread with one thread. QUADRANT_POOL_ALONE=0 keeps
+// every step on the partitioned path (serially when the pool is serial); set before main, unless
+// the environment already says otherwise.
+[[maybe_unused]] inline const bool kPoolStepsSplit = (setenv("QUADRANT_POOL_ALONE", "0", 0), true);
 
 inline constexpr Real kDt = Real(1) / Real(60);
 inline constexpr double kPi = 3.14159265358979323846;

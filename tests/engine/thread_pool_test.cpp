@@ -10,10 +10,12 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cstdlib>
 #include <memory>
 #include <mutex>
 #include <random>
 #include <stdexcept>
+#include <string>
 #include <thread>
 #include <tuple>
 #include <vector>
@@ -250,6 +252,15 @@ TEST(ThreadPoolTest, APoolWithoutWorkersRunsAloneAndStepsGiveTheOneThreadHash) {
   const uint64_t serial = HashAfterSteps(1, 60, SolverType::kSoftStep);
   uint64_t alone = 0;
   {
+    // test_helpers.h sets QUADRANT_POOL_ALONE=0 for the determinism tests; here the pool may.
+    const std::string saved = std::getenv("QUADRANT_POOL_ALONE") ? std::getenv("QUADRANT_POOL_ALONE") : "";
+    unsetenv("QUADRANT_POOL_ALONE");
+    struct Restore {
+      std::string value;
+      ~Restore() {
+        if (!value.empty()) setenv("QUADRANT_POOL_ALONE", value.c_str(), 1);
+      }
+    } restore{saved};
     OneCore pin;
     ASSERT_TRUE(pin.ok());
     std::unique_ptr<TaskSystem> pool = MakeThreadPool(3);
@@ -271,6 +282,8 @@ TEST(ThreadPoolTest, AFreshPoolWithWorkersDoesNotRunAlone) {
   if (std::thread::hardware_concurrency() < 2) GTEST_SKIP() << "one core: the pool starts no worker";
   std::unique_ptr<TaskSystem> pool = MakeThreadPool(2);
   if (pool->ThreadCount() < 2) GTEST_SKIP() << "the affinity mask allows one core";
+  // (QUADRANT_POOL_ALONE=0, set by test_helpers.h, makes this false too; the pool's own rule
+  // gives false on its first call either way.)
   EXPECT_FALSE(pool->RunsAlone());
   EXPECT_FALSE(MakeThreadPool(1)->RunsAlone());  // one thread is no pool: the engine's own path
 }

@@ -52,7 +52,9 @@ class TaskSystem {
   /// Whether the jobs that the calling thread starts next would all run on it alone (a pool that
   /// found the machine busy, or that could start no worker). The engine asks once per step and
   /// then takes its one-thread path for the whole step, which gives the same results (see the
-  /// contract above) without the per-block bookkeeping of the partition. Default: false.
+  /// contract above) without the per-block bookkeeping of the partition. Default: false. The
+  /// default pool never runs alone with QUADRANT_POOL_ALONE=0 in the environment (tests that
+  /// must exercise the partition on a busy machine set it).
   virtual bool RunsAlone() { return false; }
 };
 
