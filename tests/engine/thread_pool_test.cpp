@@ -189,6 +189,22 @@ void BuildBusyScene(World& world) {
   }
 }
 
+// test_helpers.h sets QUADRANT_POOL_ALONE=0, so that determinism tests compare the partitioned
+// path with one thread; while one of these is in scope the pool may run steps alone again.
+class PoolMayRunAlone {
+ public:
+  PoolMayRunAlone() {
+    if (const char* v = std::getenv("QUADRANT_POOL_ALONE")) saved_ = v;
+    unsetenv("QUADRANT_POOL_ALONE");
+  }
+  ~PoolMayRunAlone() {
+    if (!saved_.empty()) setenv("QUADRANT_POOL_ALONE", saved_.c_str(), 1);
+  }
+
+ private:
+  std::string saved_;
+};
+
 uint64_t HashAfterSteps(int threads, int steps, SolverType solver = SolverType::kPgs) {
   WorldDef def;
   def.threadCount = threads;
@@ -208,14 +224,19 @@ TEST(ThreadPoolTest, MoreThreadsThanFreeCoresGiveTheOneThreadHash) {
   for (SolverType solver : {SolverType::kPgs, SolverType::kSoftStep}) {
     SCOPED_TRACE(solver == SolverType::kPgs ? "pgs" : "soft_step");
     const uint64_t serial = HashAfterSteps(1, 90, solver);
-    uint64_t busy2 = 0, busyMany = 0;
+    uint64_t busy2 = 0, busyMany = 0, busyAlone = 0;
     {
       BusyCores busy(hardware);
       busy2 = HashAfterSteps(2, 90, solver);
       busyMany = HashAfterSteps(hardware + 2, 90, solver);
+      // Steps on the one-thread path (RunsAlone) mixed with partitioned ones: the pool's first
+      // step is partitioned, and the busy cores make it run later ones alone.
+      PoolMayRunAlone may;
+      busyAlone = HashAfterSteps(2, 90, solver);
     }
     EXPECT_EQ(busy2, serial);
     EXPECT_EQ(busyMany, serial);
+    EXPECT_EQ(busyAlone, serial);
   }
 }
 
@@ -252,15 +273,7 @@ TEST(ThreadPoolTest, APoolWithoutWorkersRunsAloneAndStepsGiveTheOneThreadHash) {
   const uint64_t serial = HashAfterSteps(1, 60, SolverType::kSoftStep);
   uint64_t alone = 0;
   {
-    // test_helpers.h sets QUADRANT_POOL_ALONE=0 for the determinism tests; here the pool may.
-    const std::string saved = std::getenv("QUADRANT_POOL_ALONE") ? std::getenv("QUADRANT_POOL_ALONE") : "";
-    unsetenv("QUADRANT_POOL_ALONE");
-    struct Restore {
-      std::string value;
-      ~Restore() {
-        if (!value.empty()) setenv("QUADRANT_POOL_ALONE", value.c_str(), 1);
-      }
-    } restore{saved};
+    PoolMayRunAlone may;  // here the pool may run steps alone
     OneCore pin;
     ASSERT_TRUE(pin.ok());
     std::unique_ptr<TaskSystem> pool = MakeThreadPool(3);
