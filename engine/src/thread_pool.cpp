@@ -63,8 +63,10 @@
 //   a probe that fails doubles the next period (up to kMaxContendedMillis). A serial job runs on
 //   the caller stage by stage and chunk by chunk, and a step that starts while the pool is
 //   serial (RunsAlone, asked once per step by StageRunner::BeginStep) takes the engine's
-//   one-thread path for the whole step. Which thread runs a chunk, and whether a step is split
-//   into blocks at all, never changes the arithmetic: the results are bit-identical either way.
+//   one-thread path for the whole step (not with QUADRANT_POOL_ALONE=0, which the tests set so
+//   that a determinism test on a busy machine still compares the partition with one thread).
+//   Which thread runs a chunk, and whether a step is split into blocks at all, never changes
+//   the arithmetic: the results are bit-identical either way.
 // - No more threads than cores: a pool asked for more threads than the process may run on
 //   (its affinity mask) starts only as many; the blocks and chunks are the same, fewer threads
 //   claim them. Threads beyond the cores could only take turns, each preempting the others
