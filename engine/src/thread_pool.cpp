@@ -672,8 +672,8 @@ class ThreadPool final : public TaskSystem {
     while (first < stages && chunks_[first] == 0) ++first;
     if (first == stages) return;
     ++statJobs_;
-    const Clock::time_point jobStart = Clock::now();
-    if (statFirstJobMs_ < 0) statFirstJobMs_ = std::chrono::duration<double, std::milli>(jobStart - born_).count();
+    const Clock::time_point jobStart = stats_ ? Clock::now() : Clock::time_point{};
+    if (stats_ && statFirstJobMs_ < 0) statFirstJobMs_ = std::chrono::duration<double, std::milli>(jobStart - born_).count();
     failed_.store(false, std::memory_order_relaxed);
     done_.store(0, std::memory_order_relaxed);
     tag_ = (tag_ + 1) & 0xFFFF;
@@ -684,7 +684,7 @@ class ThreadPool final : public TaskSystem {
     if (mine == total) ++statAlone_;
     ++windowJobs_;
     windowHelped_ += mine < total;
-    statJobNs_ += std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now() - jobStart).count();
+    if (stats_) statJobNs_ += std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now() - jobStart).count();
     rangeFn_ = nullptr;
     stageFn_ = nullptr;
     if (error_) {
