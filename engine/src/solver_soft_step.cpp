@@ -151,15 +151,20 @@ class SoftStepSolver final : public ContactSolverBase {
       // bound it. Base-100 pyramid: 44.7M -> 43.2M instructions a step, and the 16 hard cases hold
       // as with friction in both (tall_stack top 0.034 m; with friction in the first pass only
       // 0.051 m, which fails).
-      for (int it = 0; it < def.softRelaxIterations; ++it) {
-        if (it == def.softRelaxIterations - 1 || def.softFrictionEveryRelaxPass) {
-          ForEachGroup(run, simd, [&](auto lanes, SoftRowGroup& g, int lane) {
-            SolveRows<decltype(lanes), kRotation, kFriction, false>(states_.data(), g, lane, prm);
-          });
+      //
+      // With two or more relax passes the first stores each point's speculative bias and the later
+      // ones load it (soft_rows.h, RelaxBias, says why).
+      const int relax = def.softRelaxIterations;
+      for (int it = 0; it < relax; ++it) {
+        if (relax == 1) {
+          RelaxPass<kRotation, kFriction, RelaxBias::kCompute>(run, simd, prm);
+        } else if (it == 0) {
+          def.softFrictionEveryRelaxPass ? RelaxPass<kRotation, kFriction, RelaxBias::kComputeAndStore>(run, simd, prm)
+                                         : RelaxPass<kRotation, false, RelaxBias::kComputeAndStore>(run, simd, prm);
+        } else if (it == relax - 1 || def.softFrictionEveryRelaxPass) {
+          RelaxPass<kRotation, kFriction, RelaxBias::kLoad>(run, simd, prm);
         } else {
-          ForEachGroup(run, simd, [&](auto lanes, SoftRowGroup& g, int lane) {
-            SolveRows<decltype(lanes), kRotation, false, false>(states_.data(), g, lane, prm);
-          });
+          RelaxPass<kRotation, false, RelaxBias::kLoad>(run, simd, prm);
         }
       }
       EndRegion(run);
@@ -180,6 +185,15 @@ class SoftStepSolver final : public ContactSolverBase {
     ctx.profile->solve += total - integrateMs;
   }
 
+  // One relax pass over the rows (Run says which), queued in the sub-step's region.
+  template <bool kRotation, bool kFriction, RelaxBias kRelax>
+  void RelaxPass(StageRunner& run, bool simd, const SoftSolveParams& prm) {
+    ForEachGroup(run, simd, [this, prm](auto lanes, SoftRowGroup& g, int lane) {
+      RelaxBiasRows* cache = kRelax == RelaxBias::kCompute ? nullptr : &relaxBias_[&g - groups_.data()];
+      SolveRows<decltype(lanes), kRotation, kFriction, false, kRelax>(states_.data(), g, lane, prm, cache);
+    });
+  }
+
   // The rows in groups of four, colour by colour (a colour's last group padded), from the
   // prepared constraints. Friction is solved in the relax pass only (as Box2D 3 does since it
   // split its push stage): during the soft solve the velocities still carry the push-out the
@@ -195,6 +209,7 @@ class SoftStepSolver final : public ContactSolverBase {
       groupStart_[k + 1] = groupStart_[k] + (count + kLanes - 1) / kLanes;
     }
     groups_.resize(groupStart_[kColors + 1]);
+    relaxBias_.resize(groups_.size());
     // One region, a stage per colour (the groups are independent; a stage tells its groups their
     // colour): one hand-over instead of one per colour (ForEachColor).
     stagePlan_.clear();
@@ -1024,6 +1039,7 @@ class SoftStepSolver final : public ContactSolverBase {
   Real collisionShare_ = 1;  // a sub-step's share of the step's collision impulses (Run says why)
   std::vector<SolverBody> states_;
   std::vector<SoftRowGroup> groups_;
+  std::vector<RelaxBiasRows> relaxBias_;  // per group: the relax passes' speculative bias (RelaxBias)
   std::vector<int> groupStart_;
 };
 
