@@ -84,6 +84,9 @@ inline bool Greater(Real a, Real b) { return a > b; }
 inline bool GreaterEqual(Real a, Real b) { return a >= b; }
 inline bool Less(Real a, Real b) { return a < b; }
 inline bool And(bool a, bool b) { return a && b; }
+inline bool AndNot(bool a, bool b) { return !a && b; }
+// mask ? x : +0.
+inline Real Masked(bool mask, Real x) { return mask ? x : Real(0); }
 inline bool Any(bool m) { return m; }
 inline Real Div(Real a, Real b) { return a / b; }
 inline Real Sqrt(Real a) { return std::sqrt(a); }
@@ -111,6 +114,8 @@ inline M4 Greater(F4 a, F4 b) { return {_mm_cmpgt_ps(a.v, b.v)}; }
 inline M4 GreaterEqual(F4 a, F4 b) { return {_mm_cmpge_ps(a.v, b.v)}; }
 inline M4 Less(F4 a, F4 b) { return {_mm_cmplt_ps(a.v, b.v)}; }
 inline M4 And(M4 a, M4 b) { return {_mm_and_ps(a.v, b.v)}; }
+inline M4 AndNot(M4 a, M4 b) { return {_mm_andnot_ps(a.v, b.v)}; }
+inline F4 Masked(M4 mask, F4 x) { return {_mm_and_ps(mask.v, x.v)}; }
 inline bool Any(M4 m) { return _mm_movemask_ps(m.v) != 0; }
 inline F4 Div(F4 a, F4 b) { return {_mm_div_ps(a.v, b.v)}; }
 inline F4 Sqrt(F4 a) { return {_mm_sqrt_ps(a.v)}; }
@@ -157,6 +162,11 @@ template <>
 }
 
 #if QUADRANT_SOFT_SIMD
+// Bit k set: lane k's inverse mass is not zero (the body moves and its state is written).
+[[gnu::always_inline]] inline int WrittenLanes(const Real* invMass) {
+  return _mm_movemask_ps(_mm_cmpneq_ps(_mm_load_ps(invMass), _mm_setzero_ps()));
+}
+
 template <>
 [[gnu::always_inline]] inline void Gather<F4>(const SolverBody* states, const int32_t* index, int, RowBodies<F4>& out) {
   const float* s0 = &states[index[0]].v.x;
@@ -183,20 +193,24 @@ template <>
   // be kept in a register through the row.
   __m128 r0 = in.vx.v, r1 = in.vy.v, r2 = in.w.v, r3 = _mm_setzero_ps();
   _MM_TRANSPOSE4_PS(r0, r1, r2, r3);
-  if (invMass[0] != 0) _mm_storeu_ps(&states[index[0]].v.x, r0);
-  if (invMass[1] != 0) _mm_storeu_ps(&states[index[1]].v.x, r1);
-  if (invMass[2] != 0) _mm_storeu_ps(&states[index[2]].v.x, r2);
-  if (invMass[3] != 0) _mm_storeu_ps(&states[index[3]].v.x, r3);
+  // Which lanes move (invMass != 0, NaN included as the scalar test has it), as one mask from the
+  // row's inverse masses (already in a register): four bit tests instead of four float compares.
+  const int moves = WrittenLanes(invMass);
+  if (moves & 1) _mm_storeu_ps(&states[index[0]].v.x, r0);
+  if (moves & 2) _mm_storeu_ps(&states[index[1]].v.x, r1);
+  if (moves & 4) _mm_storeu_ps(&states[index[2]].v.x, r2);
+  if (moves & 8) _mm_storeu_ps(&states[index[3]].v.x, r3);
 }
 template <>
 [[gnu::always_inline]] inline void ScatterMotion<F4>(SolverBody* states, const int32_t* index, const Real* invMass,
                                                      int, const RowBodies<F4>& in) {
   __m128 r0 = in.dpx.v, r1 = in.dpy.v, r2 = in.qc.v, r3 = in.qs.v;
   _MM_TRANSPOSE4_PS(r0, r1, r2, r3);
-  if (invMass[0] != 0) _mm_storeu_ps(&states[index[0]].dp.x, r0);
-  if (invMass[1] != 0) _mm_storeu_ps(&states[index[1]].dp.x, r1);
-  if (invMass[2] != 0) _mm_storeu_ps(&states[index[2]].dp.x, r2);
-  if (invMass[3] != 0) _mm_storeu_ps(&states[index[3]].dp.x, r3);
+  const int moves = WrittenLanes(invMass);
+  if (moves & 1) _mm_storeu_ps(&states[index[0]].dp.x, r0);
+  if (moves & 2) _mm_storeu_ps(&states[index[1]].dp.x, r1);
+  if (moves & 4) _mm_storeu_ps(&states[index[2]].dp.x, r2);
+  if (moves & 8) _mm_storeu_ps(&states[index[3]].dp.x, r3);
 }
 #endif
 
@@ -319,8 +333,11 @@ inline void SolveRows(SolverBody* states, SoftRowGroup& g, int lane, const SoftS
         const V softBias = Max(biasRate * sep, maxVel);
         const V rigidBias = Max(Neg(biasRate) * Splat(prm.pushMaxDepth, V{}), maxVel);
         bias = Select(apart, bias, Select(soft, softBias, rigidBias));
-        massScale = Select(apart, one, Select(soft, Load(g.massScale, lane, V{}), one));
-        impulseScale = Select(apart, zero, Select(soft, Load(g.impulseScale, lane, V{}), zero));
+        // A soft touching point takes the softness; apart or deep ones are rigid (scale 1, 0).
+        // One mask for both: the same values as selecting on apart, then soft.
+        const auto softTouching = AndNot(apart, soft);
+        massScale = Select(softTouching, Load(g.massScale, lane, V{}), one);
+        impulseScale = Masked(softTouching, Load(g.impulseScale, lane, V{}));
       }
     }
     V dvx = B.vx - A.vx, dvy = B.vy - A.vy;

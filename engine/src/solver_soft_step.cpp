@@ -110,7 +110,12 @@ class SoftStepSolver final : public ContactSolverBase {
     auto t0 = Clock::now();
     Color(run, ctx);
     const int m = static_cast<int>(constraints_.size());
-    run.For(Stage::kSolve, m, run.MinHeavyItems(), [&](int b, int e, int) { Prepare<kRotation>(ctx, b, e); });
+    // The block data (k12, block) only for the restitution passes, the only readers here.
+    if (def.effects.restitution) {
+      run.For(Stage::kSolve, m, run.MinHeavyItems(), [&](int b, int e, int) { Prepare<kRotation, true>(ctx, b, e); });
+    } else {
+      run.For(Stage::kSolve, m, run.MinHeavyItems(), [&](int b, int e, int) { Prepare<kRotation, false>(ctx, b, e); });
+    }
     SnapshotPositions(run, bodies);
     const bool box2dRestitution = def.effects.restitution && def.restitution == RestitutionPolicy::kBox2d;
     if (def.effects.restitution && !box2dRestitution) {
