@@ -168,11 +168,17 @@ class ContactSolverBase : public Solver {
   // instructions a contact without them).
   template <bool kRotation, bool kBlock = true>
   void Prepare(StepContext& ctx, int begin, int end) {
+    for (int k = begin; k < end; ++k) PrepareContact<kRotation, kBlock>(ctx, order_[k], constraints_[k]);
+  }
+
+  // One contact's constraint (Prepare's body; soft_step prepares into a local one where it keeps
+  // no constraint list).
+  template <bool kRotation, bool kBlock>
+  [[gnu::always_inline]] static void PrepareContact(const StepContext& ctx, int contactIndex, ContactConstraint& cc) {
     const Bodies& bodies = *ctx.bodies;
-    for (int k = begin; k < end; ++k) {
-      const Contact& contact = ctx.contacts[order_[k]];
-      ContactConstraint& cc = constraints_[k];
-      cc.contact = order_[k];
+    {
+      const Contact& contact = ctx.contacts[contactIndex];
+      cc.contact = contactIndex;
       cc.a = contact.a;
       cc.b = contact.b;
       cc.normal = contact.manifold.normal;

@@ -110,11 +110,14 @@ class SoftStepSolver final : public ContactSolverBase {
     auto t0 = Clock::now();
     Color(run, ctx);
     const int m = static_cast<int>(constraints_.size());
-    // The block data (k12, block) only for the restitution passes, the only readers here.
-    if (def.effects.restitution) {
+    contacts_ = ctx.contacts;
+    inv_ = bodies.inv.data();
+    // Without restitution nothing but the rows reads a prepared constraint: each is prepared into
+    // a local one as its row is built (BuildRows), and the list of constraints (144 bytes each,
+    // written and read back once a step) is not kept. The restitution passes need the list.
+    const bool lean = !def.effects.restitution;
+    if (!lean) {
       run.For(Stage::kSolve, m, run.MinHeavyItems(), [&](int b, int e, int) { Prepare<kRotation, true>(ctx, b, e); });
-    } else {
-      run.For(Stage::kSolve, m, run.MinHeavyItems(), [&](int b, int e, int) { Prepare<kRotation, false>(ctx, b, e); });
     }
     SnapshotPositions(run, bodies);
     const bool box2dRestitution = def.effects.restitution && def.restitution == RestitutionPolicy::kBox2d;
@@ -126,7 +129,8 @@ class SoftStepSolver final : public ContactSolverBase {
     // 32 bytes a body) and on the rows in groups of four (soft_rows.h), not on the body arrays
     // and the constraints.
     if (def.softMassRatioLimit > 0) MarkSupported(run, bodies.Count());
-    BuildRows(run, soft, staticSoft, def.softMassRatioLimit);
+    lean ? BuildRows<kRotation, true>(ctx, soft, staticSoft, def.softMassRatioLimit)
+         : BuildRows<kRotation, false>(ctx, soft, staticSoft, def.softMassRatioLimit);
     if (def.softMassRatioLimit > 0) ClearSupported(run);
     auto ti = Clock::now();
     LoadStates(run, bodies, def.effects.sleep);
@@ -183,8 +187,12 @@ class SoftStepSolver final : public ContactSolverBase {
     ti = Clock::now();
     StoreStates(run, bodies, def, ctx.dt);
     integrateMs += Ms(ti, Clock::now());
-    StoreRowImpulses(run);
-    run.For(Stage::kSolve, m, run.MinHeavyItems(), [&](int b, int e, int) { StoreImpulses(ctx.contacts, b, e); });
+    if (lean) {
+      StoreRowImpulses<true>(run);
+    } else {
+      StoreRowImpulses<false>(run);
+      run.For(Stage::kSolve, m, run.MinHeavyItems(), [&](int b, int e, int) { StoreImpulses(ctx.contacts, b, e); });
+    }
     const double total = Ms(t0, Clock::now());
     ctx.profile->integrate += integrateMs;
     ctx.profile->solve += total - integrateMs;
@@ -207,7 +215,12 @@ class SoftStepSolver final : public ContactSolverBase {
   // carries its impulse into the next sub-step. With friction in both passes the 15-box stack's
   // top crept 0.014 m in 9 s and slowly toppled (worse at 8 and 16 sub-steps, with less
   // numerical damping: 0.14-0.17 m); with friction in the relax pass only it moves 0.0003 m.
-  void BuildRows(StageRunner& run, const Softness& soft, const Softness& staticSoft, Real massLimit) {
+  //
+  // kLean: each constraint is prepared here into a local one (Run says when) instead of read from
+  // the prepared list; the same arithmetic, so the same rows.
+  template <bool kRotation, bool kLean>
+  void BuildRows(StepContext& ctx, const Softness& soft, const Softness& staticSoft, Real massLimit) {
+    StageRunner& run = *ctx.run;
     groupStart_.assign(kColors + 2, 0);
     for (int k = 0; k <= kColors; ++k) {
       const int count = colorStart_[k + 1] - colorStart_[k];
@@ -236,7 +249,9 @@ class SoftStepSolver final : public ContactSolverBase {
               PadLane(g, lane);
               continue;
             }
-            const ContactConstraint& cc = constraints_[c];
+            ContactConstraint local;
+            if constexpr (kLean) PrepareContact<kRotation, false>(ctx, order_[c], local);
+            const ContactConstraint& cc = kLean ? local : constraints_[c];
             g.a[lane] = cc.a;
             g.b[lane] = cc.b;
             g.constraint[lane] = c;
@@ -310,6 +325,17 @@ class SoftStepSolver final : public ContactSolverBase {
     });
   }
 
+  // Constraint c's bodies and inverse masses, read from its contact and the bodies (the prepared
+  // constraint holds the same, but is not kept in the lean path: Run says when).
+  struct RowEnds {
+    int a, b;
+    Real invMassA, invMassB;
+  };
+  RowEnds Ends(int c) const {
+    const Contact& contact = contacts_[order_[c]];
+    return {contact.a, contact.b, inv_[contact.a].invMass, inv_[contact.b].invMass};
+  }
+
   // supported_[i] = 1 for every dynamic body with a contact against a static or kinematic one
   // (WorldDef::softMassRatioLimit acts only on those). Colour by colour: no two constraints of a
   // colour share a dynamic body, so no two threads write one flag.
@@ -317,7 +343,7 @@ class SoftStepSolver final : public ContactSolverBase {
     supported_.resize(bodyCount, 0);  // all zero between steps
     ForEachColor(run, [&](int b, int e) {
       for (int c = b; c < e; ++c) {
-        const ContactConstraint& cc = constraints_[c];
+        const RowEnds cc = Ends(c);
         if (cc.invMassA > 0 && cc.invMassB == 0) supported_[cc.a] = 1;
         if (cc.invMassB > 0 && cc.invMassA == 0) supported_[cc.b] = 1;
       }
@@ -327,7 +353,7 @@ class SoftStepSolver final : public ContactSolverBase {
   void ClearSupported(StageRunner& run) {
     ForEachColor(run, [&](int b, int e) {
       for (int c = b; c < e; ++c) {
-        const ContactConstraint& cc = constraints_[c];
+        const RowEnds cc = Ends(c);
         if (cc.invMassA > 0) supported_[cc.a] = 0;  // only dynamic bodies were marked (and only
         if (cc.invMassB > 0) supported_[cc.b] = 0;  // they are this colour's own)
       }
@@ -540,6 +566,8 @@ class SoftStepSolver final : public ContactSolverBase {
 
   // The accumulated impulses back into the constraints (StoreImpulses keeps them for the next
   // step's warm start).
+  // kLean: straight into the contacts' manifolds (no constraint list: Run says when).
+  template <bool kLean>
   void StoreRowImpulses(StageRunner& run) {
     const int count = static_cast<int>(groups_.size());
     run.For(Stage::kSolve, count, std::max(1, run.MinHeavyItems() / kLanes), [&](int gb, int ge, int) {
@@ -547,6 +575,14 @@ class SoftStepSolver final : public ContactSolverBase {
         const SoftRowGroup& g = groups_[gi];
         for (int lane = 0; lane < kLanes; ++lane) {
           if (g.constraint[lane] < 0) continue;
+          if constexpr (kLean) {
+            Manifold& mf = contacts_[order_[g.constraint[lane]]].manifold;
+            for (int pt = 0; pt < mf.pointCount; ++pt) {
+              mf.points[pt].normalImpulse = g.p[pt].normalImpulse[lane];
+              mf.points[pt].tangentImpulse = g.p[pt].tangentImpulse[lane];
+            }
+            continue;
+          }
           ContactConstraint& cc = constraints_[g.constraint[lane]];
           for (int pt = 0; pt < cc.pointCount; ++pt) {
             cc.points[pt].normalImpulse = g.p[pt].normalImpulse[lane];
@@ -593,7 +629,7 @@ class SoftStepSolver final : public ContactSolverBase {
     // one flag.
     ForEachColor(run, [&](int b, int e) {
       for (int c = b; c < e; ++c) {
-        const ContactConstraint& cc = constraints_[c];
+        const RowEnds cc = Ends(c);
         if (cc.invMassA > 0) inRows_[cc.a] = 1;
         if (cc.invMassB > 0) inRows_[cc.b] = 1;
       }
@@ -1044,6 +1080,8 @@ class SoftStepSolver final : public ContactSolverBase {
   Real collisionShare_ = 1;  // a sub-step's share of the step's collision impulses (Run says why)
   std::vector<SolverBody> states_;
   std::vector<SoftRowGroup> groups_;
+  std::span<Contact> contacts_;           // this step's (Run)
+  const BodyInverseMass* inv_ = nullptr;  // this step's bodies' (Run)
   std::vector<RelaxBiasRows> relaxBias_;  // per group: the relax passes' speculative bias (RelaxBias)
   std::vector<int> groupStart_;
 };
