@@ -20,6 +20,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <atomic>
 #include <cstring>
 #include <type_traits>
 #include <vector>
@@ -235,6 +236,10 @@ struct SoftSolveParams {
   Real invH = 0;
   Real pushMaxDepth = 0;     // WorldDef::contactPushMaxDepth
   Real pushMaxVelocity = 0;  // WorldDef::contactPushMaxVelocity
+  // A relax pass that computes the separations sets *deep (when given) if a point is deeper than
+  // deepBelow: solver_soft_step.cpp then knows whether its position pass can move anything.
+  std::atomic<bool>* deep = nullptr;
+  Real deepBelow = 0;
 };
 
 // Warm start: last sub-step's (or step's) accumulated impulses applied again.
@@ -311,6 +316,10 @@ inline void SolveRows(SolverBody* states, SoftRowGroup& g, int lane, const SoftS
   if constexpr (!kBias && kRelax != RelaxBias::kLoad) {
     sepK[0] = separation(0);
     sepK[1] = separation(1);
+    if (prm.deep != nullptr) {
+      const V below = Splat(prm.deepBelow, V{});
+      if (Any(Less(sepK[0], below)) || Any(Less(sepK[1], below))) prm.deep->store(true, std::memory_order_relaxed);
+    }
   }
   for (int k = 0; k < 2; ++k) {
     SoftPointRows& p = g.p[k];
