@@ -244,7 +244,7 @@ struct SoftSolveParams {
 
 // Warm start: last sub-step's (or step's) accumulated impulses applied again.
 template <class V, bool kRotation>
-inline void WarmStartRows(SolverBody* states, SoftRowGroup& g, int lane) {
+[[gnu::always_inline]] inline void WarmStartRowsImpl(SolverBody* states, SoftRowGroup& g, int lane) {
   RowBodies<V> A, B;
   Gather<V>(states, g.a, lane, A);
   Gather<V>(states, g.b, lane, B);
@@ -283,9 +283,9 @@ struct alignas(16) RelaxBiasRows {
 // bounded speed), without it the relax pass (rigid rows, no bias) and friction.
 // solver_soft_step.cpp says why each is as it is. kRelax says where a relax pass takes its
 // speculative bias from (`cache`: this group's store; unused by the soft solve).
-template <class V, bool kRotation, bool kFriction, bool kBias, RelaxBias kRelax = RelaxBias::kCompute>
-inline void SolveRows(SolverBody* states, SoftRowGroup& g, int lane, const SoftSolveParams& prm,
-                      RelaxBiasRows* cache = nullptr) {
+template <class V, bool kRotation, bool kFriction, bool kBias, RelaxBias kRelax>
+[[gnu::always_inline]] inline void SolveRowsImpl(SolverBody* states, SoftRowGroup& g, int lane,
+                                                 const SoftSolveParams& prm, RelaxBiasRows* cache) {
   static_assert(!kBias || kRelax == RelaxBias::kCompute);
   RowBodies<V> A, B;
   Gather<V>(states, g.a, lane, A);
@@ -301,7 +301,7 @@ inline void SolveRows(SolverBody* states, SoftRowGroup& g, int lane, const SoftS
   // included); the soft solve, with more live values of its own, was 8 instructions a group slower
   // so and takes each where it is used (511 -> 505 with the lambda).
   const V dpx = B.dpx - A.dpx, dpy = B.dpy - A.dpy;
-  auto separation = [&](int k) {
+  auto separation = [&](int k) __attribute__((always_inline)) {
     const SoftPointRows& p = g.p[k];
     V dx = dpx, dy = dpy;
     if constexpr (kRotation) {
@@ -424,8 +424,8 @@ struct SoftPositionParams {
 // need a turn of 0.5 rad or more (the caller then solves the group one row at a time, where
 // IntegrateRot takes sin and cos); sets `moved` when a row moved something.
 template <class V, bool kRotation>
-inline bool SolvePositionRows(SolverBody* states, const SoftRowGroup& g, int lane, const SoftPositionParams& prm,
-                              bool& moved) {
+[[gnu::always_inline]] inline bool SolvePositionRowsImpl(SolverBody* states, const SoftRowGroup& g, int lane,
+                                                         const SoftPositionParams& prm, bool& moved) {
   RowBodies<V> A, B;
   Gather<V>(states, g.a, lane, A);
   Gather<V>(states, g.b, lane, B);
@@ -500,6 +500,89 @@ inline bool SolvePositionRows(SolverBody* states, const SoftRowGroup& g, int lan
   ScatterMotion<V>(states, g.a, g.invMassA, lane, A);
   ScatterMotion<V>(states, g.b, g.invMassB, lane, B);
   return true;
+}
+
+// ---- entry points and the AVX (VEX) encoding -----------------------------------------------------
+//
+// The kernels above are also compiled a second time for CPUs with AVX (gnu::target("avx")), called
+// with the lane tag F4Vex: the same four-wide SSE operations on the same data, in AVX's
+// three-operand encoding, which needs no register copies and spills less (16 xmm registers either
+// way). The arithmetic is the same instruction for instruction (no FMA: -ffp-contract=off, and
+// the target does not include it), so the state is the same bit for bit (SoftSimdTest, and the
+// whole engine built with -mavx2 gave the same pyramid hash). WorldDef::softSimd picks it when the
+// CPU has AVX (checked once, at run time); WorldDef::softVex = false keeps the SSE2 encoding.
+// Base-100 pyramid, callgrind, instructions a group of four rows (SSE2 -> AVX encoding): soft
+// solve 481 -> 330, first relax pass 404 -> 337, friction relax pass 453 -> 286, warm start 189 ->
+// 156; the step 36.6M -> 32.3M.
+#if QUADRANT_SOFT_SIMD && defined(__x86_64__) && defined(__GNUC__)
+#define QUADRANT_SOFT_VEX 1
+struct F4Vex {};
+
+inline bool CpuHasAvx() {
+  static const bool has = __builtin_cpu_supports("avx");
+  return has;
+}
+
+template <bool kRotation>
+[[gnu::target("avx"), gnu::noinline]] void WarmStartRowsVex(SolverBody* states, SoftRowGroup& g) {
+  WarmStartRowsImpl<F4, kRotation>(states, g, 0);
+}
+template <bool kRotation, bool kFriction, bool kBias, RelaxBias kRelax>
+[[gnu::target("avx"), gnu::noinline]] void SolveRowsVex(SolverBody* states, SoftRowGroup& g, const SoftSolveParams& prm,
+                                                         RelaxBiasRows* cache) {
+  SolveRowsImpl<F4, kRotation, kFriction, kBias, kRelax>(states, g, 0, prm, cache);
+}
+template <bool kRotation>
+[[gnu::target("avx"), gnu::noinline]] bool SolvePositionRowsVex(SolverBody* states, const SoftRowGroup& g,
+                                                                 const SoftPositionParams& prm, bool& moved) {
+  return SolvePositionRowsImpl<F4, kRotation>(states, g, 0, prm, moved);
+}
+#else
+#define QUADRANT_SOFT_VEX 0
+struct F4Vex {};  // never passed: no AVX path in this build
+inline bool CpuHasAvx() { return false; }
+#endif
+
+// The kernels by lane type V: Real (one row), F4 (four, SSE2) or F4Vex (four, AVX encoding).
+template <class V, bool kRotation>
+inline void WarmStartRows(SolverBody* states, SoftRowGroup& g, int lane) {
+#if QUADRANT_SOFT_VEX
+  if constexpr (std::is_same_v<V, F4Vex>) {
+    WarmStartRowsVex<kRotation>(states, g);
+    return;
+  } else
+#endif
+  {
+    if constexpr (!std::is_same_v<V, F4Vex>) WarmStartRowsImpl<V, kRotation>(states, g, lane);
+  }
+}
+
+template <class V, bool kRotation, bool kFriction, bool kBias, RelaxBias kRelax = RelaxBias::kCompute>
+inline void SolveRows(SolverBody* states, SoftRowGroup& g, int lane, const SoftSolveParams& prm,
+                      RelaxBiasRows* cache = nullptr) {
+#if QUADRANT_SOFT_VEX
+  if constexpr (std::is_same_v<V, F4Vex>) {
+    SolveRowsVex<kRotation, kFriction, kBias, kRelax>(states, g, prm, cache);
+    return;
+  } else
+#endif
+  {
+    if constexpr (!std::is_same_v<V, F4Vex>) SolveRowsImpl<V, kRotation, kFriction, kBias, kRelax>(states, g, lane, prm, cache);
+  }
+}
+
+template <class V, bool kRotation>
+inline bool SolvePositionRows(SolverBody* states, const SoftRowGroup& g, int lane, const SoftPositionParams& prm,
+                              bool& moved) {
+#if QUADRANT_SOFT_VEX
+  if constexpr (std::is_same_v<V, F4Vex>) {
+    return SolvePositionRowsVex<kRotation>(states, g, prm, moved);
+  } else
+#endif
+  {
+    if constexpr (!std::is_same_v<V, F4Vex>) return SolvePositionRowsImpl<V, kRotation>(states, g, lane, prm, moved);
+    return false;
+  }
 }
 
 }  // namespace quadrant

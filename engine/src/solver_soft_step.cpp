@@ -153,6 +153,7 @@ class SoftStepSolver final : public ContactSolverBase {
       lastPrm.deepBelow = -def.contactPushMaxDepth + kDeepMargin;
     }
     const bool simd = def.softSimd;
+    vex_ = simd && def.softVex && CpuHasAvx();  // soft_rows.h: the same operations in AVX's encoding
     // Each sub-step is one region of stages (TaskSystem::ParallelStages): gravity, the warm start
     // and the soft solve colour by colour, the positions, the relax passes colour by colour; the
     // threads go from stage to stage inside one job instead of one hand-over per pass (base-100
@@ -419,7 +420,11 @@ class SoftStepSolver final : public ContactSolverBase {
     auto rows = [&](int gb, int ge) {
 #if QUADRANT_SOFT_SIMD
       if (simd) {
-        for (int gi = gb; gi < ge; ++gi) fn(F4{}, groups_[gi], 0);
+        if (vex_) {
+          for (int gi = gb; gi < ge; ++gi) fn(F4Vex{}, groups_[gi], 0);
+        } else {
+          for (int gi = gb; gi < ge; ++gi) fn(F4{}, groups_[gi], 0);
+        }
         return;
       }
 #else
@@ -1067,7 +1072,11 @@ class SoftStepSolver final : public ContactSolverBase {
     regionFns_.emplace_back([this, simd, fn, overflow](int gb, int ge) mutable {
 #if QUADRANT_SOFT_SIMD
       if (simd && gb < overflow) {
-        for (int gi = gb; gi < ge; ++gi) fn(F4{}, groups_[gi], 0);
+        if (vex_) {
+          for (int gi = gb; gi < ge; ++gi) fn(F4Vex{}, groups_[gi], 0);
+        } else {
+          for (int gi = gb; gi < ge; ++gi) fn(F4{}, groups_[gi], 0);
+        }
         return;
       }
 #else
@@ -1100,6 +1109,7 @@ class SoftStepSolver final : public ContactSolverBase {
   Real collisionShare_ = 1;  // a sub-step's share of the step's collision impulses (Run says why)
   std::vector<SolverBody> states_;
   std::vector<SoftRowGroup> groups_;
+  bool vex_ = false;  // the four-wide kernels in AVX's encoding (Run)
   std::span<Contact> contacts_;           // this step's (Run)
   const BodyInverseMass* inv_ = nullptr;  // this step's bodies' (Run)
   std::vector<RelaxBiasRows> relaxBias_;  // per group: the relax passes' speculative bias (RelaxBias)
