@@ -378,8 +378,12 @@ void CollidePairs(const Bodies& bodies, const WorldDef& def, Real dt, std::span<
     const BodyVelocity& va = bodies.vel[a];
     const BodyVelocity& vb = bodies.vel[b];
     const Real sweep = def.effects.continuous ? dt : Real(0);
-    const Real spec = def.speculativeDistance +
-                      sweep * (Length(vb.v - va.v) + std::abs(va.w) * bodies.boundRadius[a] + std::abs(vb.w) * bodies.boundRadius[b]);
+    // Without continuous collision the sweep term is 0 (times a finite speed): not computed (a
+    // square root a pair).
+    const Real spec = sweep > 0 ? def.speculativeDistance +
+                                      sweep * (Length(vb.v - va.v) + std::abs(va.w) * bodies.boundRadius[a] +
+                                               std::abs(vb.w) * bodies.boundRadius[b])
+                                : def.speculativeDistance;
     // Bounding circles reject most AABB-overlapping pairs before any shape test.
     const Real reach = bodies.boundRadius[a] + bodies.boundRadius[b] + spec;
     if (LengthSquared(bodies.center[b] - bodies.center[a]) > reach * reach) continue;
