@@ -754,7 +754,9 @@ class SoftStepSolver final : public ContactSolverBase {
       if (simd) {
         for (; k + kLanes <= e; k += kLanes) {
           const int* idx = &active_[k];
-          if (!IntegrateFour(bodies, idx, sleep, rotation, h, maxSpeed2, maxLinearSpeed, maxAngularSpeed)) {
+          const bool done = vex_ ? IntegrateFourVex(bodies, idx, sleep, rotation, h, maxSpeed2, maxLinearSpeed, maxAngularSpeed)
+                                 : IntegrateFour(bodies, idx, sleep, rotation, h, maxSpeed2, maxLinearSpeed, maxAngularSpeed);
+          if (!done) {
             for (int l = 0; l < kLanes; ++l) {
               IntegrateOne(bodies, idx[l], sleep, rotation, h, maxSpeed2, maxLinearSpeed, maxAngularSpeed);
             }
@@ -788,7 +790,21 @@ class SoftStepSolver final : public ContactSolverBase {
 #if QUADRANT_SOFT_SIMD
   // Bodies idx[0..3] (distinct); returns false, having written nothing, if one of them turns by 0.5 rad or
   // more in the sub-step (IntegrateRot takes sin and cos there).
-  bool IntegrateFour(const Bodies& bodies, const int* idx, bool sleep, bool rotation, Real h, Real maxSpeed2,
+  // The same in AVX's encoding (soft_rows.h says why; the same operations, the same bits).
+#if QUADRANT_SOFT_VEX
+  [[gnu::target("avx"), gnu::noinline]] bool IntegrateFourVex(const Bodies& bodies, const int* idx, bool sleep,
+                                                               bool rotation, Real h, Real maxSpeed2, Real maxSpeed,
+                                                               Real maxAngularSpeed) {
+    return IntegrateFour(bodies, idx, sleep, rotation, h, maxSpeed2, maxSpeed, maxAngularSpeed);
+  }
+#else
+  bool IntegrateFourVex(const Bodies& bodies, const int* idx, bool sleep, bool rotation, Real h, Real maxSpeed2,
+                        Real maxSpeed, Real maxAngularSpeed) {
+    return IntegrateFour(bodies, idx, sleep, rotation, h, maxSpeed2, maxSpeed, maxAngularSpeed);
+  }
+#endif
+
+  [[gnu::always_inline]] bool IntegrateFour(const Bodies& bodies, const int* idx, bool sleep, bool rotation, Real h, Real maxSpeed2,
                      Real maxSpeed, Real maxAngularSpeed) {
     float* s[kLanes] = {&states_[idx[0]].v.x, &states_[idx[1]].v.x, &states_[idx[2]].v.x, &states_[idx[3]].v.x};
     __m128 a0 = _mm_loadu_ps(s[0]), a1 = _mm_loadu_ps(s[1]), a2 = _mm_loadu_ps(s[2]), a3 = _mm_loadu_ps(s[3]);
@@ -851,7 +867,7 @@ class SoftStepSolver final : public ContactSolverBase {
             const bool moves = sleep ? awake[i + k] != 0 : type[i + k] != BodyType::kStatic;
             mask |= int(moves & (inRows[i + k] == 0)) << k;
           }
-          if (mask == 0 || MoveFour(bodies, fm, i, mask)) continue;
+          if (mask == 0 || (vex_ ? MoveFourVex(bodies, fm, i, mask) : MoveFour(bodies, fm, i, mask))) continue;
           for (int k = 0; k < kLanes; ++k) {
             if (mask >> k & 1) MoveFree(bodies, fm, i + k);
           }
@@ -953,7 +969,15 @@ class SoftStepSolver final : public ContactSolverBase {
   // when a body needs the speed limit or turns by 0.5 rad or more in the step: the caller then
   // moves the four one by one. Why: MoveFree was the largest of the per-body passes on the sparse
   // stress scenes (circle stress N = 4000: 7.9M of the 57.3M instructions of 20 steps).
-  bool MoveFour(Bodies& bodies, const FreeMotion& fm, int i, int mask) {
+#if QUADRANT_SOFT_VEX
+  [[gnu::target("avx"), gnu::noinline]] bool MoveFourVex(Bodies& bodies, const FreeMotion& fm, int i, int mask) {
+    return MoveFour(bodies, fm, i, mask);  // in AVX's encoding: the same operations, the same bits
+  }
+#else
+  bool MoveFourVex(Bodies& bodies, const FreeMotion& fm, int i, int mask) { return MoveFour(bodies, fm, i, mask); }
+#endif
+
+  [[gnu::always_inline]] bool MoveFour(Bodies& bodies, const FreeMotion& fm, int i, int mask) {
     const BodyVelocity* vel = bodies.vel.data() + i;
     F4 ux{_mm_setr_ps(vel[0].v.x, vel[1].v.x, vel[2].v.x, vel[3].v.x)};
     F4 uy{_mm_setr_ps(vel[0].v.y, vel[1].v.y, vel[2].v.y, vel[3].v.y)};

@@ -104,10 +104,11 @@ TEST(SoftSimdTest, AvxEncodingGivesTheSameStateAsSse2WithOverlapAndBounces) {
 // pairs that touch (so groups of four mix free bodies with bodies in rows, and a static one),
 // spinning fast enough that some turn by 0.5 rad or more in a step, one faster than the speed
 // limit, with damping and with sleep, 1 and 3 threads; 83 bodies, so the last group is partial.
-uint64_t RunFree(bool simd, int threads, bool damping, bool sleep) {
+uint64_t RunFree(bool simd, int threads, bool damping, bool sleep, bool vex = true) {
   WorldDef def;
   def.solver = SolverType::kSoftStep;
   def.softSimd = simd;
+  def.softVex = vex;
   def.threadCount = threads;
   def.minParallelItems = 8;
   def.effects.damping = damping;
@@ -137,6 +138,7 @@ TEST(SoftSimdTest, FreeBodiesFourAtATimeGiveTheSameState) {
       const uint64_t scalar = RunFree(false, 1, damping, sleep);
       EXPECT_EQ(RunFree(true, 1, damping, sleep), scalar) << "damping " << damping << " sleep " << sleep;
       EXPECT_EQ(RunFree(true, 3, damping, sleep), scalar) << "damping " << damping << " sleep " << sleep;
+      EXPECT_EQ(RunFree(true, 1, damping, sleep, false), scalar) << "SSE2 encoding, damping " << damping << " sleep " << sleep;
     }
   }
 }
