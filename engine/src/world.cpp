@@ -86,7 +86,8 @@ struct World::Impl {
   std::vector<int> queryFound;
   bool queryStale = true;
 
-  // Contact events (def.contactEvents only): touching pairs after this step and the last one.
+  // Contact events (def.contactEvents, or effects.sleep for the touching counter): touching pairs
+  // after this step and the last one.
   std::vector<ContactEvent> touching, touchingBefore, beginEvents, endEvents;
 
   int Dense(BodyId id) const {
@@ -245,7 +246,13 @@ void World::StepRepeated(Real dt, int pipelineRepeats) {
   for (int s = 0; s < pipelineRepeats; ++s) w.RunPipeline(h);
   w.profile.total = Ms(start, Clock::now());
   w.profile.balance = w.run->Balance();
-  if (w.def.contactEvents) w.UpdateContactEvents();
+  // With sleep on, the touching pairs are tracked even without events: a sleeping island's
+  // contacts are not in `contacts` (it gets no pairs), yet it still touches, so the counter counts
+  // the tracked pairs (as Box2D, Bullet and Chipmunk count a sleeping pile's contacts).
+  if (w.def.contactEvents || w.def.effects.sleep) {
+    w.UpdateContactEvents();
+    w.counters.touchingContacts = static_cast<int>(w.touching.size());
+  }
 }
 
 void World::Impl::FindPairs() {

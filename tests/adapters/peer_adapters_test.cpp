@@ -411,16 +411,7 @@ TEST_P(SharedAdapterChecks, RotationOff) { CheckRotationOff(Make()); }
 TEST_P(SharedAdapterChecks, GravityOff) { CheckGravityOff(Make()); }
 TEST_P(SharedAdapterChecks, Sleep) { CheckSleep(Make()); }
 TEST_P(SharedAdapterChecks, StackContacts) { CheckStackContacts(Make()); }
-TEST_P(SharedAdapterChecks, ContactsSurviveSleep) {
-  if (GetParam() == "quadrant") {
-    // Found by running this check on Quadrant (issue 16): its ContactCount is the last step's
-    // Counters::touchingContacts, which counts only awake islands' contacts, so a scene asleep
-    // reports 0 where Box2D, Bullet and Chipmunk report 3. An engine change (world.cpp), left to
-    // the solver work; the check stays here to be enabled with it.
-    GTEST_SKIP() << "quadrant: touchingContacts leaves out sleeping islands (reports 0, peers 3)";
-  }
-  CheckContactsSurviveSleep(Make());
-}
+TEST_P(SharedAdapterChecks, ContactsSurviveSleep) { CheckContactsSurviveSleep(Make()); }
 TEST_P(SharedAdapterChecks, DriverRunsBeforeEachStep) { CheckDriver(Make()); }
 TEST_P(SharedAdapterChecks, LoadTwiceReplacesWorld) { CheckLoadTwice(Make()); }
 TEST_P(SharedAdapterChecks, SetVelocity) { CheckSetVelocity(Make()); }

@@ -309,7 +309,7 @@ struct Counters {
   int bodies = 0;
   int candidatePairs = 0;    ///< pairs whose AABBs overlap, from the broad phase
   int contacts = 0;          ///< manifolds with at least one point (touching or speculative)
-  int touchingContacts = 0;  ///< manifolds with a point at separation <= 0
+  int touchingContacts = 0;  ///< manifolds with a point at separation <= 0 (with sleep on, sleeping islands' too)
   int contactPoints = 0;
 };
 
