@@ -191,8 +191,8 @@ class UniformGrid final : public BroadPhase {
   int CellY(double v) const { return std::clamp(int((v - originY_) * inv_), 0, rows_ - 1); }
 
   // Counting sort of ordinary bodies by cell, in parallel by ranges of cells: each worker owns
-  // a contiguous range of cells and counts, places and copies only the bodies of its own range
-  // (listed per block of bodies by the first pass), walking them in index order. Within a cell, bodies are in
+  // a contiguous range of cells, reads every body's cell and counts, places and copies only the
+  // bodies of its own range, walking the bodies in index order. Within a cell, bodies are in
   // index order whatever the ranges, so the sorted arrays are the same for any thread count.
   // AABBs are copied in cell order so the pair scan reads memory sequentially.
   //
@@ -207,25 +207,11 @@ class UniformGrid final : public BroadPhase {
   [[gnu::always_inline]] inline void Bucket(std::span<const AABB> aabbs, StageRunner& run) {
     const int n = static_cast<int>(aabbs.size());
     const int cells = cols_ * rows_;
-    // One range of cells per worker when the bodies are many enough to split; one otherwise.
-    const int ranges = n >= run.MinItems() ? run.Workers() : 1;
-    rangeBegin_.resize(ranges + 1);
-    for (int r = 0; r <= ranges; ++r) rangeBegin_[r] = BlockBegin(cells, ranges, r);
     cellOf_.resize(n);
     largePart_.resize(run.Workers());
     for (std::vector<int>& part : largePart_) part.clear();  // a worker may get no block
-    // With several ranges, each block of bodies also lists its bodies by range (in index order),
-    // so that the count and place passes of a range read only that range's bodies. Without the
-    // lists every range read every body's cell twice, which did not shrink with the threads:
-    // circle stress N = 16000 at 2 threads, those two passes took about as long as on one thread.
-    const int blocks = run.Workers();
-    if (ranges > 1) {
-      byRange_.resize(size_t(blocks) * ranges);
-      for (std::vector<int>& list : byRange_) list.clear();
-    }
     run.For(Stage::kBroadPhase, n, run.MinItems(), [&](int begin, int end, int worker) {
       std::vector<int>& large = largePart_[worker];
-      std::vector<int>* lists = ranges > 1 ? &byRange_[size_t(worker) * ranges] : nullptr;
       for (int i = begin; i < end; ++i) {
         const AABB& b = aabbs[i];
         if (extent_[i] > largeThreshold_) {
@@ -234,32 +220,22 @@ class UniformGrid final : public BroadPhase {
         } else if (!Overlaps(b, region_)) {
           cellOf_[i] = -2;  // cannot touch any movable body
         } else {
-          const int c = CellY(b.lower.y) * cols_ + CellX(b.lower.x);
-          cellOf_[i] = c;
-          if (lists) lists[RangeOf(c, ranges, cells)].push_back(i);
+          cellOf_[i] = CellY(b.lower.y) * cols_ + CellX(b.lower.x);
         }
       }
     });
-    // Calls fn(i, c) for every body i of range r (its cell c in the range), in index order.
-    auto forRange = [&](int r, int c0, int c1, auto&& fn) {
-      if (ranges == 1) {
-        for (int i = 0; i < n; ++i) {
-          const int c = cellOf_[i];
-          if (c >= c0 && c < c1) fn(i, c);
-        }
-        return;
-      }
-      for (int b = 0; b < blocks; ++b) {
-        for (int i : byRange_[size_t(b) * ranges + r]) fn(i, cellOf_[i]);
-      }
-    };
+    // One range of cells per worker when the bodies are many enough to split; one otherwise.
+    const int ranges = n >= run.MinItems() ? run.Workers() : 1;
     cellCount_.resize(size_t(cells) + 1);
     rangeTotal_.assign(ranges + 1, 0);
     run.For(Stage::kBroadPhase, ranges, 1, [&](int r0, int r1, int) {
       for (int r = r0; r < r1; ++r) {
-        const int c0 = rangeBegin_[r], c1 = rangeBegin_[r + 1];
+        const int c0 = BlockBegin(cells, ranges, r), c1 = BlockBegin(cells, ranges, r + 1);
         std::fill(cellCount_.begin() + c0, cellCount_.begin() + c1, 0);
-        forRange(r, c0, c1, [&](int, int c) { ++cellCount_[c]; });
+        for (int i = 0; i < n; ++i) {
+          const int c = cellOf_[i];
+          if (c >= c0 && c < c1) ++cellCount_[c];
+        }
         int total = 0;  // the count becomes the cell's first slot, relative to the range
         for (int c = c0; c < c1; ++c) {
           const int k = cellCount_[c];
@@ -282,25 +258,19 @@ class UniformGrid final : public BroadPhase {
     });
     run.For(Stage::kBroadPhase, ranges, 1, [&](int r0, int r1, int) {
       for (int r = r0; r < r1; ++r) {
-        const int c0 = rangeBegin_[r], c1 = rangeBegin_[r + 1];
+        const int c0 = BlockBegin(cells, ranges, r), c1 = BlockBegin(cells, ranges, r + 1);
         const int offset = rangeTotal_[r];
         for (int c = c0; c < c1; ++c) cellStart_[c] = cellCount_[c] += offset;
-        forRange(r, c0, c1, [&](int i, int c) {
+        for (int i = 0; i < n; ++i) {
+          const int c = cellOf_[i];
+          if (c < c0 || c >= c1) continue;
           const int k = cellCount_[c]++;
           sortedIndex_[k] = i;
           sortedBox_[k] = aabbs[i];
           sortedCell_[k] = c;
-        });
+        }
       }
     });
-  }
-
-  // The range (of `ranges` equal ranges of the cells, BlockBegin) that holds cell c.
-  int RangeOf(int c, int ranges, int cells) const {
-    int r = static_cast<int>((static_cast<long long>(c) * ranges) / cells);
-    while (r + 1 < ranges && c >= rangeBegin_[r + 1]) ++r;
-    while (r > 0 && c < rangeBegin_[r]) --r;
-    return r;
   }
 
   void Emit(int i, int j, std::span<const uint8_t> movable, std::vector<CandidatePair>& out) const {
@@ -380,8 +350,7 @@ class UniformGrid final : public BroadPhase {
   std::vector<Real> extent_;
   std::vector<Partial> partial_;
   std::vector<double> cellMax_;
-  std::vector<int> cellCount_, rangeTotal_, rangeBegin_;
-  std::vector<std::vector<int>> byRange_;  // Bucket: per block of bodies and range of cells
+  std::vector<int> cellCount_, rangeTotal_;
   std::vector<std::vector<int>> largePart_;
   std::vector<std::vector<CandidatePair>> perWorker_;
 };
