@@ -54,7 +54,11 @@
 //   end the threads took turns, and each pass moved about half the chunks' data to the other
 //   core. Measured on a quiet machine, 5 alternated runs, 2 threads, 60 + 10 steps, solve stage
 //   (profile) / whole step, ms: circle stress 16000 0.264 / 1.004 from one end, 0.217 / 0.959
-//   from both; polygon stress 16000 0.494 / 1.806 and 0.413 / 1.721.
+//   from both; polygon stress 16000 0.494 / 1.806 and 0.413 / 1.721. Against main's pool (3c85fba),
+//   15 rounds alternated with c70fd1b, each run at SCHED_FIFO priority 1 beside other users' niced
+//   builds (load 10-15), fastest / median ms per step at 2 threads: circles 16000 0.786 / 0.948 ->
+//   0.760 / 0.904 (c70fd1b 0.660 / 0.806); polygons 16000 1.403 / 1.720 -> 1.349 / 1.666 (c70fd1b
+//   1.226 / 1.541); 1 thread unchanged (same instruction counts, icount).
 // - The caller runs jobs alone while the machine is busy. A preempted worker that holds a chunk
 //   stalls the stage until the scheduler runs it again, a time slice later; with one busy loop
 //   on two cores that happens every few milliseconds, and no chunk size avoids it (a claimed
