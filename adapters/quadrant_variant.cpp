@@ -6,7 +6,9 @@
 // Box2D 2.4.1's restitution (RestitutionPolicy::kBox2d, pgs and soft_step), "b2skin" for its 0.01 m polygon
 // skin (WorldDef::polygonSkin), "coupled" for the thesis solver's coupled impulse
 // (WorldDef::thesisCoupledImpulse), "points" for its impulse at each touching point
-// (WorldDef::thesisPointImpulses), "passes<N>" for its passes (WorldDef::thesisPasses),
+// (WorldDef::thesisPointImpulses), "passes<N>" for its passes (WorldDef::thesisPasses), "accum"
+// for its impulses accumulated and clamped over the passes (WorldDef::thesisAccumulatedImpulse),
+// "b2pos" for Box2D 2.4.1's position pass instead of its push (WorldDef::thesisPositionPass),
 // "relaxfriction" for soft_step's friction in every relax pass, "b3soft"
 // for soft_step with Box2D 3's settings (one relax pass, no mass-ratio limit, damping ratio 10).
 // The default is the engine's own (WorldDef: soft_step with two relax passes and a mass-ratio
@@ -83,6 +85,10 @@ QuadrantVariant QuadrantVariant::Parse(std::string_view variant) {
       v.thesisCoupled = true;
     } else if (token == "points") {
       v.thesisPoints = true;
+    } else if (token == "accum") {
+      v.thesisAccumulated = true;
+    } else if (token == "b2pos") {
+      v.thesisPositionPass = true;
     } else if (token == "b2skin") {
       v.polygonSkin = Real(0.01);  // Box2D 2.4.1's b2_polygonRadius
     } else if (token == "quadtree") {
@@ -96,7 +102,7 @@ QuadrantVariant QuadrantVariant::Parse(std::string_view variant) {
     } else {
       throw Error("unknown quadrant variant '" + std::string(token) +
                   "' (known: thesis, pgs, soft_step, jacobi, quadtree, grid, deterministic, quadrants, sub<N>, it<N>, "
-                  "pos<N>, relax<N>, ratio<N>, passes<N>, b3soft, relaxfriction, b2rest, b2skin, coupled, points)");
+                  "pos<N>, relax<N>, ratio<N>, passes<N>, b3soft, relaxfriction, b2rest, b2skin, coupled, points, accum, b2pos)");
     }
     if (end == std::string_view::npos) break;
     start = end + 1;
@@ -123,6 +129,8 @@ WorldDef QuadrantVariant::MakeWorldDef(const Scene& scene, int threads) const {
   def.thesisCoupledImpulse = thesisCoupled;
   def.thesisPointImpulses = thesisPoints;
   if (thesisPasses > 0) def.thesisPasses = thesisPasses;
+  def.thesisAccumulatedImpulse = thesisAccumulated;
+  def.thesisPositionPass = thesisPositionPass;
   if (box2d3Soft) {
     def.softRelaxIterations = 1;
     def.softMassRatioLimit = 0;

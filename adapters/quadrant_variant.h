@@ -23,6 +23,8 @@ struct QuadrantVariant {
   bool frictionEveryRelax = false;  ///< relaxfriction: soft_step's WorldDef::softFrictionEveryRelaxPass
   bool thesisPoints = false;   ///< points: the thesis solver's impulse at each touching point
   int thesisPasses = 0;        ///< passes<N>: the thesis solver's WorldDef::thesisPasses; 0: the engine's
+  bool thesisAccumulated = false;  ///< accum: the thesis solver's WorldDef::thesisAccumulatedImpulse
+  bool thesisPositionPass = false;  ///< b2pos: the thesis solver's WorldDef::thesisPositionPass
   int massRatioLimit = 0;      ///< ratio<N>: soft_step's WorldDef::softMassRatioLimit; 0: the engine's
   int relaxIterations = 0;     ///< relax<N>: soft_step's WorldDef::softRelaxIterations; 0: the engine's
   bool box2d3Soft = false;     ///< b3soft: soft_step with Box2D 3's settings (relax 1, no ratio limit, damping 10)

@@ -209,7 +209,13 @@ std::string Markdown(const qs::Campaign& c, const std::vector<qs::CampaignRow>& 
        "last relax pass only, after the normal rows, which leaves the two unconverged where a lever arm couples "
        "them; `relax4`: four relax passes instead of two); `coupled` = `WorldDef::thesisCoupledImpulse` (the thesis's one impulse with "
        "its normal and friction parts solved together); `points` = `WorldDef::thesisPointImpulses` (an impulse "
-       "at each touching point in turn instead of the thesis's one at their centroid); others are Quadrant "
+       "at each touching point in turn instead of the thesis's one at their centroid); `box2d_positions` = "
+       "`WorldDef::thesisPositionPass` (`b2pos`: the penetration removed after the positions are integrated by "
+       "Box2D 2.4.1's position pass, which turns the bodies too, instead of the thesis's translation push before "
+       "the impulses); `accumulated` = `WorldDef::thesisAccumulatedImpulse` (`accum`: each point's impulse a "
+       "total over the step's passes, clamped as a total, so a later pass can take back what an earlier one "
+       "gave a point, as Box2D's iterations do; `passes8`: `WorldDef::thesisPasses = 8`, Box2D's 8 velocity "
+       "iterations; either alone changes nothing); others are Quadrant "
        "adapter variants given with `--runs`.\n\n"
     << "| class | engine | setting | p90 | p90 with more choices switched |\n|---|---|---|---:|---|\n";
   auto tokens = [](const std::string& setting) {

@@ -67,10 +67,11 @@ def main():
     import matplotlib.pyplot as plt
 
     compared = [r for r in runs if r in to_box2d]
-    # tab20's dark shades, then its light ones: the campaign has 16 runs, and the default cycle's
-    # 10 colours drew two runs alike.
+    # tab20's dark shades, then its light ones, then tab20b's: the campaign has 21 runs (with
+    # Box2D and the analytic impact), and tab20 alone drew the last one as the first.
     tab20 = plt.get_cmap("tab20").colors
-    colours = list(tab20[0::2]) + list(tab20[1::2])
+    tab20b = plt.get_cmap("tab20b").colors
+    colours = list(tab20[0::2]) + list(tab20[1::2]) + list(tab20b[0::4]) + list(tab20b[2::4])
     colour = {run: colours[k % len(colours)] for k, run in enumerate(runs)}
     fig = plt.figure(figsize=(16, 10))
     top = fig.add_subplot(2, 1, 1)
@@ -117,7 +118,11 @@ def main():
         ax.set_xlim(FLOOR * 0.8, 10)
         ax.set_xlabel(title + " (fraction of impact speed)")
         ax.set_ylabel("fraction of hits at or below")
-        ax.legend(fontsize=7, loc="lower right")
+        # The runs' colours are the top panel's legend; only runs not in it are named here (a
+        # legend of all 21 covered the curves).
+        extra = [h for h, l in zip(*ax.get_legend_handles_labels()) if l not in compared]
+        if extra:
+            ax.legend(handles=extra, fontsize=8, loc="lower right")
     fig.tight_layout()
     out = os.path.join(directory, "validation_random.png")
     fig.savefig(out, dpi=90)

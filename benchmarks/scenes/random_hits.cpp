@@ -347,6 +347,11 @@ std::vector<CampaignRun> DefaultCampaignRuns() {
       {"quadrant:thesis", "coupled+points", "quadrant:thesis+coupled+points"},
       {"quadrant:thesis", "coupled+box2d_skin", "quadrant:thesis+coupled+b2skin"},
       {"quadrant:thesis", "coupled+points+box2d_skin", "quadrant:thesis+coupled+points+b2skin"},
+      {"quadrant:thesis", "coupled+points+box2d_skin+box2d_positions", "quadrant:thesis+coupled+points+b2skin+b2pos"},
+      {"quadrant:thesis", "coupled+points+box2d_skin+accumulated+passes8",
+       "quadrant:thesis+coupled+points+b2skin+accum+passes8"},
+      {"quadrant:thesis", "coupled+points+box2d_skin+box2d_positions+accumulated+passes8",
+       "quadrant:thesis+coupled+points+b2skin+b2pos+accum+passes8"},
   };
 }
 

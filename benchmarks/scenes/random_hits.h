@@ -127,7 +127,8 @@ struct Campaign {
 /// Box2D-compatible setting); soft_step with each of those, with friction in every relax pass, with
 /// the first two, with all three (soft_step's Box2D-compatible setting) and that with four relax
 /// passes; thesis with its impulse coupled, and that with an impulse per touching point, with the
-/// skin, and with both.
+/// skin, and with both; and that (coupled, points, skin) with Box2D's position pass, with its
+/// impulses accumulated over 8 passes, and with both (the thesis's Box2D-compatible setting).
 std::vector<CampaignRun> DefaultCampaignRuns();
 
 /// Runs hits 0..count-1 of the campaign seeded `seed` on every run. A hit is single-point, and

@@ -242,6 +242,16 @@ struct WorldDef {
   /// pass; more let the impulses of a contact's two points, or of neighbouring contacts, settle
   /// as an iterative solver's do. README "validation" gives what it changes.
   int thesisPasses = 1;
+  /// thesis solver: each point's impulse is a total accumulated over the step's passes and
+  /// clamped as a total (normal >= 0, friction within mu times it), as Box2D 2.4.1's iterations
+  /// do, instead of a fresh impulse per pass that only pushes. Only matters with thesisPasses > 1.
+  /// Off (the default): the thesis's method. README "validation" gives what it changes.
+  bool thesisAccumulatedImpulse = false;
+  /// thesis solver: remove penetration after the positions are integrated, by positionIterations
+  /// passes of non-linear Gauss-Seidel at the touching points (Box2D 2.4.1's and pgs's position
+  /// pass, which turns the bodies too), instead of the thesis's translation push before the
+  /// impulses. Off (the default): the thesis's method. README "validation" gives what it changes.
+  bool thesisPositionPass = false;
   Real maxLinearSpeed = Real(400);      ///< m/s; a numerical guard, as Box2D 3's default
   /// Most a body turns in one step (rad), as Box2D 3's 0.25 pi: a numerical guard. Speculative
   /// contacts see where a corner is, not where a fast spin takes it within the step; without
