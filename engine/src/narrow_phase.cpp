@@ -14,6 +14,13 @@
 
 #include <cfloat>
 
+#if defined(__SSE2__) && !defined(QUADRANT_DOUBLE)
+#include <emmintrin.h>
+#define QUADRANT_NARROW_SIMD 1
+#else
+#define QUADRANT_NARROW_SIMD 0
+#endif
+
 namespace quadrant {
 namespace {
 
@@ -52,7 +59,7 @@ struct ClipVertex {
 };
 
 // Keeps the part of segment (in[0], in[1]) where Dot(n, p) <= offset.
-int ClipSegment(ClipVertex out[2], const ClipVertex in[2], Vec2 n, Real offset, uint32_t side) {
+[[gnu::always_inline]] inline int ClipSegment(ClipVertex out[2], const ClipVertex in[2], Vec2 n, Real offset, uint32_t side) {
   int count = 0;
   Real d0 = Dot(n, in[0].v) - offset;
   Real d1 = Dot(n, in[1].v) - offset;
@@ -146,8 +153,68 @@ namespace {
 // pairs (4 and 4), the pyramid's and the stacks' only pairs, get fully unrolled loops: the same
 // operations in the same order, so the same manifold bit for bit. Base-100 pyramid: see the
 // commit that added it for the instruction counts.
+#if QUADRANT_NARROW_SIMD
+// The four-vertex case of the searches below four lanes at a time (SSE2): lane i does the
+// scalar code's operations for face (or vertex) i in the same order, and _mm_min_ps is the
+// scalar `d < m ? d : m`, so the manifold is the same bit for bit (the state hashes did not
+// move). Why: box pairs are the pyramid's and the stacks' only pairs, and the 2 x 16 dot
+// products of the axis searches and the 8 vertex transforms were most of CollidePolygonsT<4, 4>
+// (base-100 pyramid: 797 instructions a pair; the commit that added this gives the after).
+struct Four {
+  __m128 x, y;
+};
+
+inline Four LoadFour(const Vec2* v) {
+  const __m128 lo = _mm_loadu_ps(&v[0].x), hi = _mm_loadu_ps(&v[2].x);  // x0 y0 x1 y1, x2 y2 x3 y3
+  return {_mm_shuffle_ps(lo, hi, _MM_SHUFFLE(2, 0, 2, 0)), _mm_shuffle_ps(lo, hi, _MM_SHUFFLE(3, 1, 3, 1))};
+}
+
+// TransformPoint(xf, v) in every lane.
+inline Four TransformFour(Transform xf, Four v) {
+  const __m128 c = _mm_set1_ps(xf.q.c), s = _mm_set1_ps(xf.q.s);
+  return {_mm_add_ps(_mm_sub_ps(_mm_mul_ps(c, v.x), _mm_mul_ps(s, v.y)), _mm_set1_ps(xf.p.x)),
+          _mm_add_ps(_mm_add_ps(_mm_mul_ps(s, v.x), _mm_mul_ps(c, v.y)), _mm_set1_ps(xf.p.y))};
+}
+
+inline void StoreFour(Four f, Vec2* out) {
+  _mm_storeu_ps(&out[0].x, _mm_unpacklo_ps(f.x, f.y));
+  _mm_storeu_ps(&out[2].x, _mm_unpackhi_ps(f.x, f.y));
+}
+
+template <int kLane>
+inline __m128 SplatLane(__m128 v) {
+  return _mm_shuffle_ps(v, v, _MM_SHUFFLE(kLane, kLane, kLane, kLane));
+}
+
+// MaxSeparation<4, 4>: the lanes are a's faces, the loop runs over b's vertices (in a's frame).
+inline Real MaxSeparationFour(const Polygon& a, Four b, int* edgeOut) {
+  const Four n = LoadFour(a.normals.data()), v = LoadFour(a.vertices.data());
+  __m128 minDot = _mm_set1_ps(FLT_MAX);
+  auto vertex = [&](__m128 bx, __m128 by) {
+    const __m128 d = _mm_add_ps(_mm_mul_ps(n.x, _mm_sub_ps(bx, v.x)), _mm_mul_ps(n.y, _mm_sub_ps(by, v.y)));
+    minDot = _mm_min_ps(d, minDot);
+  };
+  vertex(SplatLane<0>(b.x), SplatLane<0>(b.y));
+  vertex(SplatLane<1>(b.x), SplatLane<1>(b.y));
+  vertex(SplatLane<2>(b.x), SplatLane<2>(b.y));
+  vertex(SplatLane<3>(b.x), SplatLane<3>(b.y));
+  alignas(16) Real face[4];
+  _mm_store_ps(face, minDot);
+  Real best = -FLT_MAX;
+  int bestEdge = 0;
+  for (int i = 0; i < 4; ++i) {
+    if (face[i] > best) {
+      best = face[i];
+      bestEdge = i;
+    }
+  }
+  *edgeOut = bestEdge;
+  return best;
+}
+#endif
+
 template <int kA, int kB>
-Manifold CollidePolygonsT(const Polygon& a, Transform xfA, const Polygon& b, Transform xfB, Real speculative) {
+[[gnu::always_inline]] inline Manifold CollidePolygonsT(const Polygon& a, Transform xfA, const Polygon& b, Transform xfB, Real speculative) {
   const int aCount = kA > 0 ? kA : a.count;
   const int bCount = kB > 0 ? kB : b.count;
   Manifold m;
@@ -156,15 +223,28 @@ Manifold CollidePolygonsT(const Polygon& a, Transform xfA, const Polygon& b, Tra
   const Transform aInB = InvMulTransforms(xfB, xfA);
   Vec2 bVerts[kMaxPolygonVertices];
   Vec2 aVerts[kMaxPolygonVertices];
-  for (int i = 0; i < bCount; ++i) bVerts[i] = TransformPoint(bInA, b.vertices[i]);
-  for (int i = 0; i < aCount; ++i) aVerts[i] = TransformPoint(aInB, a.vertices[i]);
-
-  int edgeA = 0;
-  const Real sepA = MaxSeparation<kA, kB>(a, bVerts, bCount, &edgeA);
-  if (sepA > speculative) return m;
-  int edgeB = 0;
-  const Real sepB = MaxSeparation<kB, kA>(b, aVerts, aCount, &edgeB);
-  if (sepB > speculative) return m;
+  int edgeA = 0, edgeB = 0;
+  Real sepA, sepB;
+#if QUADRANT_NARROW_SIMD
+  if constexpr (kA == 4 && kB == 4) {
+    const Four bFour = TransformFour(bInA, LoadFour(b.vertices.data()));
+    sepA = MaxSeparationFour(a, bFour, &edgeA);
+    if (sepA > speculative) return m;
+    const Four aFour = TransformFour(aInB, LoadFour(a.vertices.data()));
+    sepB = MaxSeparationFour(b, aFour, &edgeB);
+    if (sepB > speculative) return m;
+    StoreFour(bFour, bVerts);
+    StoreFour(aFour, aVerts);
+  } else
+#endif
+  {
+    for (int i = 0; i < bCount; ++i) bVerts[i] = TransformPoint(bInA, b.vertices[i]);
+    for (int i = 0; i < aCount; ++i) aVerts[i] = TransformPoint(aInB, a.vertices[i]);
+    sepA = MaxSeparation<kA, kB>(a, bVerts, bCount, &edgeA);
+    if (sepA > speculative) return m;
+    sepB = MaxSeparation<kB, kA>(b, aVerts, aCount, &edgeB);
+    if (sepB > speculative) return m;
+  }
 
   const bool flip = sepB > sepA + kAxisPreference;
   const Polygon& ref = flip ? b : a;
@@ -181,11 +261,30 @@ Manifold CollidePolygonsT(const Polygon& a, Transform xfA, const Polygon& b, Tra
   const Rot incInRef = flip ? InvMul(xfB.q, xfA.q) : InvMul(xfA.q, xfB.q);
   int incEdge = 0;
   Real minDot = FLT_MAX;
-  for (int i = 0; i < incCount; ++i) {
-    Real d = Dot(refNormal, Rotate(incInRef, inc.normals[i]));
-    if (d < minDot) {
-      minDot = d;
-      incEdge = i;
+#if QUADRANT_NARROW_SIMD
+  if constexpr (kA == 4 && kB == 4) {
+    // Dot(refNormal, Rotate(incInRef, normal i)) in lane i, the same operations.
+    const Four n = LoadFour(inc.normals.data());
+    const __m128 c = _mm_set1_ps(incInRef.c), s = _mm_set1_ps(incInRef.s);
+    const __m128 rx = _mm_sub_ps(_mm_mul_ps(c, n.x), _mm_mul_ps(s, n.y));
+    const __m128 ry = _mm_add_ps(_mm_mul_ps(s, n.x), _mm_mul_ps(c, n.y));
+    alignas(16) Real d[4];
+    _mm_store_ps(d, _mm_add_ps(_mm_mul_ps(_mm_set1_ps(refNormal.x), rx), _mm_mul_ps(_mm_set1_ps(refNormal.y), ry)));
+    for (int i = 0; i < 4; ++i) {
+      if (d[i] < minDot) {
+        minDot = d[i];
+        incEdge = i;
+      }
+    }
+  } else
+#endif
+  {
+    for (int i = 0; i < incCount; ++i) {
+      Real d = Dot(refNormal, Rotate(incInRef, inc.normals[i]));
+      if (d < minDot) {
+        minDot = d;
+        incEdge = i;
+      }
     }
   }
   const int incNext = incEdge + 1 < incCount ? incEdge + 1 : 0;
@@ -212,11 +311,47 @@ Manifold CollidePolygonsT(const Polygon& a, Transform xfA, const Polygon& b, Tra
   return m;
 }
 
+#if QUADRANT_NARROW_SIMD && defined(__x86_64__) && defined(__GNUC__)
+// The box-box case compiled again in AVX's three-operand encoding, for CPUs that have it: the same
+// operations, so the same manifold bit for bit (as soft_rows.h's kernels; the whole engine built
+// with -mavx2 gave the same pyramid hash). Base-100 pyramid: 590 -> 478 instructions a pair with
+// ClipSegment inlined (SSE2 encoding, ClipSegment called: 500 + 91).
+[[gnu::target("avx"), gnu::noinline]] Manifold CollideBoxesVex(const Polygon& a, Transform xfA, const Polygon& b,
+                                                                Transform xfB, Real speculative) {
+  return CollidePolygonsT<4, 4>(a, xfA, b, xfB, speculative);
+}
+
+bool BoxesVex() {
+  static const bool has = __builtin_cpu_supports("avx");
+  return has;
+}
+#endif
+
+// Out of line, so the dispatcher below stays a few instructions (with both inlined it set up a
+// frame for both: 45 instructions a call).
+[[gnu::noinline]] Manifold CollideBoxes(const Polygon& a, Transform xfA, const Polygon& b, Transform xfB,
+                                        Real speculative) {
+  return CollidePolygonsT<4, 4>(a, xfA, b, xfB, speculative);
+}
+[[gnu::noinline]] Manifold CollideAnyPolygons(const Polygon& a, Transform xfA, const Polygon& b, Transform xfB,
+                                              Real speculative) {
+  return CollidePolygonsT<0, 0>(a, xfA, b, xfB, speculative);
+}
+
 }  // namespace
 
 Manifold CollidePolygons(const Polygon& a, Transform xfA, const Polygon& b, Transform xfB, Real speculative) {
-  if (a.count == 4 && b.count == 4) return CollidePolygonsT<4, 4>(a, xfA, b, xfB, speculative);
-  return CollidePolygonsT<0, 0>(a, xfA, b, xfB, speculative);
+  if (a.count == 4 && b.count == 4) {
+#if QUADRANT_NARROW_SIMD && defined(__x86_64__) && defined(__GNUC__)
+    if (BoxesVex()) return CollideBoxesVex(a, xfA, b, xfB, speculative);
+#endif
+    return CollideBoxes(a, xfA, b, xfB, speculative);
+  }
+  return CollideAnyPolygons(a, xfA, b, xfB, speculative);
+}
+
+Manifold CollidePolygonsGeneral(const Polygon& a, Transform xfA, const Polygon& b, Transform xfB, Real speculative) {
+  return CollideAnyPolygons(a, xfA, b, xfB, speculative);
 }
 
 Manifold Collide(const ShapeDef& a, Transform xfA, const ShapeDef& b, Transform xfB, Real speculative) {
@@ -243,8 +378,12 @@ void CollidePairs(const Bodies& bodies, const WorldDef& def, Real dt, std::span<
     const BodyVelocity& va = bodies.vel[a];
     const BodyVelocity& vb = bodies.vel[b];
     const Real sweep = def.effects.continuous ? dt : Real(0);
-    const Real spec = def.speculativeDistance +
-                      sweep * (Length(vb.v - va.v) + std::abs(va.w) * bodies.boundRadius[a] + std::abs(vb.w) * bodies.boundRadius[b]);
+    // Without continuous collision the sweep term is 0 (times a finite speed): not computed (a
+    // square root a pair).
+    const Real spec = sweep > 0 ? def.speculativeDistance +
+                                      sweep * (Length(vb.v - va.v) + std::abs(va.w) * bodies.boundRadius[a] +
+                                               std::abs(vb.w) * bodies.boundRadius[b])
+                                : def.speculativeDistance;
     // Bounding circles reject most AABB-overlapping pairs before any shape test.
     const Real reach = bodies.boundRadius[a] + bodies.boundRadius[b] + spec;
     if (LengthSquared(bodies.center[b] - bodies.center[a]) > reach * reach) continue;

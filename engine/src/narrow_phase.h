@@ -38,6 +38,9 @@ struct Manifold {
 Manifold CollideCircles(const Circle& a, Transform xfA, const Circle& b, Transform xfB, Real speculative);
 Manifold CollidePolygonAndCircle(const Polygon& a, Transform xfA, const Circle& b, Transform xfB, Real speculative);
 Manifold CollidePolygons(const Polygon& a, Transform xfA, const Polygon& b, Transform xfB, Real speculative);
+/// CollidePolygons by its general path (vertex counts read at run time, no SIMD), which the
+/// four-vertex pairs' SSE2 and AVX paths must match bit for bit: for the tests.
+Manifold CollidePolygonsGeneral(const Polygon& a, Transform xfA, const Polygon& b, Transform xfB, Real speculative);
 
 /// Dispatches on the shape types. For a circle A and polygon B it collides (B, A) and flips
 /// the normal so the result still points from A to B.

@@ -20,6 +20,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <atomic>
 #include <cstring>
 #include <type_traits>
 #include <vector>
@@ -84,6 +85,9 @@ inline bool Greater(Real a, Real b) { return a > b; }
 inline bool GreaterEqual(Real a, Real b) { return a >= b; }
 inline bool Less(Real a, Real b) { return a < b; }
 inline bool And(bool a, bool b) { return a && b; }
+inline bool AndNot(bool a, bool b) { return !a && b; }
+// mask ? x : +0.
+inline Real Masked(bool mask, Real x) { return mask ? x : Real(0); }
 inline bool Any(bool m) { return m; }
 inline Real Div(Real a, Real b) { return a / b; }
 inline Real Sqrt(Real a) { return std::sqrt(a); }
@@ -111,6 +115,8 @@ inline M4 Greater(F4 a, F4 b) { return {_mm_cmpgt_ps(a.v, b.v)}; }
 inline M4 GreaterEqual(F4 a, F4 b) { return {_mm_cmpge_ps(a.v, b.v)}; }
 inline M4 Less(F4 a, F4 b) { return {_mm_cmplt_ps(a.v, b.v)}; }
 inline M4 And(M4 a, M4 b) { return {_mm_and_ps(a.v, b.v)}; }
+inline M4 AndNot(M4 a, M4 b) { return {_mm_andnot_ps(a.v, b.v)}; }
+inline F4 Masked(M4 mask, F4 x) { return {_mm_and_ps(mask.v, x.v)}; }
 inline bool Any(M4 m) { return _mm_movemask_ps(m.v) != 0; }
 inline F4 Div(F4 a, F4 b) { return {_mm_div_ps(a.v, b.v)}; }
 inline F4 Sqrt(F4 a) { return {_mm_sqrt_ps(a.v)}; }
@@ -157,6 +163,11 @@ template <>
 }
 
 #if QUADRANT_SOFT_SIMD
+// Bit k set: lane k's inverse mass is not zero (the body moves and its state is written).
+[[gnu::always_inline]] inline int WrittenLanes(const Real* invMass) {
+  return _mm_movemask_ps(_mm_cmpneq_ps(_mm_load_ps(invMass), _mm_setzero_ps()));
+}
+
 template <>
 [[gnu::always_inline]] inline void Gather<F4>(const SolverBody* states, const int32_t* index, int, RowBodies<F4>& out) {
   const float* s0 = &states[index[0]].v.x;
@@ -183,20 +194,24 @@ template <>
   // be kept in a register through the row.
   __m128 r0 = in.vx.v, r1 = in.vy.v, r2 = in.w.v, r3 = _mm_setzero_ps();
   _MM_TRANSPOSE4_PS(r0, r1, r2, r3);
-  if (invMass[0] != 0) _mm_storeu_ps(&states[index[0]].v.x, r0);
-  if (invMass[1] != 0) _mm_storeu_ps(&states[index[1]].v.x, r1);
-  if (invMass[2] != 0) _mm_storeu_ps(&states[index[2]].v.x, r2);
-  if (invMass[3] != 0) _mm_storeu_ps(&states[index[3]].v.x, r3);
+  // Which lanes move (invMass != 0, NaN included as the scalar test has it), as one mask from the
+  // row's inverse masses (already in a register): four bit tests instead of four float compares.
+  const int moves = WrittenLanes(invMass);
+  if (moves & 1) _mm_storeu_ps(&states[index[0]].v.x, r0);
+  if (moves & 2) _mm_storeu_ps(&states[index[1]].v.x, r1);
+  if (moves & 4) _mm_storeu_ps(&states[index[2]].v.x, r2);
+  if (moves & 8) _mm_storeu_ps(&states[index[3]].v.x, r3);
 }
 template <>
 [[gnu::always_inline]] inline void ScatterMotion<F4>(SolverBody* states, const int32_t* index, const Real* invMass,
                                                      int, const RowBodies<F4>& in) {
   __m128 r0 = in.dpx.v, r1 = in.dpy.v, r2 = in.qc.v, r3 = in.qs.v;
   _MM_TRANSPOSE4_PS(r0, r1, r2, r3);
-  if (invMass[0] != 0) _mm_storeu_ps(&states[index[0]].dp.x, r0);
-  if (invMass[1] != 0) _mm_storeu_ps(&states[index[1]].dp.x, r1);
-  if (invMass[2] != 0) _mm_storeu_ps(&states[index[2]].dp.x, r2);
-  if (invMass[3] != 0) _mm_storeu_ps(&states[index[3]].dp.x, r3);
+  const int moves = WrittenLanes(invMass);
+  if (moves & 1) _mm_storeu_ps(&states[index[0]].dp.x, r0);
+  if (moves & 2) _mm_storeu_ps(&states[index[1]].dp.x, r1);
+  if (moves & 4) _mm_storeu_ps(&states[index[2]].dp.x, r2);
+  if (moves & 8) _mm_storeu_ps(&states[index[3]].dp.x, r3);
 }
 #endif
 
@@ -221,11 +236,15 @@ struct SoftSolveParams {
   Real invH = 0;
   Real pushMaxDepth = 0;     // WorldDef::contactPushMaxDepth
   Real pushMaxVelocity = 0;  // WorldDef::contactPushMaxVelocity
+  // A relax pass that computes the separations sets *deep (when given) if a point is deeper than
+  // deepBelow: solver_soft_step.cpp then knows whether its position pass can move anything.
+  std::atomic<bool>* deep = nullptr;
+  Real deepBelow = 0;
 };
 
 // Warm start: last sub-step's (or step's) accumulated impulses applied again.
 template <class V, bool kRotation>
-inline void WarmStartRows(SolverBody* states, SoftRowGroup& g, int lane) {
+[[gnu::always_inline]] inline void WarmStartRowsImpl(SolverBody* states, SoftRowGroup& g, int lane) {
   RowBodies<V> A, B;
   Gather<V>(states, g.a, lane, A);
   Gather<V>(states, g.b, lane, B);
@@ -248,11 +267,26 @@ inline void WarmStartRows(SolverBody* states, SoftRowGroup& g, int lane) {
   Scatter<V>(states, g.b, g.invMassB, lane, B);
 }
 
+// What a relax pass does with the speculative bias (sep > 0 ? sep / h : 0). The relax passes of
+// a sub-step all run at the same positions (nothing moves the bodies between them), so with two
+// or more the first computes it from the separation and stores it, and the later ones load it
+// and need neither the bodies' motion nor the separation: the same values, so the same bits.
+// Base-100 pyramid: the friction relax pass went from 593 to 471 instructions a group (callgrind).
+enum class RelaxBias { kCompute, kComputeAndStore, kLoad };
+
+// The relax bias store of a group: point k's lanes at [k * kLanes, k * kLanes + kLanes).
+struct alignas(16) RelaxBiasRows {
+  Real bias[2 * kLanes];
+};
+
 // One pass over the rows: with kBias the soft solve (push-out toward zero separation at a
 // bounded speed), without it the relax pass (rigid rows, no bias) and friction.
-// solver_soft_step.cpp says why each is as it is.
-template <class V, bool kRotation, bool kFriction, bool kBias>
-inline void SolveRows(SolverBody* states, SoftRowGroup& g, int lane, const SoftSolveParams& prm) {
+// solver_soft_step.cpp says why each is as it is. kRelax says where a relax pass takes its
+// speculative bias from (`cache`: this group's store; unused by the soft solve).
+template <class V, bool kRotation, bool kFriction, bool kBias, RelaxBias kRelax>
+[[gnu::always_inline]] inline void SolveRowsImpl(SolverBody* states, SoftRowGroup& g, int lane,
+                                                 const SoftSolveParams& prm, RelaxBiasRows* cache) {
+  static_assert(!kBias || kRelax == RelaxBias::kCompute);
   RowBodies<V> A, B;
   Gather<V>(states, g.a, lane, A);
   Gather<V>(states, g.b, lane, B);
@@ -261,31 +295,59 @@ inline void SolveRows(SolverBody* states, SoftRowGroup& g, int lane, const SoftS
   const V mA = Load(g.invMassA, lane, V{}), iA = Load(g.invIA, lane, V{});
   const V mB = Load(g.invMassB, lane, V{}), iB = Load(g.invIB, lane, V{});
   const V invH = Splat(prm.invH, V{});
+  // The separation of point k now: the prepared one plus the normal part of how far the anchors
+  // moved. A relax pass takes both points' first, so the bodies' motion is dead before the
+  // impulses (fewer registers spilled: 434 -> 418 instructions a group, the bias stores
+  // included); the soft solve, with more live values of its own, was 8 instructions a group slower
+  // so and takes each where it is used (511 -> 505 with the lambda).
   const V dpx = B.dpx - A.dpx, dpy = B.dpy - A.dpy;
+  auto separation = [&](int k) __attribute__((always_inline)) {
+    const SoftPointRows& p = g.p[k];
+    V dx = dpx, dy = dpy;
+    if constexpr (kRotation) {
+      const V rAx = Load(p.rAx, lane, V{}), rAy = Load(p.rAy, lane, V{});
+      const V rBx = Load(p.rBx, lane, V{}), rBy = Load(p.rBy, lane, V{});
+      dx += ((B.qc * rBx - B.qs * rBy) - rBx) - ((A.qc * rAx - A.qs * rAy) - rAx);
+      dy += ((B.qs * rBx + B.qc * rBy) - rBy) - ((A.qs * rAx + A.qc * rAy) - rAy);
+    }
+    return Load(p.separation, lane, V{}) + (nx * dx + ny * dy);
+  };
+  V sepK[2];
+  if constexpr (!kBias && kRelax != RelaxBias::kLoad) {
+    sepK[0] = separation(0);
+    sepK[1] = separation(1);
+    if (prm.deep != nullptr) {
+      const V below = Splat(prm.deepBelow, V{});
+      if (Any(Less(sepK[0], below)) || Any(Less(sepK[1], below))) prm.deep->store(true, std::memory_order_relaxed);
+    }
+  }
   for (int k = 0; k < 2; ++k) {
     SoftPointRows& p = g.p[k];
     const V rAx = Load(p.rAx, lane, V{}), rAy = Load(p.rAy, lane, V{});
     const V rBx = Load(p.rBx, lane, V{}), rBy = Load(p.rBy, lane, V{});
-    // The separation now: the prepared one plus the normal part of how far the anchors moved.
-    V dx = dpx, dy = dpy;
-    if constexpr (kRotation) {
-      dx += ((B.qc * rBx - B.qs * rBy) - rBx) - ((A.qc * rAx - A.qs * rAy) - rAx);
-      dy += ((B.qs * rBx + B.qc * rBy) - rBy) - ((A.qs * rAx + A.qc * rAy) - rAy);
-    }
-    const V sep = Load(p.separation, lane, V{}) + (nx * dx + ny * dy);
-    // Speculative (still apart): may close the gap within the sub-step, no more.
-    const auto apart = Greater(sep, zero);
-    V bias = Select(apart, sep * invH, zero), massScale = one, impulseScale = zero;
-    if constexpr (kBias) {
-      const V biasRate = Load(g.biasRate, lane, V{});
-      const V maxVel = Neg(Splat(prm.pushMaxVelocity, V{}));
-      const auto soft = GreaterEqual(sep, Neg(Splat(prm.pushMaxDepth, V{})));
-      // Soft down to the depth cap; deeper, a rigid row pushing at the cap's rate.
-      const V softBias = Max(biasRate * sep, maxVel);
-      const V rigidBias = Max(Neg(biasRate) * Splat(prm.pushMaxDepth, V{}), maxVel);
-      bias = Select(apart, bias, Select(soft, softBias, rigidBias));
-      massScale = Select(apart, one, Select(soft, Load(g.massScale, lane, V{}), one));
-      impulseScale = Select(apart, zero, Select(soft, Load(g.impulseScale, lane, V{}), zero));
+    V bias, massScale = one, impulseScale = zero;
+    if constexpr (kRelax == RelaxBias::kLoad) {
+      bias = Load(cache->bias + k * kLanes, lane, V{});
+    } else {
+      const V sep = kBias ? separation(k) : sepK[k];
+      // Speculative (still apart): may close the gap within the sub-step, no more.
+      const auto apart = Greater(sep, zero);
+      bias = Select(apart, sep * invH, zero);
+      if constexpr (kRelax == RelaxBias::kComputeAndStore) Store(cache->bias + k * kLanes, lane, bias);
+      if constexpr (kBias) {
+        const V biasRate = Load(g.biasRate, lane, V{});
+        const V maxVel = Neg(Splat(prm.pushMaxVelocity, V{}));
+        const auto soft = GreaterEqual(sep, Neg(Splat(prm.pushMaxDepth, V{})));
+        // Soft down to the depth cap; deeper, a rigid row pushing at the cap's rate.
+        const V softBias = Max(biasRate * sep, maxVel);
+        const V rigidBias = Max(Neg(biasRate) * Splat(prm.pushMaxDepth, V{}), maxVel);
+        bias = Select(apart, bias, Select(soft, softBias, rigidBias));
+        // A soft touching point takes the softness; apart or deep ones are rigid (scale 1, 0).
+        // One mask for both: the same values as selecting on apart, then soft.
+        const auto softTouching = AndNot(apart, soft);
+        massScale = Select(softTouching, Load(g.massScale, lane, V{}), one);
+        impulseScale = Masked(softTouching, Load(g.impulseScale, lane, V{}));
+      }
     }
     V dvx = B.vx - A.vx, dvy = B.vy - A.vy;
     if constexpr (kRotation) {
@@ -362,8 +424,8 @@ struct SoftPositionParams {
 // need a turn of 0.5 rad or more (the caller then solves the group one row at a time, where
 // IntegrateRot takes sin and cos); sets `moved` when a row moved something.
 template <class V, bool kRotation>
-inline bool SolvePositionRows(SolverBody* states, const SoftRowGroup& g, int lane, const SoftPositionParams& prm,
-                              bool& moved) {
+[[gnu::always_inline]] inline bool SolvePositionRowsImpl(SolverBody* states, const SoftRowGroup& g, int lane,
+                                                         const SoftPositionParams& prm, bool& moved) {
   RowBodies<V> A, B;
   Gather<V>(states, g.a, lane, A);
   Gather<V>(states, g.b, lane, B);
@@ -438,6 +500,89 @@ inline bool SolvePositionRows(SolverBody* states, const SoftRowGroup& g, int lan
   ScatterMotion<V>(states, g.a, g.invMassA, lane, A);
   ScatterMotion<V>(states, g.b, g.invMassB, lane, B);
   return true;
+}
+
+// ---- entry points and the AVX (VEX) encoding -----------------------------------------------------
+//
+// The kernels above are also compiled a second time for CPUs with AVX (gnu::target("avx")), called
+// with the lane tag F4Vex: the same four-wide SSE operations on the same data, in AVX's
+// three-operand encoding, which needs no register copies and spills less (16 xmm registers either
+// way). The arithmetic is the same instruction for instruction (no FMA: -ffp-contract=off, and
+// the target does not include it), so the state is the same bit for bit (SoftSimdTest, and the
+// whole engine built with -mavx2 gave the same pyramid hash). WorldDef::softSimd picks it when the
+// CPU has AVX (checked once, at run time); WorldDef::softVex = false keeps the SSE2 encoding.
+// Base-100 pyramid, callgrind, instructions a group of four rows (SSE2 -> AVX encoding): soft
+// solve 481 -> 330, first relax pass 404 -> 337, friction relax pass 453 -> 286, warm start 189 ->
+// 156; the step 36.6M -> 32.3M.
+#if QUADRANT_SOFT_SIMD && defined(__x86_64__) && defined(__GNUC__)
+#define QUADRANT_SOFT_VEX 1
+struct F4Vex {};
+
+inline bool CpuHasAvx() {
+  static const bool has = __builtin_cpu_supports("avx");
+  return has;
+}
+
+template <bool kRotation>
+[[gnu::target("avx"), gnu::noinline]] void WarmStartRowsVex(SolverBody* states, SoftRowGroup& g) {
+  WarmStartRowsImpl<F4, kRotation>(states, g, 0);
+}
+template <bool kRotation, bool kFriction, bool kBias, RelaxBias kRelax>
+[[gnu::target("avx"), gnu::noinline]] void SolveRowsVex(SolverBody* states, SoftRowGroup& g, const SoftSolveParams& prm,
+                                                         RelaxBiasRows* cache) {
+  SolveRowsImpl<F4, kRotation, kFriction, kBias, kRelax>(states, g, 0, prm, cache);
+}
+template <bool kRotation>
+[[gnu::target("avx"), gnu::noinline]] bool SolvePositionRowsVex(SolverBody* states, const SoftRowGroup& g,
+                                                                 const SoftPositionParams& prm, bool& moved) {
+  return SolvePositionRowsImpl<F4, kRotation>(states, g, 0, prm, moved);
+}
+#else
+#define QUADRANT_SOFT_VEX 0
+struct F4Vex {};  // never passed: no AVX path in this build
+inline bool CpuHasAvx() { return false; }
+#endif
+
+// The kernels by lane type V: Real (one row), F4 (four, SSE2) or F4Vex (four, AVX encoding).
+template <class V, bool kRotation>
+inline void WarmStartRows(SolverBody* states, SoftRowGroup& g, int lane) {
+#if QUADRANT_SOFT_VEX
+  if constexpr (std::is_same_v<V, F4Vex>) {
+    WarmStartRowsVex<kRotation>(states, g);
+    return;
+  } else
+#endif
+  {
+    if constexpr (!std::is_same_v<V, F4Vex>) WarmStartRowsImpl<V, kRotation>(states, g, lane);
+  }
+}
+
+template <class V, bool kRotation, bool kFriction, bool kBias, RelaxBias kRelax = RelaxBias::kCompute>
+inline void SolveRows(SolverBody* states, SoftRowGroup& g, int lane, const SoftSolveParams& prm,
+                      RelaxBiasRows* cache = nullptr) {
+#if QUADRANT_SOFT_VEX
+  if constexpr (std::is_same_v<V, F4Vex>) {
+    SolveRowsVex<kRotation, kFriction, kBias, kRelax>(states, g, prm, cache);
+    return;
+  } else
+#endif
+  {
+    if constexpr (!std::is_same_v<V, F4Vex>) SolveRowsImpl<V, kRotation, kFriction, kBias, kRelax>(states, g, lane, prm, cache);
+  }
+}
+
+template <class V, bool kRotation>
+inline bool SolvePositionRows(SolverBody* states, const SoftRowGroup& g, int lane, const SoftPositionParams& prm,
+                              bool& moved) {
+#if QUADRANT_SOFT_VEX
+  if constexpr (std::is_same_v<V, F4Vex>) {
+    return SolvePositionRowsVex<kRotation>(states, g, prm, moved);
+  } else
+#endif
+  {
+    if constexpr (!std::is_same_v<V, F4Vex>) return SolvePositionRowsImpl<V, kRotation>(states, g, lane, prm, moved);
+    return false;
+  }
 }
 
 }  // namespace quadrant

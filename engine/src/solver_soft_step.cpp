@@ -110,7 +110,15 @@ class SoftStepSolver final : public ContactSolverBase {
     auto t0 = Clock::now();
     Color(run, ctx);
     const int m = static_cast<int>(constraints_.size());
-    run.For(Stage::kSolve, m, run.MinHeavyItems(), [&](int b, int e, int) { Prepare<kRotation>(ctx, b, e); });
+    contacts_ = ctx.contacts;
+    inv_ = bodies.inv.data();
+    // Without restitution nothing but the rows reads a prepared constraint: each is prepared into
+    // a local one as its row is built (BuildRows), and the list of constraints (144 bytes each,
+    // written and read back once a step) is not kept. The restitution passes need the list.
+    const bool lean = !def.effects.restitution;
+    if (!lean) {
+      run.For(Stage::kSolve, m, run.MinHeavyItems(), [&](int b, int e, int) { Prepare<kRotation, true>(ctx, b, e); });
+    }
     SnapshotPositions(run, bodies);
     const bool box2dRestitution = def.effects.restitution && def.restitution == RestitutionPolicy::kBox2d;
     if (def.effects.restitution && !box2dRestitution) {
@@ -120,14 +128,34 @@ class SoftStepSolver final : public ContactSolverBase {
     // The sub-steps run on the compact solver state (velocity and motion since the step began,
     // 32 bytes a body) and on the rows in groups of four (soft_rows.h), not on the body arrays
     // and the constraints.
-    if (def.softMassRatioLimit > 0) MarkSupported(run, bodies.Count());
-    BuildRows(run, soft, staticSoft, def.softMassRatioLimit);
-    if (def.softMassRatioLimit > 0) ClearSupported(run);
     auto ti = Clock::now();
-    LoadStates(run, bodies, def.effects.sleep);
+    LoadFixedStates(run, bodies, def.effects.sleep);
+    integrateMs += Ms(ti, Clock::now());
+    MarkRows(run, bodies.Count(), def.softMassRatioLimit > 0);
+    lean ? BuildRows<kRotation, true>(ctx, soft, staticSoft, def.softMassRatioLimit)
+         : BuildRows<kRotation, false>(ctx, soft, staticSoft, def.softMassRatioLimit);
+    ti = Clock::now();
+    LoadStates(run, bodies);
     integrateMs += Ms(ti, Clock::now());
     const SoftSolveParams prm{invH, def.contactPushMaxDepth, def.contactPushMaxVelocity};
+    // Whether the position pass can move anything (CorrectStatePositions): the last sub-step's
+    // first relax pass sees every point's separation at the step's final positions, and without
+    // restitution nothing moves the bodies after it (the bounce shifts and Box2D's restitution
+    // do). A point is counted deep below -contactPushMaxDepth + kDeepMargin: the position pass
+    // computes the same separation in another order of operations, which differs by far less
+    // (a few float ulps of the anchors and the motion, about 1e-6 m), so with no deep point it
+    // moves nothing, and skipping it gives the same bits. Base-100 pyramid: its one pass over
+    // the rows found nothing to move every step (0.98M instructions a step).
+    std::atomic<bool> deep{false};
+    const bool maySkipPositions = !def.effects.restitution;
+    constexpr Real kDeepMargin = Real(1e-4);
+    SoftSolveParams lastPrm = prm;
+    if (maySkipPositions) {
+      lastPrm.deep = &deep;
+      lastPrm.deepBelow = -def.contactPushMaxDepth + kDeepMargin;
+    }
     const bool simd = def.softSimd;
+    vex_ = simd && def.softVex && CpuHasAvx();  // soft_rows.h: the same operations in AVX's encoding
     // Each sub-step is one region of stages (TaskSystem::ParallelStages): gravity, the warm start
     // and the soft solve colour by colour, the positions, the relax passes colour by colour; the
     // threads go from stage to stage inside one job instead of one hand-over per pass (base-100
@@ -151,15 +179,22 @@ class SoftStepSolver final : public ContactSolverBase {
       // bound it. Base-100 pyramid: 44.7M -> 43.2M instructions a step, and the 16 hard cases hold
       // as with friction in both (tall_stack top 0.034 m; with friction in the first pass only
       // 0.051 m, which fails).
-      for (int it = 0; it < def.softRelaxIterations; ++it) {
-        if (it == def.softRelaxIterations - 1 || def.softFrictionEveryRelaxPass) {
-          ForEachGroup(run, simd, [&](auto lanes, SoftRowGroup& g, int lane) {
-            SolveRows<decltype(lanes), kRotation, kFriction, false>(states_.data(), g, lane, prm);
-          });
+      //
+      // With two or more relax passes the first stores each point's speculative bias and the later
+      // ones load it (soft_rows.h, RelaxBias, says why).
+      const int relax = def.softRelaxIterations;
+      const SoftSolveParams& firstPrm = sub == n - 1 ? lastPrm : prm;  // the first pass looks for deep points
+      for (int it = 0; it < relax; ++it) {
+        if (relax == 1) {
+          RelaxPass<kRotation, kFriction, RelaxBias::kCompute>(run, simd, firstPrm);
+        } else if (it == 0) {
+          def.softFrictionEveryRelaxPass
+              ? RelaxPass<kRotation, kFriction, RelaxBias::kComputeAndStore>(run, simd, firstPrm)
+              : RelaxPass<kRotation, false, RelaxBias::kComputeAndStore>(run, simd, firstPrm);
+        } else if (it == relax - 1 || def.softFrictionEveryRelaxPass) {
+          RelaxPass<kRotation, kFriction, RelaxBias::kLoad>(run, simd, prm);
         } else {
-          ForEachGroup(run, simd, [&](auto lanes, SoftRowGroup& g, int lane) {
-            SolveRows<decltype(lanes), kRotation, false, false>(states_.data(), g, lane, prm);
-          });
+          RelaxPass<kRotation, false, RelaxBias::kLoad>(run, simd, prm);
         }
       }
       EndRegion(run);
@@ -169,15 +204,30 @@ class SoftStepSolver final : public ContactSolverBase {
     // Overlap deeper than the soft contacts push out (contactPushMaxDepth) is moved out here, by pgs's
     // position pass (on the solver states): positions change, velocities do not, so deep overlap
     // cannot fling bodies.
-    if (m > 0) CorrectStatePositions<kRotation>(run, def, simd);
+    if (m > 0 && (!maySkipPositions || deep.load(std::memory_order_relaxed))) {
+      CorrectStatePositions<kRotation>(run, def, simd);
+    }
     ti = Clock::now();
     StoreStates(run, bodies, def, ctx.dt);
     integrateMs += Ms(ti, Clock::now());
-    StoreRowImpulses(run);
-    run.For(Stage::kSolve, m, run.MinHeavyItems(), [&](int b, int e, int) { StoreImpulses(ctx.contacts, b, e); });
+    if (lean) {
+      StoreRowImpulses<true>(run);
+    } else {
+      StoreRowImpulses<false>(run);
+      run.For(Stage::kSolve, m, run.MinHeavyItems(), [&](int b, int e, int) { StoreImpulses(ctx.contacts, b, e); });
+    }
     const double total = Ms(t0, Clock::now());
     ctx.profile->integrate += integrateMs;
     ctx.profile->solve += total - integrateMs;
+  }
+
+  // One relax pass over the rows (Run says which), queued in the sub-step's region.
+  template <bool kRotation, bool kFriction, RelaxBias kRelax>
+  void RelaxPass(StageRunner& run, bool simd, const SoftSolveParams& prm) {
+    ForEachGroup(run, simd, [this, prm](auto lanes, SoftRowGroup& g, int lane) {
+      RelaxBiasRows* cache = kRelax == RelaxBias::kCompute ? nullptr : &relaxBias_[&g - groups_.data()];
+      SolveRows<decltype(lanes), kRotation, kFriction, false, kRelax>(states_.data(), g, lane, prm, cache);
+    });
   }
 
   // The rows in groups of four, colour by colour (a colour's last group padded), from the
@@ -188,13 +238,19 @@ class SoftStepSolver final : public ContactSolverBase {
   // carries its impulse into the next sub-step. With friction in both passes the 15-box stack's
   // top crept 0.014 m in 9 s and slowly toppled (worse at 8 and 16 sub-steps, with less
   // numerical damping: 0.14-0.17 m); with friction in the relax pass only it moves 0.0003 m.
-  void BuildRows(StageRunner& run, const Softness& soft, const Softness& staticSoft, Real massLimit) {
+  //
+  // kLean: each constraint is prepared here into a local one (Run says when) instead of read from
+  // the prepared list; the same arithmetic, so the same rows.
+  template <bool kRotation, bool kLean>
+  void BuildRows(StepContext& ctx, const Softness& soft, const Softness& staticSoft, Real massLimit) {
+    StageRunner& run = *ctx.run;
     groupStart_.assign(kColors + 2, 0);
     for (int k = 0; k <= kColors; ++k) {
       const int count = colorStart_[k + 1] - colorStart_[k];
       groupStart_[k + 1] = groupStart_[k] + (count + kLanes - 1) / kLanes;
     }
     groups_.resize(groupStart_[kColors + 1]);
+    relaxBias_.resize(groups_.size());
     // One region, a stage per colour (the groups are independent; a stage tells its groups their
     // colour): one hand-over instead of one per colour (ForEachColor).
     stagePlan_.clear();
@@ -214,6 +270,10 @@ class SoftStepSolver final : public ContactSolverBase {
             const int c = colorStart_[k] + (gi - begin) * kLanes + lane;
             if (c >= colorStart_[k + 1]) {
               PadLane(g, lane);
+              continue;
+            }
+            if constexpr (kLean) {
+              FillLeanLane<kRotation>(ctx, g, lane, c, soft, staticSoft, massLimit);
               continue;
             }
             const ContactConstraint& cc = constraints_[c];
@@ -240,12 +300,12 @@ class SoftStepSolver final : public ContactSolverBase {
             // momentum, and a 1:100 head-on hit came out wrong).
             bool limited = false;
             if (massLimit > 0 && cc.invMassA > 0 && cc.invMassB > 0) {
-              if (cc.invMassA > massLimit * cc.invMassB && supported_[cc.a]) {
+              if (cc.invMassA > massLimit * cc.invMassB && supported_[cc.a] == stamp_) {
                 const Real f = massLimit * cc.invMassB / cc.invMassA;
                 g.invMassA[lane] *= f;
                 g.invIA[lane] *= f;
                 limited = true;
-              } else if (cc.invMassB > massLimit * cc.invMassA && supported_[cc.b]) {
+              } else if (cc.invMassB > massLimit * cc.invMassA && supported_[cc.b] == stamp_) {
                 const Real f = massLimit * cc.invMassA / cc.invMassB;
                 g.invMassB[lane] *= f;
                 g.invIB[lane] *= f;
@@ -290,26 +350,128 @@ class SoftStepSolver final : public ContactSolverBase {
     });
   }
 
-  // supported_[i] = 1 for every dynamic body with a contact against a static or kinematic one
-  // (WorldDef::softMassRatioLimit acts only on those). Colour by colour: no two constraints of a
-  // colour share a dynamic body, so no two threads write one flag.
-  void MarkSupported(StageRunner& run, int bodyCount) {
-    supported_.resize(bodyCount, 0);  // all zero between steps
-    ForEachColor(run, [&](int b, int e) {
-      for (int c = b; c < e; ++c) {
-        const ContactConstraint& cc = constraints_[c];
-        if (cc.invMassA > 0 && cc.invMassB == 0) supported_[cc.a] = 1;
-        if (cc.invMassB > 0 && cc.invMassA == 0) supported_[cc.b] = 1;
+  // BuildRows' lane for constraint c straight from its contact (the lean path: Run says when),
+  // with PrepareContact's arithmetic and then BuildRows' own, expression for expression, so the
+  // same row bit for bit; without the constraint in between (base-100 pyramid: BuildRows 293 ->
+  // 257 instructions a contact, the lane 237 of them).
+  template <bool kRotation>
+  void FillLeanLane(const StepContext& ctx, SoftRowGroup& g, int lane, int c, const Softness& soft,
+                    const Softness& staticSoft, Real massLimit) {
+    const Bodies& bodies = *ctx.bodies;
+    const Contact& contact = contacts_[order_[c]];
+    const int a = contact.a, b = contact.b;
+    const Vec2 n = contact.manifold.normal;
+    const Real invMassA = inv_[a].invMass, invMassB = inv_[b].invMass;
+    const Real invIA = kRotation ? inv_[a].invInertia : Real(0), invIB = kRotation ? inv_[b].invInertia : Real(0);
+    g.a[lane] = a;
+    g.b[lane] = b;
+    g.constraint[lane] = c;
+    g.nx[lane] = n.x;
+    g.ny[lane] = n.y;
+    g.friction[lane] = contact.friction;
+    Real mA = invMassA, iA = invIA, mB = invMassB, iB = invIB;
+    // WorldDef::softMassRatioLimit, as BuildRows says.
+    bool limited = false;
+    if (massLimit > 0 && invMassA > 0 && invMassB > 0) {
+      if (invMassA > massLimit * invMassB && supported_[a] == stamp_) {
+        const Real f = massLimit * invMassB / invMassA;
+        mA *= f;
+        iA *= f;
+        limited = true;
+      } else if (invMassB > massLimit * invMassA && supported_[b] == stamp_) {
+        const Real f = massLimit * invMassA / invMassB;
+        mB *= f;
+        iB *= f;
+        limited = true;
       }
-    });
+    }
+    g.invMassA[lane] = mA;
+    g.invIA[lane] = iA;
+    g.invMassB[lane] = mB;
+    g.invIB[lane] = iB;
+    const Softness& s = (invMassA == 0 || invMassB == 0) ? staticSoft : soft;
+    g.biasRate[lane] = s.biasRate;
+    g.massScale[lane] = s.massScale;
+    g.impulseScale[lane] = s.impulseScale;
+    const Real skin = ctx.def->polygonSkin > 0 ? PolygonSkin(*ctx.def, bodies.shape[a].type == ShapeType::kPolygon,
+                                                             bodies.shape[b].type == ShapeType::kPolygon)
+                                               : Real(0);
+    const Vec2 t = RightPerp(n);
+    const int count = contact.manifold.pointCount;
+    for (int pt = 0; pt < 2; ++pt) {
+      SoftPointRows& p = g.p[pt];
+      if (pt >= count) {
+        PadPoint(p, lane);
+        continue;
+      }
+      const ManifoldPoint& mp = contact.manifold.points[pt];
+      const Vec2 rA = mp.point - bodies.center[a];
+      const Vec2 rB = mp.point - bodies.center[b];
+      p.rAx[lane] = rA.x;
+      p.rAy[lane] = rA.y;
+      p.rBx[lane] = rB.x;
+      p.rBy[lane] = rB.y;
+      Real kn, kt;
+      if (!limited) {  // PrepareContact's
+        kn = invMassA + invMassB;
+        kt = kn;
+        if constexpr (kRotation) {
+          const Real rnA = Cross(rA, n), rnB = Cross(rB, n);
+          const Real rtA = Cross(rA, t), rtB = Cross(rB, t);
+          kn += invIA * rnA * rnA + invIB * rnB * rnB;
+          kt += invIA * rtA * rtA + invIB * rtB * rtB;
+        }
+      } else {  // BuildRows' for a limited contact
+        const Real rnA = Cross(rA, n), rnB = Cross(rB, n);
+        const Real rtA = Cross(rA, t), rtB = Cross(rB, t);
+        kn = mA + mB + iA * rnA * rnA + iB * rnB * rnB;
+        kt = mA + mB + iA * rtA * rtA + iB * rtB * rtB;
+      }
+      p.normalMass[lane] = kn > 0 ? Real(1) / kn : Real(0);
+      p.tangentMass[lane] = kt > 0 ? Real(1) / kt : Real(0);
+      p.separation[lane] = mp.separation - skin;
+      p.normalImpulse[lane] = mp.normalImpulse;
+      p.tangentImpulse[lane] = mp.tangentImpulse;
+      p.collisionImpulse[lane] = Real(0) * collisionShare_;  // no collisions without restitution
+    }
   }
 
-  void ClearSupported(StageRunner& run) {
+  // Constraint c's bodies and inverse masses, read from its contact and the bodies (the prepared
+  // constraint holds the same, but is not kept in the lean path: Run says when).
+  struct RowEnds {
+    int a, b;
+    Real invMassA, invMassB;
+  };
+  RowEnds Ends(int c) const {
+    const Contact& contact = contacts_[order_[c]];
+    return {contact.a, contact.b, inv_[contact.a].invMass, inv_[contact.b].invMass};
+  }
+
+  // One pass over the rows' ends, colour by colour (no two rows of a colour share a dynamic body,
+  // so no two threads write one flag): inRows_[i] = 1 for every dynamic body in a row (LoadStates
+  // says what for; LoadFixedStates has cleared the flags and set the kinematic ones), and, with
+  // `supported`, supported_[i] = stamp_ for every dynamic body with a contact against a static or
+  // kinematic one (WorldDef::softMassRatioLimit acts only on those). The stamp changes every step,
+  // so the flags need no clearing pass; base-100 pyramid: the two marking passes and the clearing
+  // one were 0.69M instructions a step, this one 0.34M.
+  void MarkRows(StageRunner& run, int bodyCount, bool supported) {
+    if (supported) {
+      supported_.resize(bodyCount, 0);
+      if (++stamp_ == 0) {  // wrapped (after 2^32 steps): no flag may hold the new stamp
+        std::fill(supported_.begin(), supported_.end(), 0u);
+        stamp_ = 1;
+      }
+    }
+    const uint32_t stamp = stamp_;
     ForEachColor(run, [&](int b, int e) {
       for (int c = b; c < e; ++c) {
-        const ContactConstraint& cc = constraints_[c];
-        if (cc.invMassA > 0) supported_[cc.a] = 0;  // only dynamic bodies were marked (and only
-        if (cc.invMassB > 0) supported_[cc.b] = 0;  // they are this colour's own)
+        const RowEnds cc = Ends(c);
+        if (cc.invMassA > 0) inRows_[cc.a] = 1;
+        if (cc.invMassB > 0) inRows_[cc.b] = 1;
+        if (supported) {
+          if (cc.invMassA > 0 && cc.invMassB == 0) supported_[cc.a] = stamp;
+          if (cc.invMassB > 0 && cc.invMassA == 0) supported_[cc.b] = stamp;
+        }
       }
     });
   }
@@ -353,7 +515,11 @@ class SoftStepSolver final : public ContactSolverBase {
     auto rows = [&](int gb, int ge) {
 #if QUADRANT_SOFT_SIMD
       if (simd) {
-        for (int gi = gb; gi < ge; ++gi) fn(F4{}, groups_[gi], 0);
+        if (vex_) {
+          for (int gi = gb; gi < ge; ++gi) fn(F4Vex{}, groups_[gi], 0);
+        } else {
+          for (int gi = gb; gi < ge; ++gi) fn(F4{}, groups_[gi], 0);
+        }
         return;
       }
 #else
@@ -520,6 +686,8 @@ class SoftStepSolver final : public ContactSolverBase {
 
   // The accumulated impulses back into the constraints (StoreImpulses keeps them for the next
   // step's warm start).
+  // kLean: straight into the contacts' manifolds (no constraint list: Run says when).
+  template <bool kLean>
   void StoreRowImpulses(StageRunner& run) {
     const int count = static_cast<int>(groups_.size());
     run.For(Stage::kSolve, count, std::max(1, run.MinHeavyItems() / kLanes), [&](int gb, int ge, int) {
@@ -527,6 +695,14 @@ class SoftStepSolver final : public ContactSolverBase {
         const SoftRowGroup& g = groups_[gi];
         for (int lane = 0; lane < kLanes; ++lane) {
           if (g.constraint[lane] < 0) continue;
+          if constexpr (kLean) {
+            Manifold& mf = contacts_[order_[g.constraint[lane]]].manifold;
+            for (int pt = 0; pt < mf.pointCount; ++pt) {
+              mf.points[pt].normalImpulse = g.p[pt].normalImpulse[lane];
+              mf.points[pt].tangentImpulse = g.p[pt].tangentImpulse[lane];
+            }
+            continue;
+          }
           ContactConstraint& cc = constraints_[g.constraint[lane]];
           for (int pt = 0; pt < cc.pointCount; ++pt) {
             cc.points[pt].normalImpulse = g.p[pt].normalImpulse[lane];
@@ -542,7 +718,9 @@ class SoftStepSolver final : public ContactSolverBase {
   // row, and every kinematic body (rows read its motion, and a colour may share it, so it is not
   // marked from the rows). The rest are free: nothing acts on them but gravity within the step,
   // and StoreStates moves them over the whole step at once.
-  void LoadStates(StageRunner& run, const Bodies& bodies, bool sleep) {
+  // First the bodies that rows read but never write (inverse mass 0: static, kinematic, sleeping),
+  // with the flags cleared (kinematic ones set); MarkRows then flags the dynamic bodies in rows.
+  void LoadFixedStates(StageRunner& run, const Bodies& bodies, bool sleep) {
     const int count = bodies.Count();
     states_.resize(count);
     inRows_.resize(count + kFlagPad);  // padded: the scans below read several flags at a time
@@ -569,15 +747,11 @@ class SoftStepSolver final : public ContactSolverBase {
       }
     });
     for (int k = 0; k < kFlagPad; ++k) inRows_[count + k] = 0;
-    // Colour by colour: no two rows of a colour share a dynamic body, so no two threads write
-    // one flag.
-    ForEachColor(run, [&](int b, int e) {
-      for (int c = b; c < e; ++c) {
-        const ContactConstraint& cc = constraints_[c];
-        if (cc.invMassA > 0) inRows_[cc.a] = 1;
-        if (cc.invMassB > 0) inRows_[cc.b] = 1;
-      }
-    });
+  }
+
+  // After MarkRows: the list of the bodies in rows and their states.
+  void LoadStates(StageRunner& run, const Bodies& bodies) {
+    const int count = bodies.Count();
     // The bodies the sub-steps integrate, in index order (so in the same order on any thread
     // count; each body's operations are its own, so the order changes no bit anyway). The sub-step
     // passes and StoreStates walk this list instead of every body: on the sparse stress scenes
@@ -587,16 +761,21 @@ class SoftStepSolver final : public ContactSolverBase {
     // 49.94M instructions (pgs 46.30M); polygon stress 101.25M -> 93.62M (pgs 88.48M); base-100
     // pyramid, 10 steps, 430.35M -> 431.53M. What is left over pgs is mostly MoveFour's own arithmetic (about 66 instructions a
     // free body a step, kept operation for operation so the bits stay).
-    active_.clear();
-    active_.reserve(count);
+    // Written through a pointer into a list sized for every body (push_back was 23 instructions a
+    // body in the base-100 pyramid), then cut to length.
+    active_.resize(count);
+    int* out = active_.data();
+    int listed = 0;
     for (int i = 0; i < count; i += 8) {
       uint64_t eight;
       std::memcpy(&eight, &inRows_[i], sizeof eight);
       if (eight == 0) continue;
       for (int k = i; k < i + 8 && k < count; ++k) {
-        if (inRows_[k]) active_.push_back(k);
+        out[listed] = k;
+        listed += inRows_[k] != 0;
       }
     }
+    active_.resize(listed);
     run.For(Stage::kIntegrate, ActiveCount(), run.MinItems(), [&](int b, int e, int) {
       for (int k = b; k < e; ++k) {
         const int i = active_[k];
@@ -663,7 +842,9 @@ class SoftStepSolver final : public ContactSolverBase {
       if (simd) {
         for (; k + kLanes <= e; k += kLanes) {
           const int* idx = &active_[k];
-          if (!IntegrateFour(bodies, idx, sleep, rotation, h, maxSpeed2, maxLinearSpeed, maxAngularSpeed)) {
+          const bool done = vex_ ? IntegrateFourVex(bodies, idx, sleep, rotation, h, maxSpeed2, maxLinearSpeed, maxAngularSpeed)
+                                 : IntegrateFour(bodies, idx, sleep, rotation, h, maxSpeed2, maxLinearSpeed, maxAngularSpeed);
+          if (!done) {
             for (int l = 0; l < kLanes; ++l) {
               IntegrateOne(bodies, idx[l], sleep, rotation, h, maxSpeed2, maxLinearSpeed, maxAngularSpeed);
             }
@@ -697,7 +878,21 @@ class SoftStepSolver final : public ContactSolverBase {
 #if QUADRANT_SOFT_SIMD
   // Bodies idx[0..3] (distinct); returns false, having written nothing, if one of them turns by 0.5 rad or
   // more in the sub-step (IntegrateRot takes sin and cos there).
-  bool IntegrateFour(const Bodies& bodies, const int* idx, bool sleep, bool rotation, Real h, Real maxSpeed2,
+  // The same in AVX's encoding (soft_rows.h says why; the same operations, the same bits).
+#if QUADRANT_SOFT_VEX
+  [[gnu::target("avx"), gnu::noinline]] bool IntegrateFourVex(const Bodies& bodies, const int* idx, bool sleep,
+                                                               bool rotation, Real h, Real maxSpeed2, Real maxSpeed,
+                                                               Real maxAngularSpeed) {
+    return IntegrateFour(bodies, idx, sleep, rotation, h, maxSpeed2, maxSpeed, maxAngularSpeed);
+  }
+#else
+  bool IntegrateFourVex(const Bodies& bodies, const int* idx, bool sleep, bool rotation, Real h, Real maxSpeed2,
+                        Real maxSpeed, Real maxAngularSpeed) {
+    return IntegrateFour(bodies, idx, sleep, rotation, h, maxSpeed2, maxSpeed, maxAngularSpeed);
+  }
+#endif
+
+  [[gnu::always_inline]] bool IntegrateFour(const Bodies& bodies, const int* idx, bool sleep, bool rotation, Real h, Real maxSpeed2,
                      Real maxSpeed, Real maxAngularSpeed) {
     float* s[kLanes] = {&states_[idx[0]].v.x, &states_[idx[1]].v.x, &states_[idx[2]].v.x, &states_[idx[3]].v.x};
     __m128 a0 = _mm_loadu_ps(s[0]), a1 = _mm_loadu_ps(s[1]), a2 = _mm_loadu_ps(s[2]), a3 = _mm_loadu_ps(s[3]);
@@ -760,7 +955,7 @@ class SoftStepSolver final : public ContactSolverBase {
             const bool moves = sleep ? awake[i + k] != 0 : type[i + k] != BodyType::kStatic;
             mask |= int(moves & (inRows[i + k] == 0)) << k;
           }
-          if (mask == 0 || MoveFour(bodies, fm, i, mask)) continue;
+          if (mask == 0 || (vex_ ? MoveFourVex(bodies, fm, i, mask) : MoveFour(bodies, fm, i, mask))) continue;
           for (int k = 0; k < kLanes; ++k) {
             if (mask >> k & 1) MoveFree(bodies, fm, i + k);
           }
@@ -862,7 +1057,15 @@ class SoftStepSolver final : public ContactSolverBase {
   // when a body needs the speed limit or turns by 0.5 rad or more in the step: the caller then
   // moves the four one by one. Why: MoveFree was the largest of the per-body passes on the sparse
   // stress scenes (circle stress N = 4000: 7.9M of the 57.3M instructions of 20 steps).
-  bool MoveFour(Bodies& bodies, const FreeMotion& fm, int i, int mask) {
+#if QUADRANT_SOFT_VEX
+  [[gnu::target("avx"), gnu::noinline]] bool MoveFourVex(Bodies& bodies, const FreeMotion& fm, int i, int mask) {
+    return MoveFour(bodies, fm, i, mask);  // in AVX's encoding: the same operations, the same bits
+  }
+#else
+  bool MoveFourVex(Bodies& bodies, const FreeMotion& fm, int i, int mask) { return MoveFour(bodies, fm, i, mask); }
+#endif
+
+  [[gnu::always_inline]] bool MoveFour(Bodies& bodies, const FreeMotion& fm, int i, int mask) {
     const BodyVelocity* vel = bodies.vel.data() + i;
     F4 ux{_mm_setr_ps(vel[0].v.x, vel[1].v.x, vel[2].v.x, vel[3].v.x)};
     F4 uy{_mm_setr_ps(vel[0].v.y, vel[1].v.y, vel[2].v.y, vel[3].v.y)};
@@ -991,7 +1194,11 @@ class SoftStepSolver final : public ContactSolverBase {
     regionFns_.emplace_back([this, simd, fn, overflow](int gb, int ge) mutable {
 #if QUADRANT_SOFT_SIMD
       if (simd && gb < overflow) {
-        for (int gi = gb; gi < ge; ++gi) fn(F4{}, groups_[gi], 0);
+        if (vex_) {
+          for (int gi = gb; gi < ge; ++gi) fn(F4Vex{}, groups_[gi], 0);
+        } else {
+          for (int gi = gb; gi < ge; ++gi) fn(F4{}, groups_[gi], 0);
+        }
         return;
       }
 #else
@@ -1020,10 +1227,15 @@ class SoftStepSolver final : public ContactSolverBase {
   std::vector<int> regionFirst_, regionPass_;
   std::vector<std::function<void(int, int)>> regionFns_;
   std::vector<int> active_;      // the bodies with inRows_ set, ascending
-  std::vector<uint8_t> supported_;
+  std::vector<uint32_t> supported_;  // MarkRows: stamp_ for a supported body this step
+  uint32_t stamp_ = 0;
   Real collisionShare_ = 1;  // a sub-step's share of the step's collision impulses (Run says why)
   std::vector<SolverBody> states_;
   std::vector<SoftRowGroup> groups_;
+  bool vex_ = false;  // the four-wide kernels in AVX's encoding (Run)
+  std::span<Contact> contacts_;           // this step's (Run)
+  const BodyInverseMass* inv_ = nullptr;  // this step's bodies' (Run)
+  std::vector<RelaxBiasRows> relaxBias_;  // per group: the relax passes' speculative bias (RelaxBias)
   std::vector<int> groupStart_;
 };
 

@@ -1,6 +1,8 @@
 // soft_step's four-wide row kernel (soft_rows.h) against its one-row path: the same state bit
 // for bit, on a pile with two-point and one-point manifolds, static, kinematic and dynamic
-// bodies, at 1 and 3 threads with parallel sections that really run in parallel.
+// bodies, at 1 and 3 threads with parallel sections that really run in parallel; and the
+// four-wide kernels in SSE2's and in AVX's encoding (WorldDef::softVex; the AVX one runs only on a
+// CPU with AVX, so on one without it the two runs below are the same path).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -14,10 +16,11 @@
 namespace quadrant {
 namespace {
 
-uint64_t RunPile(bool simd, int threads) {
+uint64_t RunPile(bool simd, int threads, bool vex = true) {
   WorldDef def;
   def.solver = SolverType::kSoftStep;
   def.softSimd = simd;
+  def.softVex = vex;
   def.threadCount = threads;
   def.minParallelItems = 8;  // split every section that has 8 items: colours run on several threads
   World world(def);
@@ -60,6 +63,40 @@ TEST(SoftSimdTest, FourWideAndOneRowPathsGiveTheSameState) {
   EXPECT_EQ(RunPile(true, 1), scalar);
   EXPECT_EQ(RunPile(false, 3), scalar);
   EXPECT_EQ(RunPile(true, 3), scalar);
+  EXPECT_EQ(RunPile(true, 1, false), scalar);
+  EXPECT_EQ(RunPile(true, 3, false), scalar);
+}
+
+// The position pass and the restitution passes run on this pile too (restitution on, deep
+// overlap at the start): the AVX-encoded position kernel against SSE2's and the one-row path.
+TEST(SoftSimdTest, AvxEncodingGivesTheSameStateAsSse2WithOverlapAndBounces) {
+  auto run = [](bool simd, bool vex) {
+    WorldDef def;
+    def.solver = SolverType::kSoftStep;
+    def.softSimd = simd;
+    def.softVex = vex;
+    def.threadCount = 2;
+    def.minParallelItems = 8;
+    World world(def);
+    BodyDef ground;
+    ground.position = {0, -0.5f};
+    ground.shape = ShapeDef::Box(20, 0.5f);
+    world.CreateBody(ground);
+    for (int i = 0; i < 60; ++i) {  // spawned 0.2 m into each other: the position pass acts
+      BodyDef b;
+      b.type = BodyType::kDynamic;
+      b.position = {Real(i % 10) * 0.8f - 4, 0.45f + Real(i / 10) * 0.8f};
+      b.angle = 0.05f * Real(i % 7);
+      b.shape = ShapeDef::Box(0.5f, 0.5f);
+      b.shape.restitution = i % 4 == 0 ? 0.6f : 0.0f;
+      world.CreateBody(b);
+    }
+    for (int s = 0; s < 120; ++s) world.Step(1.0f / 60);
+    return world.StateHash();
+  };
+  const uint64_t scalar = run(false, false);
+  EXPECT_EQ(run(true, false), scalar);
+  EXPECT_EQ(run(true, true), scalar);
 }
 
 // Free bodies (no contact row) are moved over the whole step four at a time (MoveFour in
@@ -67,10 +104,11 @@ TEST(SoftSimdTest, FourWideAndOneRowPathsGiveTheSameState) {
 // pairs that touch (so groups of four mix free bodies with bodies in rows, and a static one),
 // spinning fast enough that some turn by 0.5 rad or more in a step, one faster than the speed
 // limit, with damping and with sleep, 1 and 3 threads; 83 bodies, so the last group is partial.
-uint64_t RunFree(bool simd, int threads, bool damping, bool sleep) {
+uint64_t RunFree(bool simd, int threads, bool damping, bool sleep, bool vex = true) {
   WorldDef def;
   def.solver = SolverType::kSoftStep;
   def.softSimd = simd;
+  def.softVex = vex;
   def.threadCount = threads;
   def.minParallelItems = 8;
   def.effects.damping = damping;
@@ -100,6 +138,7 @@ TEST(SoftSimdTest, FreeBodiesFourAtATimeGiveTheSameState) {
       const uint64_t scalar = RunFree(false, 1, damping, sleep);
       EXPECT_EQ(RunFree(true, 1, damping, sleep), scalar) << "damping " << damping << " sleep " << sleep;
       EXPECT_EQ(RunFree(true, 3, damping, sleep), scalar) << "damping " << damping << " sleep " << sleep;
+      EXPECT_EQ(RunFree(true, 1, damping, sleep, false), scalar) << "SSE2 encoding, damping " << damping << " sleep " << sleep;
     }
   }
 }
@@ -109,6 +148,12 @@ TEST(SoftSimdTest, BuildHasTheFourWidePathWhereExpected) {
   EXPECT_EQ(QUADRANT_SOFT_SIMD, 1);
 #else
   EXPECT_EQ(QUADRANT_SOFT_SIMD, 0);
+#endif
+#if defined(__SSE2__) && !defined(QUADRANT_DOUBLE) && defined(__x86_64__) && defined(__GNUC__)
+  EXPECT_EQ(QUADRANT_SOFT_VEX, 1);
+#else
+  EXPECT_EQ(QUADRANT_SOFT_VEX, 0);
+  EXPECT_FALSE(CpuHasAvx());
 #endif
 }
 
