@@ -60,27 +60,46 @@ WorldDef JacobiDef(const scene::Scene& s) {
   return def;
 }
 
+// A World (rank 0 only) and a distributed world loaded with the same bodies, stepped together;
+// the distributed one may run other settings (threads inside ranks).
+struct SideBySide {
+  SideBySide(const WorldDef& def, const DistributedDef& dist, const std::vector<BodyDef>& bodies)
+      : SideBySide(def, def, dist, bodies) {}
+  SideBySide(const WorldDef& def, const WorldDef& distributedDef, const DistributedDef& dist,
+             const std::vector<BodyDef>& bodies)
+      : dw(distributedDef, dist, MPI_COMM_WORLD) {
+    if (Rank() == 0) {
+      world = std::make_unique<World>(def);
+      for (const BodyDef& b : bodies) world->CreateBody(b);
+    }
+    dw.Load(bodies);
+  }
+  void Step(Real dt) {
+    if (world) world->Step(dt);
+    dw.Step(dt);
+  }
+  // The World's hash, sent from rank 0 to every rank.
+  uint64_t WorldHash() const {
+    uint64_t expected = world ? world->StateHash() : 0;
+    MPI_Bcast(&expected, 1, MPI_UINT64_T, 0, MPI_COMM_WORLD);
+    return expected;
+  }
+  std::unique_ptr<World> world;
+  DistributedWorld dw;
+};
+
 // Steps a World (rank 0 only) and the distributed world side by side; compares their state
 // hashes every `every` steps. Returns the distributed world's migrations summed over steps and
 // ranks.
 int64_t CompareWithWorld(const WorldDef& def, const DistributedDef& dist, const std::vector<BodyDef>& bodies,
                          Real dt, int steps, int every) {
-  std::unique_ptr<World> world;
-  if (Rank() == 0) {
-    world = std::make_unique<World>(def);
-    for (const BodyDef& b : bodies) world->CreateBody(b);
-  }
-  DistributedWorld dw(def, dist, MPI_COMM_WORLD);
-  dw.Load(bodies);
+  SideBySide both(def, dist, bodies);
   int64_t migrated = 0;
   for (int step = 1; step <= steps; ++step) {
-    if (world) world->Step(dt);
-    dw.Step(dt);
-    migrated += dw.GetStats().migratedIn;
+    both.Step(dt);
+    migrated += both.dw.GetStats().migratedIn;
     if (step % every == 0 || step == steps) {
-      uint64_t expected = world ? world->StateHash() : 0;
-      MPI_Bcast(&expected, 1, MPI_UINT64_T, 0, MPI_COMM_WORLD);
-      const uint64_t got = dw.StateHash();
+      const uint64_t expected = both.WorldHash(), got = both.dw.StateHash();
       EXPECT_EQ(got, expected) << "step " << step << " at " << Size() << " ranks";
       if (got != expected) break;  // every rank sees the same values, so every rank stops here
     }
@@ -112,26 +131,17 @@ TEST(Distributed, ThreadsInsideRanksMatchWorld) {
   scene::StressParams p;
   p.count = 1000;
   const scene::Scene s = scene::MakeStressScene(p);
-  WorldDef def = JacobiDef(s);
+  const WorldDef def = JacobiDef(s);
   DistributedDef dist;
   dist.bounds = s.bounds;
   dist.tilesX = dist.tilesY = 4;
-  std::unique_ptr<World> world;
-  if (Rank() == 0) {
-    world = std::make_unique<World>(def);
-    for (const BodyDef& b : ToBodyDefs(s)) world->CreateBody(b);
-  }
-  def.threadCount = 2;
-  def.minParallelItems = 64;
-  DistributedWorld dw(def, dist, MPI_COMM_WORLD);
-  dw.Load(ToBodyDefs(s));
-  for (int step = 0; step < 60; ++step) {
-    if (world) world->Step(s.timeStep);
-    dw.Step(s.timeStep);
-  }
-  uint64_t expected = world ? world->StateHash() : 0;
-  MPI_Bcast(&expected, 1, MPI_UINT64_T, 0, MPI_COMM_WORLD);
-  EXPECT_EQ(dw.StateHash(), expected);
+  WorldDef threaded = def;
+  threaded.threadCount = 2;
+  threaded.minParallelItems = 64;
+  SideBySide both(def, threaded, dist, ToBodyDefs(s));
+  for (int step = 0; step < 60; ++step) both.Step(s.timeStep);
+  const uint64_t expected = both.WorldHash();
+  EXPECT_EQ(both.dw.StateHash(), expected);
 }
 
 // The stress scene's circles falling under gravity with friction and no bounce into a pile: many
@@ -187,24 +197,16 @@ TEST(Distributed, PyramidAcrossTilesMatchesWorld) {
   const int steps = 300;
   WorldDef def = JacobiDef(s);
   def.velocityIterations = 32;
-  std::unique_ptr<World> world;
-  if (Rank() == 0) {
-    world = std::make_unique<World>(def);
-    for (const BodyDef& b : bodies) world->CreateBody(b);
-  }
-  DistributedWorld dw(def, dist, MPI_COMM_WORLD);
-  dw.Load(bodies);
+  SideBySide both(def, dist, bodies);
   for (int step = 1; step <= steps; ++step) {
-    if (world) world->Step(s.timeStep);
-    dw.Step(s.timeStep);
+    both.Step(s.timeStep);
     if (step % 100 == 0) {
-      uint64_t expected = world ? world->StateHash() : 0;
-      MPI_Bcast(&expected, 1, MPI_UINT64_T, 0, MPI_COMM_WORLD);
-      ASSERT_EQ(dw.StateHash(), expected) << "step " << step;  // the same on every rank: all return
+      const uint64_t expected = both.WorldHash();
+      ASSERT_EQ(both.dw.StateHash(), expected) << "step " << step;  // the same on every rank: all return
     }
   }
   // The apex is the last body (MakePyramid). Distributed (Jacobi) against one process with pgs.
-  const BodyState apex = dw.GatherStates().back();
+  const BodyState apex = both.dw.GatherStates().back();
   const Vec2 start = bodies.back().position;
   const double jacobiDrift = std::hypot(double(apex.position.x - start.x), double(apex.position.y - start.y));
   if (Rank() == 0) {
@@ -275,25 +277,17 @@ TEST(Distributed, RebalanceClumpedSceneKeepsHashes) {
   dist.tilesX = dist.tilesY = 8;
   dist.rebalanceInterval = 10;
   dist.rebalanceThreshold = Real(1.2);
-  std::unique_ptr<World> world;
-  if (Rank() == 0) {
-    world = std::make_unique<World>(def);
-    for (const BodyDef& b : bodies) world->CreateBody(b);
-  }
-  DistributedWorld dw(def, dist, MPI_COMM_WORLD);
-  dw.Load(bodies);
+  SideBySide both(def, dist, bodies);
   double first = 0, last = 0;
   int rebalances = 0;
   for (int step = 1; step <= 60; ++step) {
-    if (world) world->Step(s.timeStep);
-    dw.Step(s.timeStep);
-    if (step == 1) first = dw.GetStats().imbalance;
-    last = dw.GetStats().imbalance;
-    rebalances += dw.GetStats().rebalances;
+    both.Step(s.timeStep);
+    if (step == 1) first = both.dw.GetStats().imbalance;
+    last = both.dw.GetStats().imbalance;
+    rebalances += both.dw.GetStats().rebalances;
   }
-  uint64_t expected = world ? world->StateHash() : 0;
-  MPI_Bcast(&expected, 1, MPI_UINT64_T, 0, MPI_COMM_WORLD);
-  EXPECT_EQ(dw.StateHash(), expected);
+  const uint64_t expected = both.WorldHash();
+  EXPECT_EQ(both.dw.StateHash(), expected);
   if (Size() > 1) {
     EXPECT_GT(first, 1.8);  // the clump sits in rank 0's tiles
     EXPECT_LT(last, 1.3);
