@@ -512,23 +512,6 @@ class SoftStepSolver final : public ContactSolverBase {
       QueueGroups(simd, std::forward<Fn>(fn));
       return;
     }
-    auto rows = [&](int gb, int ge) {
-#if QUADRANT_SOFT_SIMD
-      if (simd) {
-        if (vex_) {
-          for (int gi = gb; gi < ge; ++gi) fn(F4Vex{}, groups_[gi], 0);
-        } else {
-          for (int gi = gb; gi < ge; ++gi) fn(F4{}, groups_[gi], 0);
-        }
-        return;
-      }
-#else
-      (void)simd;
-#endif
-      for (int gi = gb; gi < ge; ++gi) {
-        for (int lane = 0; lane < kLanes; ++lane) fn(Real{}, groups_[gi], lane);
-      }
-    };
     // One region per pass, a stage per colour (ForEachColor says why); the overflow colour's
     // groups are one chunk, run row by row.
     stagePlan_.clear();
@@ -541,15 +524,29 @@ class SoftStepSolver final : public ContactSolverBase {
     }
     const int overflow = groupStart_[kColors];
     run.Stages(Stage::kSolve, stagePlan_, std::max(1, run.MinHeavyItems() / kLanes), [&](int s, int b, int e) {
-      const int gb = stageFirst_[s] + b, ge = stageFirst_[s] + e;
-      if (stageFirst_[s] < overflow) {
-        rows(gb, ge);
-        return;
-      }
-      for (int gi = gb; gi < ge; ++gi) {
-        for (int lane = 0; lane < kLanes; ++lane) fn(Real{}, groups_[gi], lane);
-      }
+      RunGroups(simd && stageFirst_[s] < overflow, fn, stageFirst_[s] + b, stageFirst_[s] + e);
     });
+  }
+
+  // Groups [gb, ge) four rows at a time (fourWide: in AVX's encoding where vex_), or row by row
+  // (the scalar path, and the overflow colour, whose rows may share bodies).
+  template <class Fn>
+  void RunGroups(bool fourWide, Fn& fn, int gb, int ge) {
+#if QUADRANT_SOFT_SIMD
+    if (fourWide) {
+      if (vex_) {
+        for (int gi = gb; gi < ge; ++gi) fn(F4Vex{}, groups_[gi], 0);
+      } else {
+        for (int gi = gb; gi < ge; ++gi) fn(F4{}, groups_[gi], 0);
+      }
+      return;
+    }
+#else
+    (void)fourWide;
+#endif
+    for (int gi = gb; gi < ge; ++gi) {
+      for (int lane = 0; lane < kLanes; ++lane) fn(Real{}, groups_[gi], lane);
+    }
   }
 
   // RestitutionPolicy::kBox2d (restitution_policy.h): Box2D's restitution as a velocity target
@@ -1191,24 +1188,8 @@ class SoftStepSolver final : public ContactSolverBase {
   void QueueGroups(bool simd, Fn fn) {
     const int overflow = groupStart_[kColors];
     const int pass = static_cast<int>(regionFns_.size());
-    regionFns_.emplace_back([this, simd, fn, overflow](int gb, int ge) mutable {
-#if QUADRANT_SOFT_SIMD
-      if (simd && gb < overflow) {
-        if (vex_) {
-          for (int gi = gb; gi < ge; ++gi) fn(F4Vex{}, groups_[gi], 0);
-        } else {
-          for (int gi = gb; gi < ge; ++gi) fn(F4{}, groups_[gi], 0);
-        }
-        return;
-      }
-#else
-      (void)simd;
-      (void)overflow;
-#endif
-      for (int gi = gb; gi < ge; ++gi) {
-        for (int lane = 0; lane < kLanes; ++lane) fn(Real{}, groups_[gi], lane);
-      }
-    });
+    regionFns_.emplace_back(
+        [this, simd, fn, overflow](int gb, int ge) mutable { RunGroups(simd && gb < overflow, fn, gb, ge); });
     for (int color = 0; color <= kColors; ++color) {
       const int begin = groupStart_[color], count = groupStart_[color + 1] - begin;
       if (count == 0) continue;
