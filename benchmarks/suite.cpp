@@ -503,6 +503,15 @@ void RunJob(benchmark::State& state, const Job& job) {
     if (stagesAfter[k].first.starts_with("work_")) work += delta;
     if (stagesAfter[k].first.starts_with("critical_")) critical += delta;
   }
+  // Where a step's time went: wall-clock ms per step of each stage the engine times (for
+  // Quadrant: broad_phase, narrow_phase, persistence, solve, integrate; "total" is the whole
+  // Step, so total minus the stages is the step's own bookkeeping).
+  for (size_t k = 0; k < stagesAfter.size() && k < stagesBefore.size(); ++k) {
+    const std::string& name = stagesAfter[k].first;
+    if (name.starts_with("work_") || name.starts_with("critical_")) continue;
+    state.counters["stage_" + name + "_ms"] =
+        Counter((stagesAfter[k].second - stagesBefore[k].second) / double(job.steps));
+  }
   if (critical > 0) {
     state.counters["balance_bound"] = Counter(work / critical);
   } else if (!stagesAfter.empty() && job.threads == 1) {
