@@ -247,7 +247,7 @@ class SoftStepSolver final : public ContactSolverBase {
     groupStart_.assign(kColors + 2, 0);
     for (int k = 0; k <= kColors; ++k) {
       const int count = colorStart_[k + 1] - colorStart_[k];
-      groupStart_[k + 1] = groupStart_[k] + (count + kLanes - 1) / kLanes;
+      groupStart_[k + 1] = groupStart_[k] + (count + kGroupRows - 1) / kGroupRows;
     }
     groups_.resize(groupStart_[kColors + 1]);
     relaxBias_.resize(groups_.size());
@@ -258,16 +258,16 @@ class SoftStepSolver final : public ContactSolverBase {
     for (int k = 0; k <= kColors; ++k) {
       const int count = groupStart_[k + 1] - groupStart_[k];
       if (count == 0) continue;
-      stagePlan_.push_back({count, kColorGrain / kLanes});
+      stagePlan_.push_back({count, kColorGrain / kGroupRows});
       stageFirst_.push_back(k);
     }
-    run.Stages(Stage::kSolve, stagePlan_, std::max(1, run.MinHeavyItems() / kLanes), [&](int stage, int gb, int ge) {
+    run.Stages(Stage::kSolve, stagePlan_, std::max(1, run.MinHeavyItems() / kGroupRows), [&](int stage, int gb, int ge) {
       const int k = stageFirst_[stage], begin = groupStart_[k];
       {
         for (int gi = begin + gb; gi < begin + ge; ++gi) {
           SoftRowGroup& g = groups_[gi];
-          for (int lane = 0; lane < kLanes; ++lane) {
-            const int c = colorStart_[k] + (gi - begin) * kLanes + lane;
+          for (int lane = 0; lane < kGroupRows; ++lane) {
+            const int c = colorStart_[k] + (gi - begin) * kGroupRows + lane;
             if (c >= colorStart_[k + 1]) {
               PadLane(g, lane);
               continue;
@@ -519,11 +519,11 @@ class SoftStepSolver final : public ContactSolverBase {
     for (int color = 0; color <= kColors; ++color) {
       const int begin = groupStart_[color], count = groupStart_[color + 1] - begin;
       if (count == 0) continue;
-      stagePlan_.push_back({count, color < kColors ? kColorGrain / kLanes : count});
+      stagePlan_.push_back({count, color < kColors ? kColorGrain / kGroupRows : count});
       stageFirst_.push_back(begin);
     }
     const int overflow = groupStart_[kColors];
-    run.Stages(Stage::kSolve, stagePlan_, std::max(1, run.MinHeavyItems() / kLanes), [&](int s, int b, int e) {
+    run.Stages(Stage::kSolve, stagePlan_, std::max(1, run.MinHeavyItems() / kGroupRows), [&](int s, int b, int e) {
       RunGroups(simd && stageFirst_[s] < overflow, fn, stageFirst_[s] + b, stageFirst_[s] + e);
     });
   }
@@ -535,9 +535,12 @@ class SoftStepSolver final : public ContactSolverBase {
 #if QUADRANT_SOFT_SIMD
     if (fourWide) {
       if (vex_) {
-        for (int gi = gb; gi < ge; ++gi) fn(F4Vex{}, groups_[gi], 0);
+        for (int gi = gb; gi < ge; ++gi) fn(F8Avx{}, groups_[gi], 0);
       } else {
-        for (int gi = gb; gi < ge; ++gi) fn(F4{}, groups_[gi], 0);
+        for (int gi = gb; gi < ge; ++gi) {
+          fn(F4{}, groups_[gi], 0);
+          fn(F4{}, groups_[gi], kLanes);
+        }
       }
       return;
     }
@@ -545,7 +548,7 @@ class SoftStepSolver final : public ContactSolverBase {
     (void)fourWide;
 #endif
     for (int gi = gb; gi < ge; ++gi) {
-      for (int lane = 0; lane < kLanes; ++lane) fn(Real{}, groups_[gi], lane);
+      for (int lane = 0; lane < kGroupRows; ++lane) fn(Real{}, groups_[gi], lane);
     }
   }
 
@@ -644,7 +647,7 @@ class SoftStepSolver final : public ContactSolverBase {
       if constexpr (std::is_same_v<decltype(lanes), Real>) {
         row(g, lane);
       } else {
-        for (int l = 0; l < kLanes; ++l) row(g, l);
+        for (int l = lane; l < lane + kLaneWidth<decltype(lanes)>; ++l) row(g, l);
       }
     });
   }
@@ -673,7 +676,9 @@ class SoftStepSolver final : public ContactSolverBase {
         if constexpr (std::is_same_v<decltype(lanes), Real>) {
           SolvePositionRows<Real, kRotation>(states, g, lane, prm, moved);
         } else if (!SolvePositionRows<decltype(lanes), kRotation>(states, g, lane, prm, moved)) {
-          for (int l = 0; l < kLanes; ++l) SolvePositionRows<Real, kRotation>(states, g, l, prm, moved);
+          for (int l = lane; l < lane + kLaneWidth<decltype(lanes)>; ++l) {
+            SolvePositionRows<Real, kRotation>(states, g, l, prm, moved);
+          }
         }
         if (moved) anyMoved.store(true, std::memory_order_relaxed);
       });
@@ -687,10 +692,10 @@ class SoftStepSolver final : public ContactSolverBase {
   template <bool kLean>
   void StoreRowImpulses(StageRunner& run) {
     const int count = static_cast<int>(groups_.size());
-    run.For(Stage::kSolve, count, std::max(1, run.MinHeavyItems() / kLanes), [&](int gb, int ge, int) {
+    run.For(Stage::kSolve, count, std::max(1, run.MinHeavyItems() / kGroupRows), [&](int gb, int ge, int) {
       for (int gi = gb; gi < ge; ++gi) {
         const SoftRowGroup& g = groups_[gi];
-        for (int lane = 0; lane < kLanes; ++lane) {
+        for (int lane = 0; lane < kGroupRows; ++lane) {
           if (g.constraint[lane] < 0) continue;
           if constexpr (kLean) {
             Manifold& mf = contacts_[order_[g.constraint[lane]]].manifold;
@@ -1193,7 +1198,7 @@ class SoftStepSolver final : public ContactSolverBase {
     for (int color = 0; color <= kColors; ++color) {
       const int begin = groupStart_[color], count = groupStart_[color + 1] - begin;
       if (count == 0) continue;
-      regionPlan_.push_back({count, color < kColors ? kColorGrain / kLanes : count});
+      regionPlan_.push_back({count, color < kColors ? kColorGrain / kGroupRows : count});
       regionFirst_.push_back(begin);
       regionPass_.push_back(pass);
     }
