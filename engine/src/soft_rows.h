@@ -348,6 +348,22 @@ inline F8 Sqrt(F8 a) { return {_mm256_sqrt_ps(a.v)}; }
   if (moves & (1 << k)) _mm_storeu_ps(&states[index[k]].v.x + word, _mm256_castps256_ps128(r));
   if (moves & (16 << k)) _mm_storeu_ps(&states[index[k + 4]].v.x + word, _mm256_extractf128_ps(r, 1));
 }
+// The four pairs' stores: when every lane moves (all but the rows on static bodies and the
+// padding), without a test per lane.
+[[gnu::always_inline]] inline void StorePairs(SolverBody* states, const int32_t* index, int moves, int word, __m256 r0,
+                                              __m256 r1, __m256 r2, __m256 r3) {
+  if (moves == 0xFF) {
+    StorePair(states, index, 0xFF, 0, word, r0);
+    StorePair(states, index, 0xFF, 1, word, r1);
+    StorePair(states, index, 0xFF, 2, word, r2);
+    StorePair(states, index, 0xFF, 3, word, r3);
+  } else {
+    StorePair(states, index, moves, 0, word, r0);
+    StorePair(states, index, moves, 1, word, r1);
+    StorePair(states, index, moves, 2, word, r2);
+    StorePair(states, index, moves, 3, word, r3);
+  }
+}
 
 template <>
 [[gnu::always_inline]] inline void Gather<F8>(const SolverBody* states, const int32_t* index, int lane,
@@ -375,10 +391,7 @@ template <>
   __m256 r0 = in.vx.v, r1 = in.vy.v, r2 = in.w.v, r3 = _mm256_setzero_ps();  // pad written as zero (Scatter<F4>)
   Transpose4x2(r0, r1, r2, r3);
   const int moves = WrittenLanes8(invMass + lane);
-  StorePair(states, index, moves, 0, 0, r0);
-  StorePair(states, index, moves, 1, 0, r1);
-  StorePair(states, index, moves, 2, 0, r2);
-  StorePair(states, index, moves, 3, 0, r3);
+  StorePairs(states, index, moves, 0, r0, r1, r2, r3);
 }
 template <>
 [[gnu::always_inline]] inline void ScatterMotion<F8>(SolverBody* states, const int32_t* index, const Real* invMass,
@@ -387,10 +400,7 @@ template <>
   __m256 r0 = in.dpx.v, r1 = in.dpy.v, r2 = in.qc.v, r3 = in.qs.v;
   Transpose4x2(r0, r1, r2, r3);
   const int moves = WrittenLanes8(invMass + lane);
-  StorePair(states, index, moves, 0, 4, r0);
-  StorePair(states, index, moves, 1, 4, r1);
-  StorePair(states, index, moves, 2, 4, r2);
-  StorePair(states, index, moves, 3, 4, r3);
+  StorePairs(states, index, moves, 4, r0, r1, r2, r3);
 }
 
 namespace wide8 {
