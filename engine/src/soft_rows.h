@@ -1,12 +1,13 @@
-// soft_step's contact rows in structure-of-arrays form, solved four at a time (SSE2) or one at a
-// time, with the same result bit for bit.
+// soft_step's contact rows in structure-of-arrays form, solved eight at a time (AVX), four at a
+// time (SSE2) or one at a time, with the same result bit for bit.
 //
-// The rows of one graph colour share no body that moves, so any four of them can be solved at
-// once: a group holds four consecutive rows of a colour (a colour's last group is padded with
-// rows that touch nothing). The kernel is written once over a lane type V: `float` (one row,
-// the scalar path) or F4 (four rows in an SSE2 register). Every lane does the same IEEE
-// operations in the same order in both (no FMA: -ffp-contract=off, and SSE2 has none), max and
-// min are defined as the SSE2 instructions define them (a > b ? a : b), and both paths read and
+// The rows of one graph colour share no body that moves, so any eight of them can be solved at
+// once: a group holds eight consecutive rows of a colour (a colour's last group is padded with
+// rows that touch nothing). The kernel is written once over a lane type V (soft_rows_kernels.inc):
+// `float` (one row, the scalar path), F4 (four rows in an SSE2 register: a group is two calls) or
+// F8 (eight rows in an AVX register, on CPUs with AVX). Every lane does the same IEEE operations
+// in the same order in all three (no FMA: -ffp-contract=off, and neither target has it), max and
+// min are defined as the SSE instructions define them (a > b ? a : b), and all paths read and
 // write the same padded data: so the scalar and the SIMD paths give the same state hash (a
 // test checks it), and splitting a colour across threads changes nothing either.
 //
@@ -61,7 +62,7 @@ struct SoftPointRows {
   Real collisionImpulse[kGroupRows];  // a sub-step's share of the step's collisions, for the friction bound
 };
 
-// Four rows of one colour. Softness is per row: contacts with a static or kinematic body are
+// Eight rows of one colour. Softness is per row: contacts with a static or kinematic body are
 // stiffer (solver_soft_step.cpp says why).
 struct alignas(32) SoftRowGroup {
   int32_t a[kGroupRows], b[kGroupRows];
@@ -277,6 +278,11 @@ namespace rows4 {
 // paths (SoftSimdTest). A body state is 32 bytes, so a gather is four pairs of 16-byte loads
 // (body k and body k + 4 in one register) and a 4x4 transpose in each 128-bit half.
 //
+// Base-100 pyramid, callgrind, instructions a row and pass (four-wide in AVX's encoding -> eight-wide):
+// soft solve 83 -> 48, first relax pass 84 -> 45, friction relax pass 72 -> 41, warm start 39 ->
+// 25 (with the stores below; docs/soft_step.md has the step). Eight-wide with AVX-512VL's 32 registers
+// (no spills) was 2.4 % faster on one thread in 7 interleaved rounds on a loaded machine: not kept.
+//
 // The kernels are included again (soft_rows_kernels.inc) in namespace wide8 under
 // `#pragma GCC target("avx")`, so that they and the F8 operations are compiled for AVX while the
 // scalar and SSE2 paths stay SSE2 for CPUs without it.
@@ -309,7 +315,7 @@ inline F8 Max(F8 a, F8 b) { return {_mm256_max_ps(a.v, b.v)}; }
 inline F8 Min(F8 a, F8 b) { return {_mm256_min_ps(a.v, b.v)}; }
 inline F8 Neg(F8 a) { return {_mm256_xor_ps(a.v, _mm256_set1_ps(-0.0f))}; }
 // With and/or, as F4's: GCC 12 turned _mm256_blendv_ps on these masks into a branch per lane (the
-// soft solve went from 330 to 965 instructions a group).
+// soft solve took 773 instructions a group instead of 413).
 inline F8 Select(M8 mask, F8 a, F8 b) {
   return {_mm256_or_ps(_mm256_and_ps(mask.v, a.v), _mm256_andnot_ps(mask.v, b.v))};
 }
