@@ -33,9 +33,9 @@
 //
 // Data (issue #13, after Box2D 3's layout; the code is this project's): the sub-steps work on a
 // 32-byte solver state per body (velocity, and the motion dp, dq since the step began), not on
-// the body arrays, and on the contact rows in structure-of-arrays groups of four per graph
-// colour, solved four at a time with SSE2 (soft_rows.h; the one-row path gives the same bits,
-// WorldDef::softSimd, SoftSimdTest). A point's separation in a sub-step is its prepared one plus
+// the body arrays, and on the contact rows in structure-of-arrays groups of eight per graph
+// colour, solved eight at a time with AVX or four with SSE2 (soft_rows.h; the one-row path gives
+// the same bits, WorldDef::softSimd, SoftSimdTest). A point's separation in a sub-step is its prepared one plus
 // the normal part of how far its anchors moved; the anchors, fixed at preparation, are also the
 // lever arms (Box2D 3 does the same). The bounce shifts and the position pass act on the states
 // too, and the states go back to the bodies once, after the position pass. Base-100 pyramid,
@@ -126,7 +126,7 @@ class SoftStepSolver final : public ContactSolverBase {
       ApplyCollisionPasses<kRotation>(run, bodies, def, Real(1) / ctx.dt, stepGravity);
     }
     // The sub-steps run on the compact solver state (velocity and motion since the step began,
-    // 32 bytes a body) and on the rows in groups of four (soft_rows.h), not on the body arrays
+    // 32 bytes a body) and on the rows in groups of eight (soft_rows.h), not on the body arrays
     // and the constraints.
     auto ti = Clock::now();
     LoadFixedStates(run, bodies, def.effects.sleep);
@@ -155,7 +155,7 @@ class SoftStepSolver final : public ContactSolverBase {
       lastPrm.deepBelow = -def.contactPushMaxDepth + kDeepMargin;
     }
     const bool simd = def.softSimd;
-    vex_ = simd && def.softVex && CpuHasAvx();  // soft_rows.h: the same operations in AVX's encoding
+    vex_ = simd && def.softVex && CpuHasAvx();  // soft_rows.h: the rows eight at a time with AVX
     // Each sub-step is one region of stages (TaskSystem::ParallelStages): gravity, the warm start
     // and the soft solve colour by colour, the positions, the relax passes colour by colour; the
     // threads go from stage to stage inside one job instead of one hand-over per pass (base-100
@@ -230,7 +230,7 @@ class SoftStepSolver final : public ContactSolverBase {
     });
   }
 
-  // The rows in groups of four, colour by colour (a colour's last group padded), from the
+  // The rows in groups of eight, colour by colour (a colour's last group padded), from the
   // prepared constraints. Friction is solved in the relax pass only (as Box2D 3 does since it
   // split its push stage): during the soft solve the velocities still carry the push-out the
   // relax pass removes and the normal impulse its soft bias, so a friction row there resists a
@@ -503,8 +503,8 @@ class SoftStepSolver final : public ContactSolverBase {
     PadPoint(g.p[1], lane);
   }
 
-  // fn(lanes, group, lane): lanes is a Real (one row: the given lane) or an F4 (the four rows
-  // from lane 0). The overflow colour's rows may share bodies: one at a time, in order, on one
+  // fn(lanes, group, lane): lanes is a Real (one row: the given lane), an F4 (the four rows from
+  // `lane`) or an F8Avx (the group's eight rows; kLaneWidth says how many). The overflow colour's rows may share bodies: one at a time, in order, on one
   // thread.
   template <class Fn>
   void ForEachGroup(StageRunner& run, bool simd, Fn&& fn) {
@@ -528,8 +528,8 @@ class SoftStepSolver final : public ContactSolverBase {
     });
   }
 
-  // Groups [gb, ge) four rows at a time (fourWide: in AVX's encoding where vex_), or row by row
-  // (the scalar path, and the overflow colour, whose rows may share bodies).
+  // Groups [gb, ge) eight rows at a time with AVX where vex_, else four (fourWide: two calls a
+  // group), or row by row (the scalar path, and the overflow colour, whose rows may share bodies).
   template <class Fn>
   void RunGroups(bool fourWide, Fn& fn, int gb, int ge) {
 #if QUADRANT_SOFT_SIMD
@@ -1218,7 +1218,7 @@ class SoftStepSolver final : public ContactSolverBase {
   Real collisionShare_ = 1;  // a sub-step's share of the step's collision impulses (Run says why)
   std::vector<SolverBody> states_;
   std::vector<SoftRowGroup> groups_;
-  bool vex_ = false;  // the four-wide kernels in AVX's encoding (Run)
+  bool vex_ = false;  // the rows eight-wide with AVX, the integration four-wide in AVX's encoding (Run)
   std::span<Contact> contacts_;           // this step's (Run)
   const BodyInverseMass* inv_ = nullptr;  // this step's bodies' (Run)
   std::vector<RelaxBiasRows> relaxBias_;  // per group: the relax passes' speculative bias (RelaxBias)
