@@ -146,6 +146,10 @@ class UniformGrid final : public BroadPhase {
   // cell, the pair scans. Each parallel-for of the former version (eight per step) cost a
   // hand-over to the workers and a join; a region costs one hand-over, and a stage boundary only
   // a wait for the stage's last chunk. One-item stages are the serial steps between them.
+  // Measured with the radix sort and the four-wide scan below, against main ef96acf, 9
+  // interleaved rounds of 60 steps, circle stress 16000 (load average 2.6 from other users'
+  // niced builds): the broad phase 0.817 -> 0.543 ms per step at 1 thread; polygon stress
+  // 16000 1.071 -> 0.797.
   enum class Op : uint8_t { kExtents, kReduce, kCellMax, kGrid, kKeys, kHistogram, kOffsets, kScatter, kScan, kLarge };
   struct Step {
     Op op;
@@ -160,7 +164,8 @@ class UniformGrid final : public BroadPhase {
     blocks_ = parallel ? 4 * run.Workers() : 1;
     chunks_ = (n + kChunk - 1) / kChunk;
     // The sort's passes, fixed before the grid is known: keys stay below rows * (cols + 1),
-    // at most about twice the grid's cell budget (Layout), so this many digits always suffice.
+    // at most about twice the grid's cell budget (Grid), so this many digits always suffice
+    // (more would only make the histograms larger, never the sort wrong).
     const long long keyBound = 4 * (4LL * n + 64);
     const int boundBits = std::bit_width(static_cast<unsigned long long>(keyBound));
     passes_ = (boundBits + kMaxDigitBits - 1) / kMaxDigitBits;
@@ -206,7 +211,7 @@ class UniformGrid final : public BroadPhase {
           case Op::kGrid: Grid(n); break;
           case Op::kKeys: Keys(aabbs, item); break;
           case Op::kHistogram: Histogram(step.pass, item); break;
-          case Op::kOffsets: Offsets(step.pass, n); break;
+          case Op::kOffsets: Offsets(step.pass); break;
           case Op::kScatter: Scatter(aabbs, step.pass, item, n); break;
           case Op::kScan: ScanCells(item, movable); break;
           case Op::kLarge: ScanLarge(item, aabbs, movable); break;
@@ -354,7 +359,7 @@ class UniformGrid final : public BroadPhase {
 
   // Serial: the histogram becomes each (block, digit)'s first slot, digit-major, so the blocks
   // of equal digits follow each other in block order (the stability of the sort).
-  void Offsets(int p, int n) {
+  void Offsets(int p) {
     if (p == 0) {
       large_.clear();  // blocks are in index order, so the oversized bodies are too
       for (const std::vector<int>& part : largePart_) large_.insert(large_.end(), part.begin(), part.end());
@@ -370,7 +375,6 @@ class UniformGrid final : public BroadPhase {
       }
     }
     if (p > 0) return;
-    (void)n;
     placed_ = total;
     for (auto& v : tempKey_) v.resize(placed_);
     for (auto& v : tempIndex_) v.resize(placed_);
