@@ -6,7 +6,6 @@
 #pragma once
 
 #include <cstdint>
-#include <functional>
 #include <memory>
 #include <span>
 #include <vector>
@@ -32,18 +31,6 @@ class BroadPhase {
   /// (parallel sections write per-worker buffers that are concatenated in worker order).
   virtual void FindPairs(std::span<const AABB> aabbs, std::span<const uint8_t> movable,
                          std::vector<CandidatePair>& out, StageRunner& run) = 0;
-
-  /// Fills aabbs[begin, end) (the caller's array behind `aabbs`); called for every range of
-  /// [0, aabbs.size()) once, before the broad phase reads those boxes.
-  using BoxFill = std::function<void(int begin, int end)>;
-  /// The same, with the boxes filled first by `fill`. The default fills them all in one
-  /// parallel-for; the uniform grid fills each chunk where it first reads it (uniform_grid.cpp).
-  virtual void FindPairs(std::span<const AABB> aabbs, std::span<const uint8_t> movable, const BoxFill& fill,
-                         std::vector<CandidatePair>& out, StageRunner& run) {
-    run.For(Stage::kBroadPhase, static_cast<int>(aabbs.size()), run.MinItems(),
-            [&](int begin, int end, int) { fill(begin, end); });
-    FindPairs(aabbs, movable, out, run);
-  }
   virtual const char* Name() const = 0;
 
   // Queries (World::QueryAABB, RayCastClosest, RayCastAll). A separate instance of the same

@@ -27,7 +27,6 @@ class QuadTree final : public BroadPhase {
  public:
   explicit QuadTree(int maxDepth) : maxDepth_(maxDepth) {}
   const char* Name() const override { return "quad_tree"; }
-  using BroadPhase::FindPairs;  // the variant with a box fill: the default one
 
   void FindPairs(std::span<const AABB> aabbs, std::span<const uint8_t> movable,
                  std::vector<CandidatePair>& out, StageRunner& run) override {

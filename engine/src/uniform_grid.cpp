@@ -32,19 +32,9 @@ class UniformGrid final : public BroadPhase {
 
   void FindPairs(std::span<const AABB> aabbs, std::span<const uint8_t> movable,
                  std::vector<CandidatePair>& out, StageRunner& run) override {
-    FindPairs(aabbs, movable, BoxFill{}, out, run);
-  }
-
-  void FindPairs(std::span<const AABB> aabbs, std::span<const uint8_t> movable, const BoxFill& fill,
-                 std::vector<CandidatePair>& out, StageRunner& run) override {
     out.clear();
-    if (aabbs.size() < 2) {
-      if (fill) fill(0, static_cast<int>(aabbs.size()));
-      return;
-    }
-    fill_ = fill ? &fill : nullptr;
+    if (aabbs.size() < 2) return;
     Build(aabbs, movable, run, true);
-    fill_ = nullptr;
     if (!ready_) return;
     for (const auto& part : scanPairs_) out.insert(out.end(), part.begin(), part.end());
     for (const auto& part : largePairs_) out.insert(out.end(), part.begin(), part.end());
@@ -143,7 +133,7 @@ class UniformGrid final : public BroadPhase {
   static constexpr int kPad = 4;  // sentinel keys (and empty boxes) after the sorted bodies
 
   // The step as one region of stages (StageRunner::Stages): layout, the sort of the bodies by
-  // cell, the pair scans. Each parallel-for of the former version (eight per step) cost a
+  // cell, the pair scans. Each parallel-for of the former version (seven per step) cost a
   // hand-over to the workers and a join; a region costs one hand-over, and a stage boundary only
   // a wait for the stage's last chunk. One-item stages are the serial steps between them.
   // Measured with the radix sort and the four-wide scan below, against main ef96acf, 9
@@ -222,13 +212,8 @@ class UniformGrid final : public BroadPhase {
 
   // Layout, part 1 (per chunk of bodies): extents, the box of the movable bodies, their mean
   // extent and largest extent.
-  //
-  // The caller's boxes are filled here, chunk by chunk, when FindPairs has a fill: the layout
-  // then reads each box from L1 just after it is written, and the fill needs no parallel-for
-  // (and no hand-over and join) of its own.
   void Extents(std::span<const AABB> aabbs, std::span<const uint8_t> movable, int c) {
     const int n = static_cast<int>(aabbs.size());
-    if (fill_) (*fill_)(c * kChunk, std::min(n, (c + 1) * kChunk));
     Partial p;
     for (int i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i) {
       extent_[i] = Real(Extent(aabbs[i]));
@@ -525,7 +510,6 @@ class UniformGrid final : public BroadPhase {
   }
 
   std::vector<uint8_t> all_;  // BuildForQueries: every body counts as movable
-  const BoxFill* fill_ = nullptr;  // FindPairs' fill, for the layout's first stage
   bool ready_ = false;        // this build has a grid (some movable body, finite boxes)
   bool queryReady_ = false;
   double originX_ = 0, originY_ = 0, inv_ = 1, largeThreshold_ = 0;

@@ -111,7 +111,7 @@ struct World::Impl {
   }
 
   void RunPipeline(Real dt);
-  void FindPairs(const BroadPhase::BoxFill* fill = nullptr);
+  void FindPairs();
   void UpdateContactEvents();
   void PrepareQueries();
   BodyId IdOf(int i) const { return BodyId{bodies.slot[i], generation[bodies.slot[i]]}; }  // one pass of every stage
@@ -256,12 +256,8 @@ void World::StepRepeated(Real dt, int pipelineRepeats) {
   }
 }
 
-void World::Impl::FindPairs(const BroadPhase::BoxFill* fill) {
-  if (fill) {
-    broadPhase->FindPairs(bodies.aabb, bodies.dynamic, *fill, pairs, *run);
-  } else {
-    broadPhase->FindPairs(bodies.aabb, bodies.dynamic, pairs, *run);
-  }
+void World::Impl::FindPairs() {
+  broadPhase->FindPairs(bodies.aabb, bodies.dynamic, pairs, *run);
   if (customFilters == 0) return;  // every body collides with everything: nothing to drop
   // Box2D's rule (world.h, Filter). Compacting in place keeps the pairs' deterministic order.
   run->Serial(Stage::kBroadPhase, [&] {
@@ -351,28 +347,28 @@ void World::Impl::RunPipeline(Real dt) {
   const int n = bodies.Count();
   auto t0 = Clock::now();
   const bool sleepOn = def.effects.sleep;
-  // The boxes of this step: sleeping bodies keep the box they fell asleep with (awake is 0 for
-  // them and for statics), statics the one they were made with.
-  const BroadPhase::BoxFill fillBoxes = [&](int begin, int end) {
-    if (sleepOn) {
+  if (sleepOn) {
+    // Sleeping bodies keep the box they fell asleep with (awake is 0 for them and for statics).
+    run->For(Stage::kBroadPhase, n, run->MinItems(), [&](int begin, int end, int) {
       for (int i = begin; i < end; ++i) {
         if (bodies.awake[i]) UpdateAABB(i, dt);
       }
-    } else {
+    });
+  } else {
+    run->For(Stage::kBroadPhase, n, run->MinItems(), [&](int begin, int end, int) {
       for (int i = begin; i < end; ++i) {
         if (bodies.type[i] != BodyType::kStatic) UpdateAABB(i, dt);
       }
-    }
-  };
+    });
+  }
   if (quadrants) {
-    run->For(Stage::kBroadPhase, n, run->MinItems(), [&](int begin, int end, int) { fillBoxes(begin, end); });
     int pairCount = 0;
     profile.broadPhase += Ms(t0, Clock::now());  // the AABB update; the scheme times the rest
     quadrants->Step(dt, def, bodies, *run, cache, contacts, pairCount, profile);
     CountContacts(pairCount);
     return;
   }
-  FindPairs(&fillBoxes);  // the broad phase fills the boxes as it reads them (broad_phase.h)
+  FindPairs();
   auto t1 = Clock::now();
   NarrowPhase(dt);
   auto t2 = Clock::now();

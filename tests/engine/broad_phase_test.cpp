@@ -278,35 +278,6 @@ TEST_P(BroadPhaseTest, CrowdedCellsMatchBruteForceOnAnyThreadCount) {
   }
 }
 
-TEST_P(BroadPhaseTest, BoxFillWritesEveryBoxOnceAndGivesTheSamePairs) {
-  // FindPairs with a fill (the World's step): the broad phase has the boxes written as it goes;
-  // each exactly once, before it reads them, so the pairs are those of the filled boxes.
-  auto bp = GetParam().make();
-  const Input in = RandomInput(9, 3000, 40);
-  const int n = static_cast<int>(in.aabbs.size());
-  for (int threads : {1, 3}) {
-    std::vector<CandidatePair> want;
-    FindAll(*bp, in, &want, threads);
-    std::vector<AABB> boxes(n, AABB{{-1e9f, -1e9f}, {-1e9f, -1e9f}});  // wrong until filled
-    std::vector<int> fills(n, 0);
-    const BroadPhase::BoxFill fill = [&](int begin, int end) {
-      for (int i = begin; i < end; ++i) {
-        boxes[i] = in.aabbs[i];
-        ++fills[i];
-      }
-    };
-    std::unique_ptr<TaskSystem> tasks = MakeThreadPool(threads);
-    StageRunner run(*tasks, 1);
-    std::vector<CandidatePair> got;
-    bp->FindPairs(boxes, in.movable, fill, got, run);
-    EXPECT_EQ(std::count(fills.begin(), fills.end(), 1), n) << GetParam().name << ", " << threads << " threads";
-    ASSERT_EQ(got.size(), want.size()) << GetParam().name << ", " << threads << " threads";
-    for (size_t k = 0; k < got.size(); ++k) {
-      ASSERT_TRUE(got[k].a == want[k].a && got[k].b == want[k].b) << GetParam().name << " pair " << k;
-    }
-  }
-}
-
 INSTANTIATE_TEST_SUITE_P(Both, BroadPhaseTest,
                          ::testing::Values(Factory{"QuadTree", &MakeQt}, Factory{"UniformGrid", &MakeGrid}),
                          [](const ::testing::TestParamInfo<Factory>& info) { return std::string(info.param.name); });
