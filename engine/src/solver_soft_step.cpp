@@ -108,7 +108,7 @@ class SoftStepSolver final : public ContactSolverBase {
 
     double integrateMs = 0;
     auto t0 = Clock::now();
-    Color(run, ctx);
+    Color(run, ctx, /*clearLater=*/true);  // LoadFixedStates clears the masks
     const int m = static_cast<int>(constraints_.size());
     contacts_ = ctx.contacts;
     inv_ = bodies.inv.data();
@@ -119,7 +119,6 @@ class SoftStepSolver final : public ContactSolverBase {
     if (!lean) {
       run.For(Stage::kSolve, m, run.MinHeavyItems(), [&](int b, int e, int) { Prepare<kRotation, true>(ctx, b, e); });
     }
-    SnapshotPositions(run, bodies);
     const bool box2dRestitution = def.effects.restitution && def.restitution == RestitutionPolicy::kBox2d;
     if (def.effects.restitution && !box2dRestitution) {
       const Vec2 stepGravity = def.effects.gravity ? ctx.dt * def.gravity : Vec2{};
@@ -129,92 +128,114 @@ class SoftStepSolver final : public ContactSolverBase {
     // 32 bytes a body) and on the rows in groups of four (soft_rows.h), not on the body arrays
     // and the constraints.
     auto ti = Clock::now();
-    LoadFixedStates(run, bodies, def.effects.sleep);
+    LoadFixedStates(run, bodies, def.effects.sleep, m > 0);
     integrateMs += Ms(ti, Clock::now());
     MarkRows(run, bodies.Count(), def.softMassRatioLimit > 0);
-    lean ? BuildRows<kRotation, true>(ctx, soft, staticSoft, def.softMassRatioLimit)
-         : BuildRows<kRotation, false>(ctx, soft, staticSoft, def.softMassRatioLimit);
-    ti = Clock::now();
-    LoadStates(run, bodies);
-    integrateMs += Ms(ti, Clock::now());
-    const SoftSolveParams prm{invH, def.contactPushMaxDepth, def.contactPushMaxVelocity};
-    // Whether the position pass can move anything (CorrectStatePositions): the last sub-step's
-    // first relax pass sees every point's separation at the step's final positions, and without
-    // restitution nothing moves the bodies after it (the bounce shifts and Box2D's restitution
-    // do). A point is counted deep below -contactPushMaxDepth + kDeepMargin: the position pass
-    // computes the same separation in another order of operations, which differs by far less
-    // (a few float ulps of the anchors and the motion, about 1e-6 m), so with no deep point it
-    // moves nothing, and skipping it gives the same bits. Base-100 pyramid: its one pass over
-    // the rows found nothing to move every step (0.98M instructions a step).
-    std::atomic<bool> deep{false};
-    const bool maySkipPositions = !def.effects.restitution;
-    constexpr Real kDeepMargin = Real(1e-4);
-    SoftSolveParams lastPrm = prm;
-    if (maySkipPositions) {
-      lastPrm.deep = &deep;
-      lastPrm.deepBelow = -def.contactPushMaxDepth + kDeepMargin;
-    }
     const bool simd = def.softSimd;
     vex_ = simd && def.softVex && CpuHasAvx();  // soft_rows.h: the same operations in AVX's encoding
-    // Each sub-step is one region of stages (TaskSystem::ParallelStages): gravity, the warm start
-    // and the soft solve colour by colour, the positions, the relax passes colour by colour; the
-    // threads go from stage to stage inside one job instead of one hand-over per pass (base-100
-    // pyramid, default engine: 52 jobs a step before). Which thread runs which chunk never
-    // changes the arithmetic. The sub-steps' integration is therefore timed as part of the solve.
-    for (int sub = 0; sub < n; ++sub) {
-      BeginRegion();
-      IntegrateStateVelocities(run, bodies, def, h, sub == 0 ? ctx.dt : Real(0));
-      if (def.effects.warmStarting) {
-        ForEachGroup(run, simd, [&](auto lanes, SoftRowGroup& g, int lane) {
-          WarmStartRows<decltype(lanes), kRotation>(states_.data(), g, lane);
-        });
+    // The rows' part of the step: from building the rows to storing their bodies and impulses.
+    // The free bodies (MoveFreeBodies) do not depend on it: no row reads or writes them.
+    auto rows = [&] {
+      lean ? BuildRows<kRotation, true>(ctx, soft, staticSoft, def.softMassRatioLimit)
+           : BuildRows<kRotation, false>(ctx, soft, staticSoft, def.softMassRatioLimit);
+      auto tr = Clock::now();
+      LoadStates(run, bodies);
+      integrateMs += Ms(tr, Clock::now());
+      const SoftSolveParams prm{invH, def.contactPushMaxDepth, def.contactPushMaxVelocity};
+      // Whether the position pass can move anything (CorrectStatePositions): the last sub-step's
+      // first relax pass sees every point's separation at the step's final positions, and without
+      // restitution nothing moves the bodies after it (the bounce shifts and Box2D's restitution
+      // do). A point is counted deep below -contactPushMaxDepth + kDeepMargin: the position pass
+      // computes the same separation in another order of operations, which differs by far less
+      // (a few float ulps of the anchors and the motion, about 1e-6 m), so with no deep point it
+      // moves nothing, and skipping it gives the same bits. Base-100 pyramid: its one pass over
+      // the rows found nothing to move every step (0.98M instructions a step).
+      std::atomic<bool> deep{false};
+      const bool maySkipPositions = !def.effects.restitution;
+      constexpr Real kDeepMargin = Real(1e-4);
+      SoftSolveParams lastPrm = prm;
+      if (maySkipPositions) {
+        lastPrm.deep = &deep;
+        lastPrm.deepBelow = -def.contactPushMaxDepth + kDeepMargin;
       }
-      ForEachGroup(run, simd, [&](auto lanes, SoftRowGroup& g, int lane) {
-        SolveRows<decltype(lanes), kRotation, kFriction, true>(states_.data(), g, lane, prm);
-      });
-      // The rotation guard is per world step: per sub-step it allowed n times the turn (188 rad/s
-      // instead of 47 at 4 sub-steps), and spinning triangles of the soak left the box.
-      IntegrateStatePositions(run, bodies, def, h, ctx.dt);
-      // Friction only in the last relax pass: the earlier ones settle the normal impulses that
-      // bound it. Base-100 pyramid: 44.7M -> 43.2M instructions a step, and the 16 hard cases hold
-      // as with friction in both (tall_stack top 0.034 m; with friction in the first pass only
-      // 0.051 m, which fails).
-      //
-      // With two or more relax passes the first stores each point's speculative bias and the later
-      // ones load it (soft_rows.h, RelaxBias, says why).
-      const int relax = def.softRelaxIterations;
-      const SoftSolveParams& firstPrm = sub == n - 1 ? lastPrm : prm;  // the first pass looks for deep points
-      for (int it = 0; it < relax; ++it) {
-        if (relax == 1) {
-          RelaxPass<kRotation, kFriction, RelaxBias::kCompute>(run, simd, firstPrm);
-        } else if (it == 0) {
-          def.softFrictionEveryRelaxPass
-              ? RelaxPass<kRotation, kFriction, RelaxBias::kComputeAndStore>(run, simd, firstPrm)
-              : RelaxPass<kRotation, false, RelaxBias::kComputeAndStore>(run, simd, firstPrm);
-        } else if (it == relax - 1 || def.softFrictionEveryRelaxPass) {
-          RelaxPass<kRotation, kFriction, RelaxBias::kLoad>(run, simd, prm);
-        } else {
-          RelaxPass<kRotation, false, RelaxBias::kLoad>(run, simd, prm);
+      // Each sub-step is one region of stages (TaskSystem::ParallelStages): gravity, the warm start
+      // and the soft solve colour by colour, the positions, the relax passes colour by colour; the
+      // threads go from stage to stage inside one job instead of one hand-over per pass (base-100
+      // pyramid, default engine: 52 jobs a step before). Which thread runs which chunk never
+      // changes the arithmetic. The sub-steps' integration is therefore timed as part of the solve.
+      for (int sub = 0; sub < n; ++sub) {
+        BeginRegion();
+        IntegrateStateVelocities(run, bodies, def, h, sub == 0 ? ctx.dt : Real(0));
+        if (def.effects.warmStarting) {
+          ForEachGroup(run, simd, [&](auto lanes, SoftRowGroup& g, int lane) {
+            WarmStartRows<decltype(lanes), kRotation>(states_.data(), g, lane);
+          });
         }
+        ForEachGroup(run, simd, [&](auto lanes, SoftRowGroup& g, int lane) {
+          SolveRows<decltype(lanes), kRotation, kFriction, true>(states_.data(), g, lane, prm);
+        });
+        // The rotation guard is per world step: per sub-step it allowed n times the turn (188 rad/s
+        // instead of 47 at 4 sub-steps), and spinning triangles of the soak left the box.
+        IntegrateStatePositions(run, bodies, def, h, ctx.dt);
+        // Friction only in the last relax pass: the earlier ones settle the normal impulses that
+        // bound it. Base-100 pyramid: 44.7M -> 43.2M instructions a step, and the 16 hard cases hold
+        // as with friction in both (tall_stack top 0.034 m; with friction in the first pass only
+        // 0.051 m, which fails).
+        //
+        // With two or more relax passes the first stores each point's speculative bias and the later
+        // ones load it (soft_rows.h, RelaxBias, says why).
+        const int relax = def.softRelaxIterations;
+        const SoftSolveParams& firstPrm = sub == n - 1 ? lastPrm : prm;  // the first pass looks for deep points
+        for (int it = 0; it < relax; ++it) {
+          if (relax == 1) {
+            RelaxPass<kRotation, kFriction, RelaxBias::kCompute>(run, simd, firstPrm);
+          } else if (it == 0) {
+            def.softFrictionEveryRelaxPass
+                ? RelaxPass<kRotation, kFriction, RelaxBias::kComputeAndStore>(run, simd, firstPrm)
+                : RelaxPass<kRotation, false, RelaxBias::kComputeAndStore>(run, simd, firstPrm);
+          } else if (it == relax - 1 || def.softFrictionEveryRelaxPass) {
+            RelaxPass<kRotation, kFriction, RelaxBias::kLoad>(run, simd, prm);
+          } else {
+            RelaxPass<kRotation, false, RelaxBias::kLoad>(run, simd, prm);
+          }
+        }
+        EndRegion(run);
+        if (box2dRestitution && sub == 0 && m > 0) ApplyBox2dRestitution<kRotation, kFriction>(run, def, h);
       }
-      EndRegion(run);
-      if (box2dRestitution && sub == 0 && m > 0) ApplyBox2dRestitution<kRotation, kFriction>(run, def, h);
-    }
-    if (def.effects.restitution && m > 0) ForEachColor(run, [&](int b, int e) { ApplyStateBounceShifts(b, e); });
-    // Overlap deeper than the soft contacts push out (contactPushMaxDepth) is moved out here, by pgs's
-    // position pass (on the solver states): positions change, velocities do not, so deep overlap
-    // cannot fling bodies.
-    if (m > 0 && (!maySkipPositions || deep.load(std::memory_order_relaxed))) {
-      CorrectStatePositions<kRotation>(run, def, simd);
-    }
-    ti = Clock::now();
-    StoreStates(run, bodies, def, ctx.dt);
-    integrateMs += Ms(ti, Clock::now());
-    if (lean) {
-      StoreRowImpulses<true>(run);
+      if (def.effects.restitution && m > 0) ForEachColor(run, [&](int b, int e) { ApplyStateBounceShifts(b, e); });
+      // Overlap deeper than the soft contacts push out (contactPushMaxDepth) is moved out here, by pgs's
+      // position pass (on the solver states): positions change, velocities do not, so deep overlap
+      // cannot fling bodies.
+      if (m > 0 && (!maySkipPositions || deep.load(std::memory_order_relaxed))) {
+        CorrectStatePositions<kRotation>(run, def, simd);
+      }
+      tr = Clock::now();
+      StoreRowStates(run, bodies, def);
+      integrateMs += Ms(tr, Clock::now());
+      if (lean) {
+        StoreRowImpulses<true>(run);
+      } else {
+        StoreRowImpulses<false>(run);
+        run.For(Stage::kSolve, m, run.MinItems(), [&](int b, int e, int) { StoreImpulses(ctx.contacts, b, e); });
+      }
+    };
+    // Few rows among many bodies (the sparse stress scenes): the rows' part runs on one thread
+    // beside the free bodies' pass on the others (StageRunner::Beside), instead of its sub-step
+    // regions splitting a few hundred rows across threads, a barrier for every colour of every
+    // pass. Circle stress N = 16000 at 2 threads: 309 contacts, about 56 barriers a step over a
+    // solve that took 0.174 ms against 0.183 on 1 thread. kRowCost: a contact costs the rows'
+    // part about 34 times what a free body costs MoveFreeBodies (callgrind, 20 steps of N = 16000
+    // circles, 1 thread: 0.60M instructions a step for 309 contacts against 0.88M for about 15400
+    // free bodies), so beside them the rows' part is at most the free bodies' work.
+    constexpr int kRowCost = 32;
+    const int count = bodies.Count();
+    if (int64_t(kRowCost) * m <= count) {
+      run.Beside(Stage::kSolve, rows, count, run.MinItems(), [&](int b, int e) { MoveFreeBodies(bodies, def, ctx.dt, b, e); });
     } else {
-      StoreRowImpulses<false>(run);
-      run.For(Stage::kSolve, m, run.MinHeavyItems(), [&](int b, int e, int) { StoreImpulses(ctx.contacts, b, e); });
+      rows();
+      ti = Clock::now();
+      run.For(Stage::kIntegrate, count, run.MinItems(), [&](int b, int e, int) { MoveFreeBodies(bodies, def, ctx.dt, b, e); });
+      integrateMs += Ms(ti, Clock::now());
     }
     const double total = Ms(t0, Clock::now());
     ctx.profile->integrate += integrateMs;
@@ -687,7 +708,7 @@ class SoftStepSolver final : public ContactSolverBase {
   template <bool kLean>
   void StoreRowImpulses(StageRunner& run) {
     const int count = static_cast<int>(groups_.size());
-    run.For(Stage::kSolve, count, std::max(1, run.MinHeavyItems() / kLanes), [&](int gb, int ge, int) {
+    run.For(Stage::kSolve, count, std::max(1, run.MinItems() / kLanes), [&](int gb, int ge, int) {
       for (int gi = gb; gi < ge; ++gi) {
         const SoftRowGroup& g = groups_[gi];
         for (int lane = 0; lane < kLanes; ++lane) {
@@ -717,11 +738,23 @@ class SoftStepSolver final : public ContactSolverBase {
   // and StoreStates moves them over the whole step at once.
   // First the bodies that rows read but never write (inverse mass 0: static, kinematic, sleeping),
   // with the flags cleared (kinematic ones set); MarkRows then flags the dynamic bodies in rows.
-  void LoadFixedStates(StageRunner& run, const Bodies& bodies, bool sleep) {
+  // The same pass also takes the snapshot of where every body starts (SnapshotPositions:
+  // nothing before it reads the snapshot, and the restitution passes change only velocities) and,
+  // with clearColors, clears Color's masks: one pass over the bodies instead of three, each a
+  // hand-over and a join at 2 threads (circle stress N = 16000: 3 of the step's 5 solver passes
+  // over all 16004 bodies).
+  void LoadFixedStates(StageRunner& run, const Bodies& bodies, bool sleep, bool clearColors) {
     const int count = bodies.Count();
     states_.resize(count);
     inRows_.resize(count + kFlagPad);  // padded: the scans below read several flags at a time
+    center0_.resize(count);
+    rot0_.resize(count);
     run.For(Stage::kIntegrate, count, run.MinItems(), [&](int b, int e, int) {
+      if (clearColors) ClearColors(b, e);
+      for (int i = b; i < e; ++i) {
+        center0_[i] = bodies.center[i];
+        rot0_[i] = bodies.xf[i].q;
+      }
       // Raw pointers: with the vectors' own, every store reloaded their data pointers.
       const BodyInverseMass* inv = bodies.inv.data();
       const BodyVelocity* vel = bodies.vel.data();
@@ -935,34 +968,46 @@ class SoftStepSolver final : public ContactSolverBase {
 #endif
 
   // Back to the bodies: velocity, centre (where the step began plus the motion) and rotation.
+  // The free bodies (MoveFreeBodies) and those in rows (StoreRowStates) are separate passes: the
+  // first does not depend on the sub-steps (Run runs it beside them where the rows are few).
   void StoreStates(StageRunner& run, Bodies& bodies, const WorldDef& def, Real dt) {
+    run.For(Stage::kIntegrate, bodies.Count(), run.MinItems(),
+            [&](int b, int e, int) { MoveFreeBodies(bodies, def, dt, b, e); });
+    StoreRowStates(run, bodies, def);
+  }
+
+  // The free bodies among [b, e): moved over the whole step at once (MoveFree).
+  void MoveFreeBodies(Bodies& bodies, const WorldDef& def, Real dt, int b, int e) {
     const bool sleep = def.effects.sleep;
     const FreeMotion fm = MakeFreeMotion(def, dt);
-    run.For(Stage::kIntegrate, bodies.Count(), run.MinItems(), [&](int b, int e, int) {
-      int i = b;
+    int i = b;
 #if QUADRANT_SOFT_SIMD
-      // Four consecutive bodies at a time (MoveFour), writing the free ones among them.
-      if (def.softSimd && fm.maxAngularSpeed > 0) {
-        const uint8_t* awake = bodies.awake.data();
-        const BodyType* type = bodies.type.data();
-        const uint8_t* inRows = inRows_.data();
-        for (; i + kLanes <= e; i += kLanes) {
-          int mask = 0;  // bit k: body i + k is free (Moves() and not in rows)
-          for (int k = 0; k < kLanes; ++k) {
-            const bool moves = sleep ? awake[i + k] != 0 : type[i + k] != BodyType::kStatic;
-            mask |= int(moves & (inRows[i + k] == 0)) << k;
-          }
-          if (mask == 0 || (vex_ ? MoveFourVex(bodies, fm, i, mask) : MoveFour(bodies, fm, i, mask))) continue;
-          for (int k = 0; k < kLanes; ++k) {
-            if (mask >> k & 1) MoveFree(bodies, fm, i + k);
-          }
+    // Four consecutive bodies at a time (MoveFour), writing the free ones among them.
+    if (def.softSimd && fm.maxAngularSpeed > 0) {
+      const uint8_t* awake = bodies.awake.data();
+      const BodyType* type = bodies.type.data();
+      const uint8_t* inRows = inRows_.data();
+      for (; i + kLanes <= e; i += kLanes) {
+        int mask = 0;  // bit k: body i + k is free (Moves() and not in rows)
+        for (int k = 0; k < kLanes; ++k) {
+          const bool moves = sleep ? awake[i + k] != 0 : type[i + k] != BodyType::kStatic;
+          mask |= int(moves & (inRows[i + k] == 0)) << k;
+        }
+        if (mask == 0 || (vex_ ? MoveFourVex(bodies, fm, i, mask) : MoveFour(bodies, fm, i, mask))) continue;
+        for (int k = 0; k < kLanes; ++k) {
+          if (mask >> k & 1) MoveFree(bodies, fm, i + k);
         }
       }
+    }
 #endif
-      for (; i < e; ++i) {
-        if (Moves(bodies, i, sleep) && !inRows_[i]) MoveFree(bodies, fm, i);
-      }
-    });
+    for (; i < e; ++i) {
+      if (Moves(bodies, i, sleep) && !inRows_[i]) MoveFree(bodies, fm, i);
+    }
+  }
+
+  // The bodies in rows (active_): their solver states back to the bodies.
+  void StoreRowStates(StageRunner& run, Bodies& bodies, const WorldDef& def) {
+    const bool sleep = def.effects.sleep;
     run.For(Stage::kIntegrate, ActiveCount(), run.MinItems(), [&](int b, int e, int) {
       for (int k = b; k < e; ++k) {
         const int i = active_[k];

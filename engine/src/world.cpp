@@ -387,7 +387,7 @@ void World::Impl::RunPipeline(Real dt) {
   }
   const bool persist = def.solver != SolverType::kThesis && def.effects.warmStarting;
   if (persist) {
-    run->For(Stage::kPersistence, static_cast<int>(contacts.size()), run->MinHeavyItems(),
+    run->For(Stage::kPersistence, static_cast<int>(contacts.size()), run->MinItems(),
              [&](int begin, int end, int) { cache.Restore(std::span<Contact>(contacts).subspan(begin, end - begin)); });
   }
   auto t3 = Clock::now();
