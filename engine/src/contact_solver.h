@@ -152,7 +152,8 @@ class ContactSolverBase : public Solver {
   // bodies: in order, on one thread).
   static constexpr int kColorGrain = 64;
   template <class Fn>
-  void ForEachColor(StageRunner& run, Fn&& fn, int repeat = 1) {
+  // minParallel: the region's items below which it runs inline (default: MinHeavyItems a repeat).
+  void ForEachColor(StageRunner& run, Fn&& fn, int repeat = 1, int minParallel = 0) {
     stagePlan_.clear();
     stageFirst_.clear();
     const int overflowBegin = colorStart_[kColors], overflow = colorStart_[kColors + 1] - overflowBegin;
@@ -168,7 +169,7 @@ class ContactSolverBase : public Solver {
         stageFirst_.push_back(overflowBegin);
       }
     }
-    run.Stages(Stage::kSolve, stagePlan_, run.MinHeavyItems() * repeat,
+    run.Stages(Stage::kSolve, stagePlan_, minParallel > 0 ? minParallel : run.MinHeavyItems() * repeat,
                [&](int s, int b, int e) { fn(stageFirst_[s] + b, stageFirst_[s] + e); });
   }
 

@@ -112,18 +112,6 @@ class SoftStepSolver final : public ContactSolverBase {
     const int m = static_cast<int>(constraints_.size());
     contacts_ = ctx.contacts;
     inv_ = bodies.inv.data();
-    // Without restitution nothing but the rows reads a prepared constraint: each is prepared into
-    // a local one as its row is built (BuildRows), and the list of constraints (144 bytes each,
-    // written and read back once a step) is not kept. The restitution passes need the list.
-    const bool lean = !def.effects.restitution;
-    if (!lean) {
-      run.For(Stage::kSolve, m, run.MinHeavyItems(), [&](int b, int e, int) { Prepare<kRotation, true>(ctx, b, e); });
-    }
-    const bool box2dRestitution = def.effects.restitution && def.restitution == RestitutionPolicy::kBox2d;
-    if (def.effects.restitution && !box2dRestitution) {
-      const Vec2 stepGravity = def.effects.gravity ? ctx.dt * def.gravity : Vec2{};
-      ApplyCollisionPasses<kRotation>(run, bodies, def, Real(1) / ctx.dt, stepGravity);
-    }
     // The sub-steps run on the compact solver state (velocity and motion since the step began,
     // 32 bytes a body) and on the rows in groups of four (soft_rows.h), not on the body arrays
     // and the constraints.
@@ -133,9 +121,24 @@ class SoftStepSolver final : public ContactSolverBase {
     MarkRows(run, bodies.Count(), def.softMassRatioLimit > 0);
     const bool simd = def.softSimd;
     vex_ = simd && def.softVex && CpuHasAvx();  // soft_rows.h: the same operations in AVX's encoding
-    // The rows' part of the step: from building the rows to storing their bodies and impulses.
-    // The free bodies (MoveFreeBodies) do not depend on it: no row reads or writes them.
+    // Without restitution nothing but the rows reads a prepared constraint: each is prepared into
+    // a local one as its row is built (BuildRows), and the list of constraints (144 bytes each,
+    // written and read back once a step) is not kept. The restitution passes need the list.
+    const bool lean = !def.effects.restitution;
+    const bool box2dRestitution = def.effects.restitution && def.restitution == RestitutionPolicy::kBox2d;
+    // The rows' part of the step: from preparing the constraints and the restitution passes to
+    // storing the rows' bodies and impulses. The free bodies (MoveFreeBodies) do not depend on it:
+    // no row reads or writes them (the restitution passes change the velocities of bodies with
+    // an inverse mass in a contact only, which MarkRows has flagged as in rows, and LoadFixedStates
+    // reads only those without one).
     auto rows = [&] {
+      if (!lean) {
+        run.For(Stage::kSolve, m, run.MinHeavyItems(), [&](int b, int e, int) { Prepare<kRotation, true>(ctx, b, e); });
+      }
+      if (def.effects.restitution && !box2dRestitution) {
+        const Vec2 stepGravity = def.effects.gravity ? ctx.dt * def.gravity : Vec2{};
+        ApplyCollisionPasses<kRotation>(run, bodies, def, Real(1) / ctx.dt, stepGravity);
+      }
       lean ? BuildRows<kRotation, true>(ctx, soft, staticSoft, def.softMassRatioLimit)
            : BuildRows<kRotation, false>(ctx, soft, staticSoft, def.softMassRatioLimit);
       auto tr = Clock::now();
@@ -227,7 +230,7 @@ class SoftStepSolver final : public ContactSolverBase {
     // part about 34 times what a free body costs MoveFreeBodies (callgrind, 20 steps of N = 16000
     // circles, 1 thread: 0.60M instructions a step for 309 contacts against 0.88M for about 15400
     // free bodies), so beside them the rows' part is at most the free bodies' work.
-    constexpr int kRowCost = 32;
+    constexpr int kRowCost = 16;
     const int count = bodies.Count();
     if (int64_t(kRowCost) * m <= count) {
       run.Beside(Stage::kSolve, rows, count, run.MinItems(), [&](int b, int e) { MoveFreeBodies(bodies, def, ctx.dt, b, e); });
@@ -494,7 +497,7 @@ class SoftStepSolver final : public ContactSolverBase {
           if (cc.invMassB > 0 && cc.invMassA == 0) supported_[cc.b] = stamp;
         }
       }
-    });
+    }, 1, run.MinItems());  // a few instructions a row: split only from MinItems rows on
   }
 
   static void PadPoint(SoftPointRows& p, int lane) {
