@@ -212,9 +212,6 @@ class SoftStepSolver final : public ContactSolverBase {
       if (m > 0 && (!maySkipPositions || deep.load(std::memory_order_relaxed))) {
         CorrectStatePositions<kRotation>(run, def, simd);
       }
-      tr = Clock::now();
-      StoreRowStates(run, bodies, def);
-      integrateMs += Ms(tr, Clock::now());
       if (lean) {
         StoreRowImpulses<true>(run);
       } else {
@@ -223,13 +220,15 @@ class SoftStepSolver final : public ContactSolverBase {
       }
     };
     // Few rows among many bodies (the sparse stress scenes): the rows' part runs on one thread
-    // beside the free bodies' pass on the others (StageRunner::Beside), instead of its sub-step
-    // regions splitting a few hundred rows across threads, a barrier for every colour of every
-    // pass. Circle stress N = 16000 at 2 threads: 309 contacts, about 56 barriers a step over a
-    // solve that took 0.174 ms against 0.183 on 1 thread. kRowCost: a contact costs the rows'
-    // part about 34 times what a free body costs MoveFreeBodies (callgrind, 20 steps of N = 16000
-    // circles, 1 thread: 0.60M instructions a step for 309 contacts against 0.88M for about 15400
-    // free bodies), so beside them the rows' part is at most the free bodies' work.
+    // beside the free bodies' pass on the others (StageRunner::Beside), instead of its passes
+    // splitting a few hundred rows across the threads with a barrier for every colour of every
+    // pass, which gained nothing: circle stress N = 16000 (about 670 contacts a step) at 2 threads
+    // had 53 stages in 11 regions a step, and its solve took 0.174 ms against 0.183 on 1 thread
+    // (lead's measurement at ef96acf). kRowCost: a contact costs the rows' part about 30 times
+    // what a free body costs MoveFreeBodies (callgrind, 20 steps of that scene, 1 thread: 1.24M
+    // instructions a step for the rows' part, 0.92M for the free bodies' pass), so with up to
+    // count / 16 contacts the rows' part is at most about twice the free bodies' work, and beside
+    // it costs the step at most its own time, where split it cost about that and more.
     constexpr int kRowCost = 16;
     const int count = bodies.Count();
     if (int64_t(kRowCost) * m <= count) {
@@ -240,6 +239,12 @@ class SoftStepSolver final : public ContactSolverBase {
       run.For(Stage::kIntegrate, count, run.MinItems(), [&](int b, int e, int) { MoveFreeBodies(bodies, def, ctx.dt, b, e); });
       integrateMs += Ms(ti, Clock::now());
     }
+    // After the free bodies' pass, not in the rows' part: MoveFour reads the transforms of all
+    // four bodies of a group (writing only the free ones), so the rows' bodies must not be
+    // written while it runs.
+    ti = Clock::now();
+    StoreRowStates(run, bodies, def);
+    integrateMs += Ms(ti, Clock::now());
     const double total = Ms(t0, Clock::now());
     ctx.profile->integrate += integrateMs;
     ctx.profile->solve += total - integrateMs;
@@ -1111,7 +1116,12 @@ class SoftStepSolver final : public ContactSolverBase {
 #endif
 
   [[gnu::always_inline]] bool MoveFour(Bodies& bodies, const FreeMotion& fm, int i, int mask) {
-    const BodyVelocity* vel = bodies.vel.data() + i;
+    // Only the free lanes' velocities are read: the others belong to bodies in rows, whose
+    // velocities the restitution passes may be writing meanwhile (Run's Beside); their lanes are
+    // computed from zeros and dropped.
+    const BodyVelocity* in = bodies.vel.data() + i;
+    BodyVelocity vel[kLanes];
+    for (int k = 0; k < kLanes; ++k) vel[k] = (mask >> k & 1) ? in[k] : BodyVelocity{};
     F4 ux{_mm_setr_ps(vel[0].v.x, vel[1].v.x, vel[2].v.x, vel[3].v.x)};
     F4 uy{_mm_setr_ps(vel[0].v.y, vel[1].v.y, vel[2].v.y, vel[3].v.y)};
     F4 w{_mm_setr_ps(vel[0].w, vel[1].w, vel[2].w, vel[3].w)};
