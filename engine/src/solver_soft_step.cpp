@@ -746,23 +746,16 @@ class SoftStepSolver final : public ContactSolverBase {
   // and StoreStates moves them over the whole step at once.
   // First the bodies that rows read but never write (inverse mass 0: static, kinematic, sleeping),
   // with the flags cleared (kinematic ones set); MarkRows then flags the dynamic bodies in rows.
-  // The same pass also takes the snapshot of where every body starts (SnapshotPositions:
-  // nothing before it reads the snapshot, and the restitution passes change only velocities) and,
-  // with clearColors, clears Color's masks: one pass over the bodies instead of three, each a
-  // hand-over and a join at 2 threads (circle stress N = 16000: 3 of the step's 5 solver passes
-  // over all 16004 bodies).
+  // With clearColors the same pass clears Color's masks: one pass over the bodies instead of
+  // three (this, the masks' clearing and SnapshotPositions, whose snapshot LoadStates now takes
+  // of the rows' bodies only), each a hand-over and a join at 2 threads (circle stress N = 16000:
+  // 3 of the step's 5 solver passes over all 16004 bodies).
   void LoadFixedStates(StageRunner& run, const Bodies& bodies, bool sleep, bool clearColors) {
     const int count = bodies.Count();
     states_.resize(count);
     inRows_.resize(count + kFlagPad);  // padded: the scans below read several flags at a time
-    center0_.resize(count);
-    rot0_.resize(count);
     run.For(Stage::kIntegrate, count, run.MinItems(), [&](int b, int e, int) {
       if (clearColors) ClearColors(b, e);
-      for (int i = b; i < e; ++i) {
-        center0_[i] = bodies.center[i];
-        rot0_[i] = bodies.xf[i].q;
-      }
       // Raw pointers: with the vectors' own, every store reloaded their data pointers.
       const BodyInverseMass* inv = bodies.inv.data();
       const BodyVelocity* vel = bodies.vel.data();
@@ -814,10 +807,16 @@ class SoftStepSolver final : public ContactSolverBase {
       }
     }
     active_.resize(listed);
+    // Where the rows' bodies start (StoreRowStates adds their motion to it); the free bodies
+    // need no snapshot (MoveFree).
+    center0_.resize(count);
+    rot0_.resize(count);
     run.For(Stage::kIntegrate, ActiveCount(), run.MinItems(), [&](int b, int e, int) {
       for (int k = b; k < e; ++k) {
         const int i = active_[k];
         if (bodies.inv[i].invMass != 0) states_[i] = SolverBody{bodies.vel[i].v, bodies.vel[i].w, 0, Vec2{}, Rot{}};
+        center0_[i] = bodies.center[i];
+        rot0_[i] = bodies.xf[i].q;
       }
     });
   }
@@ -1094,8 +1093,10 @@ class SoftStepSolver final : public ContactSolverBase {
       vOut = vEnd;
     }
     bodies.vel[i] = BodyVelocity{vOut, w};
-    bodies.center[i] = center0_[i] + dp;
-    if (fm.rotation && w != 0) bodies.xf[i].q = IntegrateRot(rot0_[i], fm.dt * w);
+    // Nothing has moved a free body yet in this step: its centre and rotation are where the step
+    // began (no snapshot needed: LoadStates takes one of the rows' bodies only).
+    bodies.center[i] = bodies.center[i] + dp;
+    if (fm.rotation && w != 0) bodies.xf[i].q = IntegrateRot(bodies.xf[i].q, fm.dt * w);
     SyncTransform(bodies, i);
   }
 
@@ -1151,16 +1152,14 @@ class SoftStepSolver final : public ContactSolverBase {
       if (Any(turns)) {
         const F4 turn = Splat(fm.dt, F4{}) * w;
         if (Any(GreaterEqual(Max(turn, Neg(turn)), Splat(Real(0.5), F4{})))) return false;
-        const float* r0 = &rot0_[i].c;
-        const __m128 ra = _mm_loadu_ps(r0), rb = _mm_loadu_ps(r0 + 4);  // c0 s0 c1 s1, c2 s2 c3 s3
-        F4 c{_mm_shuffle_ps(ra, rb, _MM_SHUFFLE(2, 0, 2, 0))}, sn{_mm_shuffle_ps(ra, rb, _MM_SHUFFLE(3, 1, 3, 1))};
+        F4 c = qc, sn = qs;  // a free body's rotation is still the step's first (MoveFree)
         TurnBy(c, sn, turn);
         qc = Select(turns, c, qc);
         qs = Select(turns, sn, qs);
       }
     }
     // Centres (8 bytes each): x0 y0 x1 y1 and x2 y2 x3 y3, split into xs and ys.
-    const float* c0 = &center0_[i].x;
+    const float* c0 = &bodies.center[i].x;
     const __m128 ca = _mm_loadu_ps(c0), cb = _mm_loadu_ps(c0 + 4);
     const F4 nh = Splat(fm.nh, F4{});
     const F4 cx = F4{_mm_shuffle_ps(ca, cb, _MM_SHUFFLE(2, 0, 2, 0))} + (nh * ux + Splat(fm.dpGravity.x, F4{}));
