@@ -1120,9 +1120,12 @@ class SoftStepSolver final : public ContactSolverBase {
     // Only the free lanes' velocities are read: the others belong to bodies in rows, whose
     // velocities the restitution passes may be writing meanwhile (Run's Beside); their lanes are
     // computed from zeros and dropped.
-    const BodyVelocity* in = bodies.vel.data() + i;
-    BodyVelocity vel[kLanes];
-    for (int k = 0; k < kLanes; ++k) vel[k] = (mask >> k & 1) ? in[k] : BodyVelocity{};
+    const BodyVelocity* vel = bodies.vel.data() + i;
+    BodyVelocity masked[kLanes];
+    if (mask != 0xF) {
+      for (int k = 0; k < kLanes; ++k) masked[k] = (mask >> k & 1) ? vel[k] : BodyVelocity{};
+      vel = masked;
+    }
     F4 ux{_mm_setr_ps(vel[0].v.x, vel[1].v.x, vel[2].v.x, vel[3].v.x)};
     F4 uy{_mm_setr_ps(vel[0].v.y, vel[1].v.y, vel[2].v.y, vel[3].v.y)};
     F4 w{_mm_setr_ps(vel[0].w, vel[1].w, vel[2].w, vel[3].w)};
