@@ -88,6 +88,8 @@ class ContactSolverBase : public Solver {
     bodyColors_.resize(bodies.Count(), 0);  // all zero between steps
     ends_.resize(m);
     colorOf_.resize(m);
+    // A gather of a few bytes a contact: split from MinItems contacts on, as the other passes
+    // of this cost (StoreImpulses, contact_cache.cpp's Store says why).
     run.For(Stage::kSolve, m, run.MinItems(), [&](int begin, int end, int) {
       for (int c = begin; c < end; ++c) {
         const int a = ctx.contacts[c].a, b = ctx.contacts[c].b;

@@ -228,7 +228,10 @@ class SoftStepSolver final : public ContactSolverBase {
     // what a free body costs MoveFreeBodies (callgrind, 20 steps of that scene, 1 thread: 1.24M
     // instructions a step for the rows' part, 0.92M for the free bodies' pass), so with up to
     // count / 16 contacts the rows' part is at most about twice the free bodies' work, and beside
-    // it costs the step at most its own time, where split it cost about that and more.
+    // it costs the step at most its own time, where split it cost about that and more. Measured
+    // against ef96acf (7 interleaved rounds on an otherwise quiet machine, 60 + 10 steps, medians,
+    // 2 threads): solve + integrate 0.304 -> 0.271 ms per step, the step 0.937 -> 0.885 (the
+    // rows' part, about 0.2 ms of it, is now the longer of the two sides).
     constexpr int kRowCost = 16;
     const int count = bodies.Count();
     if (int64_t(kRowCost) * m <= count) {
@@ -716,6 +719,7 @@ class SoftStepSolver final : public ContactSolverBase {
   template <bool kLean>
   void StoreRowImpulses(StageRunner& run) {
     const int count = static_cast<int>(groups_.size());
+    // Copies of a few floats a row: split from MinItems rows on (contact_cache.cpp's Store says why).
     run.For(Stage::kSolve, count, std::max(1, run.MinItems() / kLanes), [&](int gb, int ge, int) {
       for (int gi = gb; gi < ge; ++gi) {
         const SoftRowGroup& g = groups_[gi];
