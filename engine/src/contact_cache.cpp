@@ -49,17 +49,14 @@ void ContactCache::Store(std::span<const Contact> contacts, StageRunner& run) {
   const int workers = run.Workers();
   workerCount_.assign(size_t(workers) + 1, 0);
   // Both passes split the same count with the same grain, so each worker sees the same block.
-  // From MinItems contacts on (a few nanoseconds each, as a body update), not MinHeavyItems: on
-  // circle stress N = 16000 (about 670 contacts) the persistence stage took 0.012 ms per step on
-  // 1 thread and 0.018 on 2 with these passes, the restore and the sort split (lead, ef96acf).
-  run.For(Stage::kPersistence, count, run.MinItems(), [&](int begin, int end, int worker) {
+  run.For(Stage::kPersistence, count, run.MinHeavyItems(), [&](int begin, int end, int worker) {
     size_t n = 0;
     for (int i = begin; i < end; ++i) n += Carries(contacts[i]) ? 1 : 0;
     workerCount_[size_t(worker) + 1] = n;
   });
   for (int w = 0; w < workers; ++w) workerCount_[w + 1] += workerCount_[w];
   entries_.resize(workerCount_[workers]);
-  run.For(Stage::kPersistence, count, run.MinItems(), [&](int begin, int end, int worker) {
+  run.For(Stage::kPersistence, count, run.MinHeavyItems(), [&](int begin, int end, int worker) {
     size_t out = workerCount_[worker];
     for (int i = begin; i < end; ++i) {
       if (Carries(contacts[i])) entries_[out++] = MakeEntry(contacts[i]);

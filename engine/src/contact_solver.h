@@ -88,9 +88,7 @@ class ContactSolverBase : public Solver {
     bodyColors_.resize(bodies.Count(), 0);  // all zero between steps
     ends_.resize(m);
     colorOf_.resize(m);
-    // A gather of a few bytes a contact: split from MinItems contacts on, as the other passes
-    // of this cost (StoreImpulses, contact_cache.cpp's Store says why).
-    run.For(Stage::kSolve, m, run.MinItems(), [&](int begin, int end, int) {
+    run.For(Stage::kSolve, m, run.MinHeavyItems(), [&](int begin, int end, int) {
       for (int c = begin; c < end; ++c) {
         const int a = ctx.contacts[c].a, b = ctx.contacts[c].b;
         ends_[c] = {bodies.inv[a].invMass > 0 ? a : -1, bodies.inv[b].invMass > 0 ? b : -1};
@@ -154,8 +152,7 @@ class ContactSolverBase : public Solver {
   // bodies: in order, on one thread).
   static constexpr int kColorGrain = 64;
   template <class Fn>
-  // minParallel: the region's items below which it runs inline (default: MinHeavyItems a repeat).
-  void ForEachColor(StageRunner& run, Fn&& fn, int repeat = 1, int minParallel = 0) {
+  void ForEachColor(StageRunner& run, Fn&& fn, int repeat = 1) {
     stagePlan_.clear();
     stageFirst_.clear();
     const int overflowBegin = colorStart_[kColors], overflow = colorStart_[kColors + 1] - overflowBegin;
@@ -171,7 +168,7 @@ class ContactSolverBase : public Solver {
         stageFirst_.push_back(overflowBegin);
       }
     }
-    run.Stages(Stage::kSolve, stagePlan_, minParallel > 0 ? minParallel : run.MinHeavyItems() * repeat,
+    run.Stages(Stage::kSolve, stagePlan_, run.MinHeavyItems() * repeat,
                [&](int s, int b, int e) { fn(stageFirst_[s] + b, stageFirst_[s] + e); });
   }
 

@@ -18,9 +18,8 @@ void ContactSorter::Sort(StageRunner& run, int bodyCount, const std::vector<std:
   parts_.resize(parts);
   size_t total = 0;
   for (const std::vector<Contact>& part : workerContacts) total += part.size();
-  // Few contacts: one thread does it all (a parallel-for would cost more than it saves; below
-  // MinItems, contact_cache.cpp's Store says why).
-  const bool parallel = total >= size_t(run.MinItems());
+  // Few contacts: one thread does it all (a parallel-for would cost more than it saves).
+  const bool parallel = total >= size_t(run.MinHeavyItems());
   run.For(Stage::kPersistence, parts, parallel ? 1 : parts + 1, [&](int begin, int end, int) {
     for (int p = begin; p < end; ++p) SortPart(workerContacts[p], bodyCount, parts_[p]);
   });

@@ -61,7 +61,7 @@ class PgsSolver final : public ContactSolverBase {
     // Every iteration's colours in one region (ForEachColor): the same order of passes.
     ForEachColor(run, [&](int b, int e) { SolveVelocities<kRotation, kFriction>(bodies, invDt, b, e); },
                  def.velocityIterations);
-    run.For(Stage::kSolve, m, run.MinItems(), [&](int b, int e, int) { StoreImpulses(ctx.contacts, b, e); });
+    run.For(Stage::kSolve, m, run.MinHeavyItems(), [&](int b, int e, int) { StoreImpulses(ctx.contacts, b, e); });
     auto t2 = Clock::now();
 
     const bool correct = def.positionIterations > 0 && m > 0;

@@ -216,7 +216,7 @@ class SoftStepSolver final : public ContactSolverBase {
         StoreRowImpulses<true>(run);
       } else {
         StoreRowImpulses<false>(run);
-        run.For(Stage::kSolve, m, run.MinItems(), [&](int b, int e, int) { StoreImpulses(ctx.contacts, b, e); });
+        run.For(Stage::kSolve, m, run.MinHeavyItems(), [&](int b, int e, int) { StoreImpulses(ctx.contacts, b, e); });
       }
     };
     // Few rows among many bodies (the sparse stress scenes): the rows' part runs on one thread
@@ -505,7 +505,7 @@ class SoftStepSolver final : public ContactSolverBase {
           if (cc.invMassB > 0 && cc.invMassA == 0) supported_[cc.b] = stamp;
         }
       }
-    }, 1, run.MinItems());  // a few instructions a row: split only from MinItems rows on
+    });
   }
 
   static void PadPoint(SoftPointRows& p, int lane) {
@@ -719,8 +719,7 @@ class SoftStepSolver final : public ContactSolverBase {
   template <bool kLean>
   void StoreRowImpulses(StageRunner& run) {
     const int count = static_cast<int>(groups_.size());
-    // Copies of a few floats a row: split from MinItems rows on (contact_cache.cpp's Store says why).
-    run.For(Stage::kSolve, count, std::max(1, run.MinItems() / kLanes), [&](int gb, int ge, int) {
+    run.For(Stage::kSolve, count, std::max(1, run.MinHeavyItems() / kLanes), [&](int gb, int ge, int) {
       for (int gi = gb; gi < ge; ++gi) {
         const SoftRowGroup& g = groups_[gi];
         for (int lane = 0; lane < kLanes; ++lane) {

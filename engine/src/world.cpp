@@ -387,8 +387,7 @@ void World::Impl::RunPipeline(Real dt) {
   }
   const bool persist = def.solver != SolverType::kThesis && def.effects.warmStarting;
   if (persist) {
-    // Split from MinItems contacts on: a lookup is a few nanoseconds (ContactCache::Store says why).
-    run->For(Stage::kPersistence, static_cast<int>(contacts.size()), run->MinItems(),
+    run->For(Stage::kPersistence, static_cast<int>(contacts.size()), run->MinHeavyItems(),
              [&](int begin, int end, int) { cache.Restore(std::span<Contact>(contacts).subspan(begin, end - begin)); });
   }
   auto t3 = Clock::now();
