@@ -256,6 +256,28 @@ TEST_P(BroadPhaseTest, FarAwayAndNegativeCoordinates) {
   EXPECT_TRUE(SameSet(FindAll(*bp, in), BruteForce(in), in));
 }
 
+TEST_P(BroadPhaseTest, CrowdedCellsMatchBruteForceOnAnyThreadCount) {
+  // Equal boxes whose lower corners crowd a few cells (the grid's cell is one box wide), so a
+  // body meets runs of many bodies in its own, right and upper cells: longer than the grid
+  // scan's windows of four. Also bodies on the region's left and right edges.
+  auto bp = GetParam().make();
+  std::mt19937 rng(7);
+  Input in;
+  for (int i = 0; i < 600; ++i) {
+    const Real x = Real(int(rng() % 40)) * Real(0.1), y = Real(int(rng() % 30)) * Real(0.1);
+    in.aabbs.push_back({{x, y}, {x + 1, y + 1}});
+    in.movable.push_back(rng() % 7 ? 1 : 0);
+  }
+  const PairSet want = BruteForce(in);
+  std::vector<CandidatePair> one, three;
+  EXPECT_TRUE(SameSet(FindAll(*bp, in, &one, 1), want, in)) << GetParam().name;
+  EXPECT_TRUE(SameSet(FindAll(*bp, in, &three, 3), want, in)) << GetParam().name;
+  ASSERT_EQ(one.size(), three.size());
+  for (size_t k = 0; k < one.size(); ++k) {
+    ASSERT_TRUE(one[k].a == three[k].a && one[k].b == three[k].b) << GetParam().name << " pair " << k;
+  }
+}
+
 INSTANTIATE_TEST_SUITE_P(Both, BroadPhaseTest,
                          ::testing::Values(Factory{"QuadTree", &MakeQt}, Factory{"UniformGrid", &MakeGrid}),
                          [](const ::testing::TestParamInfo<Factory>& info) { return std::string(info.param.name); });
