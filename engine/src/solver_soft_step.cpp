@@ -229,9 +229,10 @@ class SoftStepSolver final : public ContactSolverBase {
     // instructions a step for the rows' part, 0.92M for the free bodies' pass), so with up to
     // count / 16 contacts the rows' part is at most about twice the free bodies' work, and beside
     // it costs the step at most its own time, where split it cost about that and more. Measured
-    // against ef96acf (7 interleaved rounds on an otherwise quiet machine, 60 + 10 steps, medians,
-    // 2 threads): solve + integrate 0.304 -> 0.271 ms per step, the step 0.937 -> 0.885 (the
-    // rows' part, about 0.2 ms of it, is now the longer of the two sides).
+    // with this branch's other changes against main e65e950 (9 interleaved rounds, each after half
+    // a second with the machine under 15 % busy, 60 + 10 steps, medians, 2 threads): solve +
+    // integrate 0.275 -> 0.216 ms per step, the step 0.709 -> 0.584 (1 thread 0.906 / 0.905). The
+    // rows' part is now the longer of the two sides.
     constexpr int kRowCost = 16;
     const int count = bodies.Count();
     if (int64_t(kRowCost) * m <= count) {
