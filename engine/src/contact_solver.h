@@ -80,7 +80,9 @@ class ContactSolverBase : public Solver {
   // that shares a body), so everything else is moved out of it: the contacts' dynamic ends are
   // gathered in parallel first (the serial loop then reads 8 bytes per contact, in order, not
   // the contact and both bodies' masses), and the body masks are cleared in parallel after.
-  void Color(StageRunner& run, const StepContext& ctx) {
+  // clearLater: the caller clears the body masks (ClearColors) in a pass of its own over the
+  // bodies before the next step, instead of a pass here.
+  void Color(StageRunner& run, const StepContext& ctx, bool clearLater = false) {
     const Bodies& bodies = *ctx.bodies;
     const int m = static_cast<int>(ctx.contacts.size());
     bodyColors_.resize(bodies.Count(), 0);  // all zero between steps
@@ -111,12 +113,19 @@ class ContactSolverBase : public Solver {
       fill_.assign(colorStart_.begin(), colorStart_.end() - 1);
       for (int c = 0; c < m; ++c) order_[fill_[colorOf_[c]]++] = c;
     });
-    if (m > 0) {  // leave the masks zeroed for the next step
+    if (m > 0 && !clearLater) {  // leave the masks zeroed for the next step
       run.For(Stage::kSolve, bodies.Count(), run.MinItems(), [&](int begin, int end, int) {
         std::fill(bodyColors_.begin() + begin, bodyColors_.begin() + end, uint64_t(0));
       });
     }
     constraints_.resize(m);
+  }
+
+  // Bodies [begin, end)'s colour masks back to zero (Color's clearLater).
+  void ClearColors(int begin, int end) {
+    if (begin < end && static_cast<size_t>(end) <= bodyColors_.size()) {
+      std::fill(bodyColors_.begin() + begin, bodyColors_.begin() + end, uint64_t(0));
+    }
   }
 
   // The smallest colour split across threads. The first colour holds most constraints

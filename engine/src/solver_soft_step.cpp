@@ -108,114 +108,147 @@ class SoftStepSolver final : public ContactSolverBase {
 
     double integrateMs = 0;
     auto t0 = Clock::now();
-    Color(run, ctx);
+    Color(run, ctx, /*clearLater=*/true);  // LoadFixedStates clears the masks
     const int m = static_cast<int>(constraints_.size());
     contacts_ = ctx.contacts;
     inv_ = bodies.inv.data();
-    // Without restitution nothing but the rows reads a prepared constraint: each is prepared into
-    // a local one as its row is built (BuildRows), and the list of constraints (144 bytes each,
-    // written and read back once a step) is not kept. The restitution passes need the list.
-    const bool lean = !def.effects.restitution;
-    if (!lean) {
-      run.For(Stage::kSolve, m, run.MinHeavyItems(), [&](int b, int e, int) { Prepare<kRotation, true>(ctx, b, e); });
-    }
-    SnapshotPositions(run, bodies);
-    const bool box2dRestitution = def.effects.restitution && def.restitution == RestitutionPolicy::kBox2d;
-    if (def.effects.restitution && !box2dRestitution) {
-      const Vec2 stepGravity = def.effects.gravity ? ctx.dt * def.gravity : Vec2{};
-      ApplyCollisionPasses<kRotation>(run, bodies, def, Real(1) / ctx.dt, stepGravity);
-    }
     // The sub-steps run on the compact solver state (velocity and motion since the step began,
     // 32 bytes a body) and on the rows in groups of eight (soft_rows.h), not on the body arrays
     // and the constraints.
     auto ti = Clock::now();
-    LoadFixedStates(run, bodies, def.effects.sleep);
+    LoadFixedStates(run, bodies, def.effects.sleep, m > 0);
     integrateMs += Ms(ti, Clock::now());
     MarkRows(run, bodies.Count(), def.softMassRatioLimit > 0);
-    lean ? BuildRows<kRotation, true>(ctx, soft, staticSoft, def.softMassRatioLimit)
-         : BuildRows<kRotation, false>(ctx, soft, staticSoft, def.softMassRatioLimit);
-    ti = Clock::now();
-    LoadStates(run, bodies);
-    integrateMs += Ms(ti, Clock::now());
-    const SoftSolveParams prm{invH, def.contactPushMaxDepth, def.contactPushMaxVelocity};
-    // Whether the position pass can move anything (CorrectStatePositions): the last sub-step's
-    // first relax pass sees every point's separation at the step's final positions, and without
-    // restitution nothing moves the bodies after it (the bounce shifts and Box2D's restitution
-    // do). A point is counted deep below -contactPushMaxDepth + kDeepMargin: the position pass
-    // computes the same separation in another order of operations, which differs by far less
-    // (a few float ulps of the anchors and the motion, about 1e-6 m), so with no deep point it
-    // moves nothing, and skipping it gives the same bits. Base-100 pyramid: its one pass over
-    // the rows found nothing to move every step (0.98M instructions a step).
-    std::atomic<bool> deep{false};
-    const bool maySkipPositions = !def.effects.restitution;
-    constexpr Real kDeepMargin = Real(1e-4);
-    SoftSolveParams lastPrm = prm;
-    if (maySkipPositions) {
-      lastPrm.deep = &deep;
-      lastPrm.deepBelow = -def.contactPushMaxDepth + kDeepMargin;
-    }
     const bool simd = def.softSimd;
     vex_ = simd && def.softVex && CpuHasAvx();  // soft_rows.h: the rows eight at a time with AVX
-    // Each sub-step is one region of stages (TaskSystem::ParallelStages): gravity, the warm start
-    // and the soft solve colour by colour, the positions, the relax passes colour by colour; the
-    // threads go from stage to stage inside one job instead of one hand-over per pass (base-100
-    // pyramid, default engine: 52 jobs a step before). Which thread runs which chunk never
-    // changes the arithmetic. The sub-steps' integration is therefore timed as part of the solve.
-    for (int sub = 0; sub < n; ++sub) {
-      BeginRegion();
-      IntegrateStateVelocities(run, bodies, def, h, sub == 0 ? ctx.dt : Real(0));
-      if (def.effects.warmStarting) {
-        ForEachGroup(run, simd, [&](auto lanes, SoftRowGroup& g, int lane) {
-          WarmStartRows<decltype(lanes), kRotation>(states_.data(), g, lane);
-        });
+    // Without restitution nothing but the rows reads a prepared constraint: each is prepared into
+    // a local one as its row is built (BuildRows), and the list of constraints (144 bytes each,
+    // written and read back once a step) is not kept. The restitution passes need the list.
+    const bool lean = !def.effects.restitution;
+    const bool box2dRestitution = def.effects.restitution && def.restitution == RestitutionPolicy::kBox2d;
+    // The rows' part of the step: from preparing the constraints and the restitution passes to
+    // storing the rows' bodies and impulses. The free bodies (MoveFreeBodies) do not depend on it:
+    // no row reads or writes them (the restitution passes change the velocities of bodies with
+    // an inverse mass in a contact only, which MarkRows has flagged as in rows, and LoadFixedStates
+    // reads only those without one).
+    auto rows = [&] {
+      if (!lean) {
+        run.For(Stage::kSolve, m, run.MinHeavyItems(), [&](int b, int e, int) { Prepare<kRotation, true>(ctx, b, e); });
       }
-      ForEachGroup(run, simd, [&](auto lanes, SoftRowGroup& g, int lane) {
-        SolveRows<decltype(lanes), kRotation, kFriction, true>(states_.data(), g, lane, prm);
-      });
-      // The rotation guard is per world step: per sub-step it allowed n times the turn (188 rad/s
-      // instead of 47 at 4 sub-steps), and spinning triangles of the soak left the box.
-      IntegrateStatePositions(run, bodies, def, h, ctx.dt);
-      // Friction only in the last relax pass: the earlier ones settle the normal impulses that
-      // bound it. Base-100 pyramid: 44.7M -> 43.2M instructions a step, and the 16 hard cases hold
-      // as with friction in both (tall_stack top 0.034 m; with friction in the first pass only
-      // 0.051 m, which fails).
-      //
-      // With two or more relax passes the first stores each point's speculative bias and the later
-      // ones load it (soft_rows.h, RelaxBias, says why).
-      const int relax = def.softRelaxIterations;
-      const SoftSolveParams& firstPrm = sub == n - 1 ? lastPrm : prm;  // the first pass looks for deep points
-      for (int it = 0; it < relax; ++it) {
-        if (relax == 1) {
-          RelaxPass<kRotation, kFriction, RelaxBias::kCompute>(run, simd, firstPrm);
-        } else if (it == 0) {
-          def.softFrictionEveryRelaxPass
-              ? RelaxPass<kRotation, kFriction, RelaxBias::kComputeAndStore>(run, simd, firstPrm)
-              : RelaxPass<kRotation, false, RelaxBias::kComputeAndStore>(run, simd, firstPrm);
-        } else if (it == relax - 1 || def.softFrictionEveryRelaxPass) {
-          RelaxPass<kRotation, kFriction, RelaxBias::kLoad>(run, simd, prm);
-        } else {
-          RelaxPass<kRotation, false, RelaxBias::kLoad>(run, simd, prm);
+      if (def.effects.restitution && !box2dRestitution) {
+        const Vec2 stepGravity = def.effects.gravity ? ctx.dt * def.gravity : Vec2{};
+        ApplyCollisionPasses<kRotation>(run, bodies, def, Real(1) / ctx.dt, stepGravity);
+      }
+      lean ? BuildRows<kRotation, true>(ctx, soft, staticSoft, def.softMassRatioLimit)
+           : BuildRows<kRotation, false>(ctx, soft, staticSoft, def.softMassRatioLimit);
+      auto tr = Clock::now();
+      LoadStates(run, bodies);
+      integrateMs += Ms(tr, Clock::now());
+      const SoftSolveParams prm{invH, def.contactPushMaxDepth, def.contactPushMaxVelocity};
+      // Whether the position pass can move anything (CorrectStatePositions): the last sub-step's
+      // first relax pass sees every point's separation at the step's final positions, and without
+      // restitution nothing moves the bodies after it (the bounce shifts and Box2D's restitution
+      // do). A point is counted deep below -contactPushMaxDepth + kDeepMargin: the position pass
+      // computes the same separation in another order of operations, which differs by far less
+      // (a few float ulps of the anchors and the motion, about 1e-6 m), so with no deep point it
+      // moves nothing, and skipping it gives the same bits. Base-100 pyramid: its one pass over
+      // the rows found nothing to move every step (0.98M instructions a step).
+      std::atomic<bool> deep{false};
+      const bool maySkipPositions = !def.effects.restitution;
+      constexpr Real kDeepMargin = Real(1e-4);
+      SoftSolveParams lastPrm = prm;
+      if (maySkipPositions) {
+        lastPrm.deep = &deep;
+        lastPrm.deepBelow = -def.contactPushMaxDepth + kDeepMargin;
+      }
+      // Each sub-step is one region of stages (TaskSystem::ParallelStages): gravity, the warm start
+      // and the soft solve colour by colour, the positions, the relax passes colour by colour; the
+      // threads go from stage to stage inside one job instead of one hand-over per pass (base-100
+      // pyramid, default engine: 52 jobs a step before). Which thread runs which chunk never
+      // changes the arithmetic. The sub-steps' integration is therefore timed as part of the solve.
+      for (int sub = 0; sub < n; ++sub) {
+        BeginRegion();
+        IntegrateStateVelocities(run, bodies, def, h, sub == 0 ? ctx.dt : Real(0));
+        if (def.effects.warmStarting) {
+          ForEachGroup(run, simd, [&](auto lanes, SoftRowGroup& g, int lane) {
+            WarmStartRows<decltype(lanes), kRotation>(states_.data(), g, lane);
+          });
         }
+        ForEachGroup(run, simd, [&](auto lanes, SoftRowGroup& g, int lane) {
+          SolveRows<decltype(lanes), kRotation, kFriction, true>(states_.data(), g, lane, prm);
+        });
+        // The rotation guard is per world step: per sub-step it allowed n times the turn (188 rad/s
+        // instead of 47 at 4 sub-steps), and spinning triangles of the soak left the box.
+        IntegrateStatePositions(run, bodies, def, h, ctx.dt);
+        // Friction only in the last relax pass: the earlier ones settle the normal impulses that
+        // bound it. Base-100 pyramid: 44.7M -> 43.2M instructions a step, and the 16 hard cases hold
+        // as with friction in both (tall_stack top 0.034 m; with friction in the first pass only
+        // 0.051 m, which fails).
+        //
+        // With two or more relax passes the first stores each point's speculative bias and the later
+        // ones load it (soft_rows.h, RelaxBias, says why).
+        const int relax = def.softRelaxIterations;
+        const SoftSolveParams& firstPrm = sub == n - 1 ? lastPrm : prm;  // the first pass looks for deep points
+        for (int it = 0; it < relax; ++it) {
+          if (relax == 1) {
+            RelaxPass<kRotation, kFriction, RelaxBias::kCompute>(run, simd, firstPrm);
+          } else if (it == 0) {
+            def.softFrictionEveryRelaxPass
+                ? RelaxPass<kRotation, kFriction, RelaxBias::kComputeAndStore>(run, simd, firstPrm)
+                : RelaxPass<kRotation, false, RelaxBias::kComputeAndStore>(run, simd, firstPrm);
+          } else if (it == relax - 1 || def.softFrictionEveryRelaxPass) {
+            RelaxPass<kRotation, kFriction, RelaxBias::kLoad>(run, simd, prm);
+          } else {
+            RelaxPass<kRotation, false, RelaxBias::kLoad>(run, simd, prm);
+          }
+        }
+        EndRegion(run);
+        if (box2dRestitution && sub == 0 && m > 0) ApplyBox2dRestitution<kRotation, kFriction>(run, def, h);
       }
-      EndRegion(run);
-      if (box2dRestitution && sub == 0 && m > 0) ApplyBox2dRestitution<kRotation, kFriction>(run, def, h);
-    }
-    if (def.effects.restitution && m > 0) ForEachColor(run, [&](int b, int e) { ApplyStateBounceShifts(b, e); });
-    // Overlap deeper than the soft contacts push out (contactPushMaxDepth) is moved out here, by pgs's
-    // position pass (on the solver states): positions change, velocities do not, so deep overlap
-    // cannot fling bodies.
-    if (m > 0 && (!maySkipPositions || deep.load(std::memory_order_relaxed))) {
-      CorrectStatePositions<kRotation>(run, def, simd);
-    }
-    ti = Clock::now();
-    StoreStates(run, bodies, def, ctx.dt);
-    integrateMs += Ms(ti, Clock::now());
-    if (lean) {
-      StoreRowImpulses<true>(run);
+      if (def.effects.restitution && m > 0) ForEachColor(run, [&](int b, int e) { ApplyStateBounceShifts(b, e); });
+      // Overlap deeper than the soft contacts push out (contactPushMaxDepth) is moved out here, by pgs's
+      // position pass (on the solver states): positions change, velocities do not, so deep overlap
+      // cannot fling bodies.
+      if (m > 0 && (!maySkipPositions || deep.load(std::memory_order_relaxed))) {
+        CorrectStatePositions<kRotation>(run, def, simd);
+      }
+      if (lean) {
+        StoreRowImpulses<true>(run);
+      } else {
+        StoreRowImpulses<false>(run);
+        run.For(Stage::kSolve, m, run.MinHeavyItems(), [&](int b, int e, int) { StoreImpulses(ctx.contacts, b, e); });
+      }
+    };
+    // Few rows among many bodies (the sparse stress scenes): the rows' part runs on one thread
+    // beside the free bodies' pass on the others (StageRunner::Beside), instead of its passes
+    // splitting a few hundred rows across the threads with a barrier for every colour of every
+    // pass, which gained nothing: circle stress N = 16000 (about 670 contacts a step) at 2 threads
+    // had 53 stages in 11 regions a step, and its solve took 0.174 ms against 0.183 on 1 thread
+    // (lead's measurement at ef96acf). kRowCost: a contact costs the rows' part about 30 times
+    // what a free body costs MoveFreeBodies (callgrind, 20 steps of that scene, 1 thread: 1.24M
+    // instructions a step for the rows' part, 0.92M for the free bodies' pass), so with up to
+    // count / 16 contacts the rows' part is at most about twice the free bodies' work, and beside
+    // it costs the step at most its own time, where split it cost about that and more. Measured
+    // with this branch's other changes against main e65e950 (9 interleaved rounds, each after half
+    // a second with the machine under 15 % busy, 60 + 10 steps, medians, 2 threads): solve +
+    // integrate 0.275 -> 0.216 ms per step, the step 0.709 -> 0.584 (1 thread 0.906 / 0.905). The
+    // rows' part is now the longer of the two sides.
+    constexpr int kRowCost = 16;
+    const int count = bodies.Count();
+    if (int64_t(kRowCost) * m <= count) {
+      run.Beside(Stage::kSolve, rows, count, run.MinItems(), [&](int b, int e) { MoveFreeBodies(bodies, def, ctx.dt, b, e); });
     } else {
-      StoreRowImpulses<false>(run);
-      run.For(Stage::kSolve, m, run.MinHeavyItems(), [&](int b, int e, int) { StoreImpulses(ctx.contacts, b, e); });
+      rows();
+      ti = Clock::now();
+      run.For(Stage::kIntegrate, count, run.MinItems(), [&](int b, int e, int) { MoveFreeBodies(bodies, def, ctx.dt, b, e); });
+      integrateMs += Ms(ti, Clock::now());
     }
+    // After the free bodies' pass, not in the rows' part: MoveFour reads the transforms of all
+    // four bodies of a group (writing only the free ones), so the rows' bodies must not be
+    // written while it runs.
+    ti = Clock::now();
+    StoreRowStates(run, bodies, def);
+    integrateMs += Ms(ti, Clock::now());
     const double total = Ms(t0, Clock::now());
     ctx.profile->integrate += integrateMs;
     ctx.profile->solve += total - integrateMs;
@@ -504,8 +537,8 @@ class SoftStepSolver final : public ContactSolverBase {
   }
 
   // fn(lanes, group, lane): lanes is a Real (one row: the given lane), an F4 (the four rows from
-  // `lane`) or an F8Avx (the group's eight rows; kLaneWidth says how many). The overflow colour's rows may share bodies: one at a time, in order, on one
-  // thread.
+  // `lane`) or an F8Avx (the group's eight rows; kLaneWidth says how many). The overflow colour's
+  // rows may share bodies: one at a time, in order, on one thread.
   template <class Fn>
   void ForEachGroup(StageRunner& run, bool simd, Fn&& fn) {
     if (collecting_) {
@@ -722,11 +755,16 @@ class SoftStepSolver final : public ContactSolverBase {
   // and StoreStates moves them over the whole step at once.
   // First the bodies that rows read but never write (inverse mass 0: static, kinematic, sleeping),
   // with the flags cleared (kinematic ones set); MarkRows then flags the dynamic bodies in rows.
-  void LoadFixedStates(StageRunner& run, const Bodies& bodies, bool sleep) {
+  // With clearColors the same pass clears Color's masks: one pass over the bodies instead of
+  // three (this, the masks' clearing and SnapshotPositions, whose snapshot LoadStates now takes
+  // of the rows' bodies only), each a hand-over and a join at 2 threads (circle stress N = 16000:
+  // 3 of the step's 5 solver passes over all 16004 bodies).
+  void LoadFixedStates(StageRunner& run, const Bodies& bodies, bool sleep, bool clearColors) {
     const int count = bodies.Count();
     states_.resize(count);
     inRows_.resize(count + kFlagPad);  // padded: the scans below read several flags at a time
     run.For(Stage::kIntegrate, count, run.MinItems(), [&](int b, int e, int) {
+      if (clearColors) ClearColors(b, e);
       // Raw pointers: with the vectors' own, every store reloaded their data pointers.
       const BodyInverseMass* inv = bodies.inv.data();
       const BodyVelocity* vel = bodies.vel.data();
@@ -778,10 +816,16 @@ class SoftStepSolver final : public ContactSolverBase {
       }
     }
     active_.resize(listed);
+    // Where the rows' bodies start (StoreRowStates adds their motion to it); the free bodies
+    // need no snapshot (MoveFree).
+    center0_.resize(count);
+    rot0_.resize(count);
     run.For(Stage::kIntegrate, ActiveCount(), run.MinItems(), [&](int b, int e, int) {
       for (int k = b; k < e; ++k) {
         const int i = active_[k];
         if (bodies.inv[i].invMass != 0) states_[i] = SolverBody{bodies.vel[i].v, bodies.vel[i].w, 0, Vec2{}, Rot{}};
+        center0_[i] = bodies.center[i];
+        rot0_[i] = bodies.xf[i].q;
       }
     });
   }
@@ -940,35 +984,50 @@ class SoftStepSolver final : public ContactSolverBase {
 #endif
 
   // Back to the bodies: velocity, centre (where the step began plus the motion) and rotation.
+  // The free bodies (MoveFreeBodies) and those in rows (StoreRowStates) are separate passes: the
+  // first does not depend on the sub-steps (Run runs it beside them where the rows are few).
   void StoreStates(StageRunner& run, Bodies& bodies, const WorldDef& def, Real dt) {
+    run.For(Stage::kIntegrate, bodies.Count(), run.MinItems(),
+            [&](int b, int e, int) { MoveFreeBodies(bodies, def, dt, b, e); });
+    StoreRowStates(run, bodies, def);
+  }
+
+  // The free bodies among [b, e): moved over the whole step at once (MoveFree).
+  void MoveFreeBodies(Bodies& bodies, const WorldDef& def, Real dt, int b, int e) {
     const bool sleep = def.effects.sleep;
     const FreeMotion fm = MakeFreeMotion(def, dt);
-    run.For(Stage::kIntegrate, bodies.Count(), run.MinItems(), [&](int b, int e, int) {
-      int i = b;
+    int i = b;
 #if QUADRANT_SOFT_SIMD
-      // Four consecutive bodies at a time (MoveFour), writing the free ones among them.
-      if (def.softSimd && fm.maxAngularSpeed > 0) {
-        const uint8_t* awake = bodies.awake.data();
-        const BodyType* type = bodies.type.data();
-        const uint8_t* inRows = inRows_.data();
-        for (; i + kLanes <= e; i += kLanes) {
-          int mask = 0;  // bit k: body i + k is free (Moves() and not in rows)
-          for (int k = 0; k < kLanes; ++k) {
-            const bool moves = sleep ? awake[i + k] != 0 : type[i + k] != BodyType::kStatic;
-            mask |= int(moves & (inRows[i + k] == 0)) << k;
-          }
-          if (mask == 0 || (vex_ ? MoveFourVex(bodies, fm, i, mask) : MoveFour(bodies, fm, i, mask))) continue;
-          for (int k = 0; k < kLanes; ++k) {
-            if (mask >> k & 1) MoveFree(bodies, fm, i + k);
-          }
+    // Four consecutive bodies at a time (MoveFour), writing the free ones among them.
+    if (def.softSimd && fm.maxAngularSpeed > 0) {
+      const uint8_t* awake = bodies.awake.data();
+      const BodyType* type = bodies.type.data();
+      const uint8_t* inRows = inRows_.data();
+      for (; i + kLanes <= e; i += kLanes) {
+        int mask = 0;  // bit k: body i + k is free (Moves() and not in rows)
+        for (int k = 0; k < kLanes; ++k) {
+          const bool moves = sleep ? awake[i + k] != 0 : type[i + k] != BodyType::kStatic;
+          mask |= int(moves & (inRows[i + k] == 0)) << k;
+        }
+        if (mask == 0 || (vex_ ? MoveFourVex(bodies, fm, i, mask) : MoveFour(bodies, fm, i, mask))) continue;
+        for (int k = 0; k < kLanes; ++k) {
+          if (mask >> k & 1) MoveFree(bodies, fm, i + k);
         }
       }
+    }
 #endif
-      for (; i < e; ++i) {
-        if (Moves(bodies, i, sleep) && !inRows_[i]) MoveFree(bodies, fm, i);
-      }
-    });
-    run.For(Stage::kIntegrate, ActiveCount(), run.MinItems(), [&](int b, int e, int) {
+    for (; i < e; ++i) {
+      if (Moves(bodies, i, sleep) && !inRows_[i]) MoveFree(bodies, fm, i);
+    }
+  }
+
+  // The bodies in rows (active_): their solver states back to the bodies.
+  void StoreRowStates(StageRunner& run, Bodies& bodies, const WorldDef& def) {
+    const bool sleep = def.effects.sleep;
+    // Split from MinHeavyItems bodies on: the rows' bodies are scattered over the arrays, so each
+    // costs cache misses more than arithmetic (circle stress N = 16000, 1 thread: 1.5 % of the
+    // step's cycles for about 1000 bodies, perf).
+    run.For(Stage::kIntegrate, ActiveCount(), run.MinHeavyItems(), [&](int b, int e, int) {
       for (int k = b; k < e; ++k) {
         const int i = active_[k];
         if (!Moves(bodies, i, sleep)) continue;
@@ -1046,8 +1105,10 @@ class SoftStepSolver final : public ContactSolverBase {
       vOut = vEnd;
     }
     bodies.vel[i] = BodyVelocity{vOut, w};
-    bodies.center[i] = center0_[i] + dp;
-    if (fm.rotation && w != 0) bodies.xf[i].q = IntegrateRot(rot0_[i], fm.dt * w);
+    // Nothing has moved a free body yet in this step: its centre and rotation are where the step
+    // began (no snapshot needed: LoadStates takes one of the rows' bodies only).
+    bodies.center[i] = bodies.center[i] + dp;
+    if (fm.rotation && w != 0) bodies.xf[i].q = IntegrateRot(bodies.xf[i].q, fm.dt * w);
     SyncTransform(bodies, i);
   }
 
@@ -1068,7 +1129,15 @@ class SoftStepSolver final : public ContactSolverBase {
 #endif
 
   [[gnu::always_inline]] bool MoveFour(Bodies& bodies, const FreeMotion& fm, int i, int mask) {
+    // Only the free lanes' velocities are read: the others belong to bodies in rows, whose
+    // velocities the restitution passes may be writing meanwhile (Run's Beside); their lanes are
+    // computed from zeros and dropped.
     const BodyVelocity* vel = bodies.vel.data() + i;
+    BodyVelocity masked[kLanes];
+    if (mask != 0xF) {
+      for (int k = 0; k < kLanes; ++k) masked[k] = (mask >> k & 1) ? vel[k] : BodyVelocity{};
+      vel = masked;
+    }
     F4 ux{_mm_setr_ps(vel[0].v.x, vel[1].v.x, vel[2].v.x, vel[3].v.x)};
     F4 uy{_mm_setr_ps(vel[0].v.y, vel[1].v.y, vel[2].v.y, vel[3].v.y)};
     F4 w{_mm_setr_ps(vel[0].w, vel[1].w, vel[2].w, vel[3].w)};
@@ -1098,16 +1167,14 @@ class SoftStepSolver final : public ContactSolverBase {
       if (Any(turns)) {
         const F4 turn = Splat(fm.dt, F4{}) * w;
         if (Any(GreaterEqual(Max(turn, Neg(turn)), Splat(Real(0.5), F4{})))) return false;
-        const float* r0 = &rot0_[i].c;
-        const __m128 ra = _mm_loadu_ps(r0), rb = _mm_loadu_ps(r0 + 4);  // c0 s0 c1 s1, c2 s2 c3 s3
-        F4 c{_mm_shuffle_ps(ra, rb, _MM_SHUFFLE(2, 0, 2, 0))}, sn{_mm_shuffle_ps(ra, rb, _MM_SHUFFLE(3, 1, 3, 1))};
+        F4 c = qc, sn = qs;  // a free body's rotation is still the step's first (MoveFree)
         TurnBy(c, sn, turn);
         qc = Select(turns, c, qc);
         qs = Select(turns, sn, qs);
       }
     }
     // Centres (8 bytes each): x0 y0 x1 y1 and x2 y2 x3 y3, split into xs and ys.
-    const float* c0 = &center0_[i].x;
+    const float* c0 = &bodies.center[i].x;
     const __m128 ca = _mm_loadu_ps(c0), cb = _mm_loadu_ps(c0 + 4);
     const F4 nh = Splat(fm.nh, F4{});
     const F4 cx = F4{_mm_shuffle_ps(ca, cb, _MM_SHUFFLE(2, 0, 2, 0))} + (nh * ux + Splat(fm.dpGravity.x, F4{}));
@@ -1162,9 +1229,17 @@ class SoftStepSolver final : public ContactSolverBase {
     regionFns_.clear();
   }
 
+  // A region splits only where its stages that split hold half of MinHeavyItems / kGroupRows items
+  // (16 groups of eight rows by default) per stage of the region on average (StageRunner::Stages
+  // counts them; the thresholds were measured with groups of four rows and MinHeavyItems / 4, the
+  // same number of rows): every stage costs a barrier, and 64 rows (kColorGrain) are about a
+  // microsecond of rows, what a barrier and the rows' states moving to the other core cost. Polygon stress N = 1000 at
+  // 2 threads: 3 regions a step split, of 10 stages and about 290 items each.
   void EndRegion(StageRunner& run) {
     collecting_ = false;
-    run.Stages(Stage::kSolve, regionPlan_, std::max(1, run.MinHeavyItems() / kLanes), [&](int s, int b, int e) {
+    const int stages = static_cast<int>(regionPlan_.size());
+    const int minItems = std::max(run.MinHeavyItems() / kGroupRows, run.MinHeavyItems() / (2 * kGroupRows) * stages);
+    run.Stages(Stage::kSolve, regionPlan_, std::max(1, minItems), [&](int s, int b, int e) {
       regionFns_[regionPass_[s]](regionFirst_[s] + b, regionFirst_[s] + e);
     });
   }

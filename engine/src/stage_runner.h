@@ -65,6 +65,10 @@ class StageRunner {
   template <class Fn>
   void For(Stage stage, int count, int minParallel, Fn&& fn) {
     if (count <= 0) return;
+    if (nested_) {  // inside Beside's lone part: one block, not timed on its own
+      fn(0, count, 0);
+      return;
+    }
     if (Workers() == 1 || count < std::max(2, minParallel)) {  // one item cannot be split
       Serial(stage, [&] { fn(0, count, 0); });
       return;
@@ -91,11 +95,25 @@ class StageRunner {
   /// that runs a region on the caller alone (a busy machine) still calls it chunk by chunk.
   template <class Fn>
   void Stages(Stage stage, const std::vector<TaskSystem::StagePlan>& plan, int minParallel, Fn&& fn) {
-    long long total = 0;
-    for (const TaskSystem::StagePlan& p : plan) total += p.count;
+    if (nested_) {
+      for (int s = 0; s < static_cast<int>(plan.size()); ++s) {
+        if (plan[s].count > 0) fn(s, 0, plan[s].count);
+      }
+      return;
+    }
+    // `splittable`: the items of the stages that split into two chunks or more. A region whose
+    // stages are each one chunk (a sub-step of 1000 circles: 8 stages of a few groups or a few
+    // dozen bodies each) gives the other threads nothing to do but wait at every stage's end, so
+    // it runs inline like a small one. Measured on circle stress N = 1000 at 2 threads: 3 such
+    // regions a step (24 stages, 334 items in all), each a hand-over and 8 barriers.
+    long long total = 0, splittable = 0;
+    for (const TaskSystem::StagePlan& p : plan) {
+      total += p.count;
+      if (StageChunks(p.count, p.grain, Workers()) > 1) splittable += p.count;
+    }
     if (total <= 0) return;
     const int stages = static_cast<int>(plan.size());
-    if (Workers() == 1 || total < std::max<long long>(2, minParallel)) {
+    if (Workers() == 1 || total < std::max<long long>(2, minParallel) || splittable < minParallel) {
       Serial(stage, [&] {
         for (int s = 0; s < stages; ++s) {
           if (plan[s].count > 0) fn(s, 0, plan[s].count);
@@ -132,9 +150,65 @@ class StageRunner {
     Add(stage, work, critical);
   }
 
+  /// Runs `alone()` once, on one thread, beside fn(begin, end) over [0, count) in blocks that
+  /// the other threads (and that one, once it is done) take: one region of one stage, so the
+  /// two parts cost one hand-over and one join together. alone() may call this runner again
+  /// (For, Stages, Serial): there every call runs inline on its thread, as one block, and is
+  /// timed as part of alone(). alone() and fn must not touch the same data. Under
+  /// minParallel items, or on one worker, both run on the caller, alone() first (and alone()'s
+  /// own calls then split as they would anywhere else).
+  ///
+  /// Why: a part of the step too small to split well (a few hundred contact rows) gains nothing
+  /// from the threads, and each of its passes split across them costs a barrier; beside an
+  /// independent pass over many bodies it runs on one thread while the others do that pass.
+  template <class Alone, class Fn>
+  void Beside(Stage stage, Alone&& alone, int count, int minParallel, Fn&& fn) {
+    if (Workers() == 1 || nested_ || count < std::max(2, minParallel)) {
+      alone();  // its own calls of this runner split and time themselves
+      if (count > 0) Serial(stage, [&] { fn(0, count); });
+      return;
+    }
+    // Item 0 is alone(), items 1.. the blocks: one item a chunk (StageChunks' most, 4 a worker).
+    // The caller claims from the front (thread_pool.cpp), so it takes alone() unless a worker
+    // is there first.
+    const int items = 4 * Workers(), blocks = items - 1;
+    const std::vector<TaskSystem::StagePlan> plan{{items, 1}};
+    chunkMs_.assign(items, 0.0);
+    tasks_.ParallelStages(1, plan.data(), [&](int, int b, int e, int) {
+      for (int item = b; item < e; ++item) {
+        const double t0 = measure_ ? NowMs() : 0.0;
+        if (item == 0) {
+          nested_ = true;  // only the thread running alone() reads it until the join
+          try {
+            alone();
+          } catch (...) {
+            nested_ = false;
+            throw;
+          }
+          nested_ = false;
+        } else {
+          const int begin = BlockBegin(count, blocks, item - 1), end = BlockBegin(count, blocks, item);
+          if (begin < end) fn(begin, end);
+        }
+        if (measure_) chunkMs_[item] = Elapsed(t0);
+      }
+    });
+    if (!measure_) return;
+    double sum = 0, largest = 0;
+    for (double ms : chunkMs_) {
+      sum += ms;
+      largest = std::max(largest, ms);
+    }
+    Add(stage, sum, std::max(largest, sum / Workers()));
+  }
+
   /// Runs fn on the calling thread; all of it is on the critical path.
   template <class Fn>
   void Serial(Stage stage, Fn&& fn) {
+    if (nested_) {
+      fn();
+      return;
+    }
     if (!measure_) {
       fn();
       return;
@@ -179,6 +253,7 @@ class StageRunner {
   std::vector<int> chunkOffset_;  // Stages: the first chunk slot of each stage
   std::vector<double> chunkMs_;   // Stages: per chunk
   bool alone_ = false;  // this step runs on the caller alone (BeginStep)
+  bool nested_ = false;  // inside Beside's alone(): every call runs inline, untimed
   bool measure_;      // more than one worker: a single one's bound is 1 by definition
   bool threadClock_;  // more workers than cores: time blocks by thread CPU time
   double readMs_;     // the cost of one clock read, subtracted from every timed block

@@ -498,6 +498,55 @@ TEST(WorldTest, ThreadCountDoesNotChangeTheResult) {
   }
 }
 
+// A sparse scene (at most a sixteenth as many contacts as bodies) runs the soft step's rows beside
+// the free bodies' pass (solver_soft_step.cpp, StageRunner::Beside): the rows' part on one thread,
+// the free bodies in blocks on the others, at the same time. Bouncing circles (the restitution
+// passes write the rows' bodies' velocities while the free pass runs), a kinematic body, boxes
+// resting on the ground: the result must be the one-thread result, bit for bit.
+TEST(WorldTest, RowsBesideFreeBodiesGiveTheOneThreadResult) {
+  auto build = [](World& world) {
+    AddGround(world, 40, Real(0.5), {0, -0.5});
+    for (int k = 0; k < 4; ++k) AddBox(world, {Real(-30 + 3 * k), Real(0.5)});
+    BodyDef kin;
+    kin.type = BodyType::kKinematic;
+    kin.position = {0, 3};
+    kin.linearVelocity = {Real(0.5), 0};
+    kin.angularVelocity = Real(0.3);
+    kin.shape = ShapeDef::Box(2, Real(0.2));
+    world.CreateBody(kin);
+    std::mt19937 rng(5);
+    auto uni = [&](double lo, double hi) { return lo + (hi - lo) * (double(rng()) / double(std::mt19937::max())); };
+    for (int row = 0; row < 20; ++row) {
+      for (int col = 0; col < 30; ++col) {
+        AddCircle(world, {Real(-29 + 2 * col), Real(5 + 2 * row)}, Real(uni(0.1, 0.3)), {Real(uni(-3, 3)), Real(uni(-3, 3))}, 1,
+                  Real(0.3), Real(0.8));
+      }
+    }
+  };
+  auto run = [&](int threads, int* besideSteps, int* parallelSteps) {
+    WorldDef def;
+    def.threadCount = threads;
+    def.minParallelItems = 8;  // split every pass of these 606 bodies
+    World world(def);
+    build(world);
+    for (int i = 0; i < 150; ++i) {
+      world.Step(kDt);
+      const Counters& c = world.GetCounters();
+      *besideSteps += c.contacts > 0 && 16 * c.contacts <= c.bodies ? 1 : 0;
+      *parallelSteps += ParallelSectionRan(world.GetProfile()) ? 1 : 0;
+    }
+    return world.StateHash();
+  };
+  int beside = 0, parallel = 0;
+  const uint64_t one = run(1, &beside, &parallel);
+  EXPECT_GT(beside, 0);  // steps with contacts, sparse enough to run the rows beside the free bodies
+  for (int threads : {2, 3}) {
+    beside = parallel = 0;
+    EXPECT_EQ(run(threads, &beside, &parallel), one) << threads << " threads";
+    EXPECT_GT(parallel, 0) << threads << " threads";
+  }
+}
+
 TEST(WorldTest, MoveKeepsTheWorld) {
   World w1;
   BuildScene(w1);
