@@ -33,9 +33,9 @@
 //
 // Data (issue #13, after Box2D 3's layout; the code is this project's): the sub-steps work on a
 // 32-byte solver state per body (velocity, and the motion dp, dq since the step began), not on
-// the body arrays, and on the contact rows in structure-of-arrays groups of four per graph
-// colour, solved four at a time with SSE2 (soft_rows.h; the one-row path gives the same bits,
-// WorldDef::softSimd, SoftSimdTest). A point's separation in a sub-step is its prepared one plus
+// the body arrays, and on the contact rows in structure-of-arrays groups of eight per graph
+// colour, solved eight at a time with AVX or four with SSE2 (soft_rows.h; the one-row path gives
+// the same bits, WorldDef::softSimd, SoftSimdTest). A point's separation in a sub-step is its prepared one plus
 // the normal part of how far its anchors moved; the anchors, fixed at preparation, are also the
 // lever arms (Box2D 3 does the same). The bounce shifts and the position pass act on the states
 // too, and the states go back to the bodies once, after the position pass. Base-100 pyramid,
@@ -113,14 +113,14 @@ class SoftStepSolver final : public ContactSolverBase {
     contacts_ = ctx.contacts;
     inv_ = bodies.inv.data();
     // The sub-steps run on the compact solver state (velocity and motion since the step began,
-    // 32 bytes a body) and on the rows in groups of four (soft_rows.h), not on the body arrays
+    // 32 bytes a body) and on the rows in groups of eight (soft_rows.h), not on the body arrays
     // and the constraints.
     auto ti = Clock::now();
     LoadFixedStates(run, bodies, def.effects.sleep, m > 0);
     integrateMs += Ms(ti, Clock::now());
     MarkRows(run, bodies.Count(), def.softMassRatioLimit > 0);
     const bool simd = def.softSimd;
-    vex_ = simd && def.softVex && CpuHasAvx();  // soft_rows.h: the same operations in AVX's encoding
+    vex_ = simd && def.softVex && CpuHasAvx();  // soft_rows.h: the rows eight at a time with AVX
     // Without restitution nothing but the rows reads a prepared constraint: each is prepared into
     // a local one as its row is built (BuildRows), and the list of constraints (144 bytes each,
     // written and read back once a step) is not kept. The restitution passes need the list.
@@ -263,7 +263,7 @@ class SoftStepSolver final : public ContactSolverBase {
     });
   }
 
-  // The rows in groups of four, colour by colour (a colour's last group padded), from the
+  // The rows in groups of eight, colour by colour (a colour's last group padded), from the
   // prepared constraints. Friction is solved in the relax pass only (as Box2D 3 does since it
   // split its push stage): during the soft solve the velocities still carry the push-out the
   // relax pass removes and the normal impulse its soft bias, so a friction row there resists a
@@ -280,7 +280,7 @@ class SoftStepSolver final : public ContactSolverBase {
     groupStart_.assign(kColors + 2, 0);
     for (int k = 0; k <= kColors; ++k) {
       const int count = colorStart_[k + 1] - colorStart_[k];
-      groupStart_[k + 1] = groupStart_[k] + (count + kLanes - 1) / kLanes;
+      groupStart_[k + 1] = groupStart_[k] + (count + kGroupRows - 1) / kGroupRows;
     }
     groups_.resize(groupStart_[kColors + 1]);
     relaxBias_.resize(groups_.size());
@@ -291,16 +291,16 @@ class SoftStepSolver final : public ContactSolverBase {
     for (int k = 0; k <= kColors; ++k) {
       const int count = groupStart_[k + 1] - groupStart_[k];
       if (count == 0) continue;
-      stagePlan_.push_back({count, kColorGrain / kLanes});
+      stagePlan_.push_back({count, kColorGrain / kGroupRows});
       stageFirst_.push_back(k);
     }
-    run.Stages(Stage::kSolve, stagePlan_, std::max(1, run.MinHeavyItems() / kLanes), [&](int stage, int gb, int ge) {
+    run.Stages(Stage::kSolve, stagePlan_, std::max(1, run.MinHeavyItems() / kGroupRows), [&](int stage, int gb, int ge) {
       const int k = stageFirst_[stage], begin = groupStart_[k];
       {
         for (int gi = begin + gb; gi < begin + ge; ++gi) {
           SoftRowGroup& g = groups_[gi];
-          for (int lane = 0; lane < kLanes; ++lane) {
-            const int c = colorStart_[k] + (gi - begin) * kLanes + lane;
+          for (int lane = 0; lane < kGroupRows; ++lane) {
+            const int c = colorStart_[k] + (gi - begin) * kGroupRows + lane;
             if (c >= colorStart_[k + 1]) {
               PadLane(g, lane);
               continue;
@@ -536,9 +536,9 @@ class SoftStepSolver final : public ContactSolverBase {
     PadPoint(g.p[1], lane);
   }
 
-  // fn(lanes, group, lane): lanes is a Real (one row: the given lane) or an F4 (the four rows
-  // from lane 0). The overflow colour's rows may share bodies: one at a time, in order, on one
-  // thread.
+  // fn(lanes, group, lane): lanes is a Real (one row: the given lane), an F4 (the four rows from
+  // `lane`) or an F8Avx (the group's eight rows; kLaneWidth says how many). The overflow colour's
+  // rows may share bodies: one at a time, in order, on one thread.
   template <class Fn>
   void ForEachGroup(StageRunner& run, bool simd, Fn&& fn) {
     if (collecting_) {
@@ -552,25 +552,28 @@ class SoftStepSolver final : public ContactSolverBase {
     for (int color = 0; color <= kColors; ++color) {
       const int begin = groupStart_[color], count = groupStart_[color + 1] - begin;
       if (count == 0) continue;
-      stagePlan_.push_back({count, color < kColors ? kColorGrain / kLanes : count});
+      stagePlan_.push_back({count, color < kColors ? kColorGrain / kGroupRows : count});
       stageFirst_.push_back(begin);
     }
     const int overflow = groupStart_[kColors];
-    run.Stages(Stage::kSolve, stagePlan_, std::max(1, run.MinHeavyItems() / kLanes), [&](int s, int b, int e) {
+    run.Stages(Stage::kSolve, stagePlan_, std::max(1, run.MinHeavyItems() / kGroupRows), [&](int s, int b, int e) {
       RunGroups(simd && stageFirst_[s] < overflow, fn, stageFirst_[s] + b, stageFirst_[s] + e);
     });
   }
 
-  // Groups [gb, ge) four rows at a time (fourWide: in AVX's encoding where vex_), or row by row
-  // (the scalar path, and the overflow colour, whose rows may share bodies).
+  // Groups [gb, ge) eight rows at a time with AVX where vex_, else four (fourWide: two calls a
+  // group), or row by row (the scalar path, and the overflow colour, whose rows may share bodies).
   template <class Fn>
   void RunGroups(bool fourWide, Fn& fn, int gb, int ge) {
 #if QUADRANT_SOFT_SIMD
     if (fourWide) {
       if (vex_) {
-        for (int gi = gb; gi < ge; ++gi) fn(F4Vex{}, groups_[gi], 0);
+        for (int gi = gb; gi < ge; ++gi) fn(F8Avx{}, groups_[gi], 0);
       } else {
-        for (int gi = gb; gi < ge; ++gi) fn(F4{}, groups_[gi], 0);
+        for (int gi = gb; gi < ge; ++gi) {
+          fn(F4{}, groups_[gi], 0);
+          fn(F4{}, groups_[gi], kLanes);
+        }
       }
       return;
     }
@@ -578,7 +581,7 @@ class SoftStepSolver final : public ContactSolverBase {
     (void)fourWide;
 #endif
     for (int gi = gb; gi < ge; ++gi) {
-      for (int lane = 0; lane < kLanes; ++lane) fn(Real{}, groups_[gi], lane);
+      for (int lane = 0; lane < kGroupRows; ++lane) fn(Real{}, groups_[gi], lane);
     }
   }
 
@@ -677,7 +680,7 @@ class SoftStepSolver final : public ContactSolverBase {
       if constexpr (std::is_same_v<decltype(lanes), Real>) {
         row(g, lane);
       } else {
-        for (int l = 0; l < kLanes; ++l) row(g, l);
+        for (int l = lane; l < lane + kLaneWidth<decltype(lanes)>; ++l) row(g, l);
       }
     });
   }
@@ -706,7 +709,9 @@ class SoftStepSolver final : public ContactSolverBase {
         if constexpr (std::is_same_v<decltype(lanes), Real>) {
           SolvePositionRows<Real, kRotation>(states, g, lane, prm, moved);
         } else if (!SolvePositionRows<decltype(lanes), kRotation>(states, g, lane, prm, moved)) {
-          for (int l = 0; l < kLanes; ++l) SolvePositionRows<Real, kRotation>(states, g, l, prm, moved);
+          for (int l = lane; l < lane + kLaneWidth<decltype(lanes)>; ++l) {
+            SolvePositionRows<Real, kRotation>(states, g, l, prm, moved);
+          }
         }
         if (moved) anyMoved.store(true, std::memory_order_relaxed);
       });
@@ -720,10 +725,10 @@ class SoftStepSolver final : public ContactSolverBase {
   template <bool kLean>
   void StoreRowImpulses(StageRunner& run) {
     const int count = static_cast<int>(groups_.size());
-    run.For(Stage::kSolve, count, std::max(1, run.MinHeavyItems() / kLanes), [&](int gb, int ge, int) {
+    run.For(Stage::kSolve, count, std::max(1, run.MinHeavyItems() / kGroupRows), [&](int gb, int ge, int) {
       for (int gi = gb; gi < ge; ++gi) {
         const SoftRowGroup& g = groups_[gi];
-        for (int lane = 0; lane < kLanes; ++lane) {
+        for (int lane = 0; lane < kGroupRows; ++lane) {
           if (g.constraint[lane] < 0) continue;
           if constexpr (kLean) {
             Manifold& mf = contacts_[order_[g.constraint[lane]]].manifold;
@@ -1224,15 +1229,16 @@ class SoftStepSolver final : public ContactSolverBase {
     regionFns_.clear();
   }
 
-  // A region splits only where its stages that split hold half of MinHeavyItems / kLanes items
-  // (32 by default) per stage of the region on average (StageRunner::Stages counts them): every
-  // stage costs a barrier, and 16 groups (kColorGrain / kLanes) are about a microsecond of rows,
-  // what a barrier and the rows' states moving to the other core cost. Polygon stress N = 1000 at
+  // A region splits only where its stages that split hold half of MinHeavyItems / kGroupRows items
+  // (16 groups of eight rows by default) per stage of the region on average (StageRunner::Stages
+  // counts them; the thresholds were measured with groups of four rows and MinHeavyItems / 4, the
+  // same number of rows): every stage costs a barrier, and 64 rows (kColorGrain) are about a
+  // microsecond of rows, what a barrier and the rows' states moving to the other core cost. Polygon stress N = 1000 at
   // 2 threads: 3 regions a step split, of 10 stages and about 290 items each.
   void EndRegion(StageRunner& run) {
     collecting_ = false;
     const int stages = static_cast<int>(regionPlan_.size());
-    const int minItems = std::max(run.MinHeavyItems() / kLanes, run.MinHeavyItems() / (2 * kLanes) * stages);
+    const int minItems = std::max(run.MinHeavyItems() / kGroupRows, run.MinHeavyItems() / (2 * kGroupRows) * stages);
     run.Stages(Stage::kSolve, regionPlan_, std::max(1, minItems), [&](int s, int b, int e) {
       regionFns_[regionPass_[s]](regionFirst_[s] + b, regionFirst_[s] + e);
     });
@@ -1267,7 +1273,7 @@ class SoftStepSolver final : public ContactSolverBase {
     for (int color = 0; color <= kColors; ++color) {
       const int begin = groupStart_[color], count = groupStart_[color + 1] - begin;
       if (count == 0) continue;
-      regionPlan_.push_back({count, color < kColors ? kColorGrain / kLanes : count});
+      regionPlan_.push_back({count, color < kColors ? kColorGrain / kGroupRows : count});
       regionFirst_.push_back(begin);
       regionPass_.push_back(pass);
     }
@@ -1287,7 +1293,7 @@ class SoftStepSolver final : public ContactSolverBase {
   Real collisionShare_ = 1;  // a sub-step's share of the step's collision impulses (Run says why)
   std::vector<SolverBody> states_;
   std::vector<SoftRowGroup> groups_;
-  bool vex_ = false;  // the four-wide kernels in AVX's encoding (Run)
+  bool vex_ = false;  // the rows eight-wide with AVX, the integration four-wide in AVX's encoding (Run)
   std::span<Contact> contacts_;           // this step's (Run)
   const BodyInverseMass* inv_ = nullptr;  // this step's bodies' (Run)
   std::vector<RelaxBiasRows> relaxBias_;  // per group: the relax passes' speculative bias (RelaxBias)

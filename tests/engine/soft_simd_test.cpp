@@ -1,8 +1,8 @@
-// soft_step's four-wide row kernel (soft_rows.h) against its one-row path: the same state bit
+// soft_step's SIMD row kernels (soft_rows.h) against their one-row path: the same state bit
 // for bit, on a pile with two-point and one-point manifolds, static, kinematic and dynamic
 // bodies, at 1 and 3 threads with parallel sections that really run in parallel; and the
-// four-wide kernels in SSE2's and in AVX's encoding (WorldDef::softVex; the AVX one runs only on a
-// CPU with AVX, so on one without it the two runs below are the same path).
+// four-wide SSE2 kernels against the eight-wide AVX ones (WorldDef::softVex; the AVX ones run only
+// on a CPU with AVX, so on one without it the two runs below are the same path).
 #include <gtest/gtest.h>
 
 #include <algorithm>

@@ -200,9 +200,10 @@ struct WorldDef {
   /// The state is the same bit for bit either way (a test checks it); false exists for that test
   /// and to measure what the four-wide path gains.
   bool softSimd = true;
-  /// soft_step: with softSimd, run the four-wide kernels in AVX's three-operand encoding when the
-  /// CPU has AVX (checked at run time): the same operations, fewer instructions, the same state
-  /// bit for bit (a test checks it); false keeps the SSE2 encoding (for that test and to measure).
+  /// soft_step: with softSimd, solve eight contact rows at a time with AVX when the CPU has it
+  /// (checked at run time): the same operations per row, fewer instructions, the same state bit
+  /// for bit (a test checks it); false keeps the four-wide SSE2 kernels (for that test and to
+  /// measure).
   bool softVex = true;
   /// soft_step: relax passes per sub-step, >= 1 (Box2D 3: 1). The second one holds the 30-box tall
   /// stack at 4 sub-steps (top 0.035 m; with one 0.083 m, 0.05 allowed; docs/soft_step.md), at the
