@@ -13,9 +13,9 @@
 #include <utility>
 #include <vector>
 
+#include "constraint_graph.h"
 #include "integrate.h"
 #include "restitution_policy.h"
-#include "constraint_graph.h"
 #include "solver.h"
 #include "stage_clock.h"
 
