@@ -3,7 +3,7 @@
 //
 // Why it exists: the pgs and soft_step solvers are Gauss-Seidel. Each row reads the velocities
 // that every earlier row of the iteration wrote, and the order of rows is the greedy colouring
-// of the global contact list (contact_solver.h). Splitting the world among processes changes
+// of the global contact list (constraint_graph.h). Splitting the world among processes changes
 // which rows a process sees and the order it could solve them in, so their result cannot be
 // made independent of the process count without replaying the global order (a process waiting
 // for every earlier colour of its neighbours: one exchange per colour per iteration). The thesis

@@ -3,7 +3,7 @@
 // step (whether collisions run).
 //
 // kCollisions: pairwise collisions before the velocity iterations (ApplyCollisions in
-// contact_solver.h); the normal rows only keep points from approaching, and a speculative point
+// contact_constraints.h); the normal rows only keep points from approaching, and a speculative point
 // may close its gap s this step (target vn >= -s/dt).
 //
 // kBox2d: Box2D 2.4.1's velocity bias. The approach speed is captured once, before the solve;

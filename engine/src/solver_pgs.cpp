@@ -12,31 +12,29 @@
 // back by the distance it bounced early, after integration): a bounce then does not depend on
 // the step at which the gap closed, which keeps restitution-1 scenes from losing energy.
 // Collisions are applied pair by pair before the iterations (ApplyCollisions in
-// contact_solver.h says why: Newton's cradle).
+// contact_constraints.h says why: Newton's cradle).
 //
 // The kernels are templates on the effects (rotation, friction): a world with an effect off
 // runs a path without its rows or terms instead of multiplying them by zero.
 //
-// Colouring, preparation and warm starting are shared with soft_step (contact_solver.h).
-#include "contact_solver.h"
+// Colouring (constraint_graph.h), and preparation, warm starting, the collisions, the position
+// pass and the row kernels (contact_constraints.h) are shared with soft_step: components each
+// solver holds.
+#include "constraint_graph.h"
+#include "contact_constraints.h"
 
 namespace quadrant {
 namespace {
 
 using Clock = StageClock;
 
-class PgsSolver final : public ContactSolverBase {
+class PgsSolver final : public Solver {
  public:
   const char* Name() const override { return "pgs"; }
 
   void Step(StepContext& ctx) override {
-    const WorldDef& def = *ctx.def;
-    const Effects& fx = def.effects;
-    if (fx.rotation) {
-      fx.friction ? Run<true, true>(ctx) : Run<true, false>(ctx);
-    } else {
-      fx.friction ? Run<false, true>(ctx) : Run<false, false>(ctx);
-    }
+    DispatchEffects(ctx.def->effects,
+                    [&](auto rotation, auto friction) { Run<decltype(rotation)::value, decltype(friction)::value>(ctx); });
   }
 
  private:
@@ -51,25 +49,34 @@ class PgsSolver final : public ContactSolverBase {
     IntegrateVelocities(bodies, def, dt, run);
     auto t1 = Clock::now();
 
-    Color(run, ctx);
-    const int m = static_cast<int>(constraints_.size());
-    run.For(Stage::kSolve, m, run.MinHeavyItems(), [&](int b, int e, int) { Prepare<kRotation>(ctx, b, e); });
-    if (def.effects.warmStarting) ForEachColor(run, [&](int b, int e) { WarmStart<kRotation>(bodies, b, e); });
+    graph_.Color(run, ctx);
+    constraints_.Resize(graph_.Count());
+    const int m = constraints_.Size();
+    run.For(Stage::kSolve, m, run.MinHeavyItems(),
+            [&](int b, int e, int) { constraints_.Prepare<kRotation>(ctx, graph_, b, e); });
+    if (def.effects.warmStarting) {
+      graph_.ForEachColor(run, [&](int b, int e) { constraints_.WarmStart<kRotation>(bodies, b, e); });
+    }
     const Real invDt = Real(1) / dt;
     const bool collisions = def.effects.restitution && def.restitution == RestitutionPolicy::kCollisions;
-    if (collisions) ApplyCollisionPasses<kRotation>(run, bodies, def, invDt, Vec2{});
+    if (collisions) constraints_.ApplyCollisionPasses<kRotation>(run, graph_, bodies, def, invDt, Vec2{});
     // Every iteration's colours in one region (ForEachColor): the same order of passes.
-    ForEachColor(run, [&](int b, int e) { SolveVelocities<kRotation, kFriction>(bodies, invDt, b, e); },
+    graph_.ForEachColor(run, [&](int b, int e) { SolveVelocities<kRotation, kFriction>(bodies, invDt, b, e); },
                  def.velocityIterations);
-    run.For(Stage::kSolve, m, run.MinHeavyItems(), [&](int b, int e, int) { StoreImpulses(ctx.contacts, b, e); });
+    run.For(Stage::kSolve, m, run.MinHeavyItems(),
+            [&](int b, int e, int) { constraints_.StoreImpulses(ctx.contacts, b, e); });
     auto t2 = Clock::now();
 
     const bool correct = def.positionIterations > 0 && m > 0;
-    if (correct) SnapshotPositions(run, bodies);
+    if (correct) constraints_.SnapshotPositions(run, bodies);
     IntegratePositions(bodies, def, dt, run);
-    if (collisions && m > 0) ForEachColor(run, [&](int b, int e) { ApplyBounceShifts(bodies, b, e); });
+    if (collisions && m > 0) {
+      graph_.ForEachColor(run, [&](int b, int e) { constraints_.ApplyBounceShifts(bodies, b, e); });
+    }
     auto t3 = Clock::now();
-    if (correct) CorrectPositions<kRotation>(run, bodies, def, def.linearSlop, def.positionIterations);
+    if (correct) {
+      constraints_.CorrectPositions<kRotation>(run, graph_, bodies, def, def.linearSlop, def.positionIterations);
+    }
     auto t4 = Clock::now();
     ctx.profile->integrate += Ms(t0, t1) + Ms(t2, t3);
     ctx.profile->solve += Ms(t1, t2) + Ms(t3, t4);
@@ -82,24 +89,12 @@ class PgsSolver final : public ContactSolverBase {
       const Vec2 n = cc.normal;
       BodyVelocity va = bodies.vel[cc.a];
       BodyVelocity vb = bodies.vel[cc.b];
-      auto apply = [&](const PointConstraint& pc, Vec2 P) {
-        va.v -= cc.invMassA * P;
-        vb.v += cc.invMassB * P;
-        if constexpr (kRotation) {
-          va.w -= cc.invIA * Cross(pc.rA, P);
-          vb.w += cc.invIB * Cross(pc.rB, P);
-        }
-      };
       if constexpr (kFriction) {
         const Vec2 t = RightPerp(n);
         for (int k = 0; k < cc.pointCount; ++k) {
           PointConstraint& pc = cc.points[k];
-          const Real vt = Dot(RelativeVelocity<kRotation>(va, vb, pc), t);
-          const Real maxFriction = cc.friction * (pc.normalImpulse + pc.collisionImpulse);
-          const Real newImpulse = std::clamp(pc.tangentImpulse - pc.tangentMass * vt, -maxFriction, maxFriction);
-          const Real lambda = newImpulse - pc.tangentImpulse;
-          pc.tangentImpulse = newImpulse;
-          apply(pc, lambda * t);
+          pc.tangentImpulse = SolveFrictionRow<kRotation>(cc, pc, t, pc.tangentImpulse,
+                                                          pc.normalImpulse + pc.collisionImpulse, va, vb);
         }
       }
       if (cc.block) {
@@ -114,7 +109,7 @@ class PgsSolver final : public ContactSolverBase {
           const Real newImpulse = std::max(pc.normalImpulse - pc.normalMass * (vn + offset), Real(0));
           const Real lambda = newImpulse - pc.normalImpulse;
           pc.normalImpulse = newImpulse;
-          apply(pc, lambda * n);
+          ApplyPointImpulse<kRotation>(cc, pc, lambda * n, va, vb);
         }
       }
       if (cc.invMassA > 0) bodies.vel[cc.a] = va;
@@ -156,6 +151,9 @@ class PgsSolver final : public ContactSolverBase {
     p0.normalImpulse = x0;
     p1.normalImpulse = x1;
   }
+
+  ConstraintGraph graph_;
+  ContactConstraints constraints_;
 };
 
 }  // namespace

@@ -4,7 +4,7 @@
 // penetration is pushed out at a bounded speed instead of by an impulse that adds velocity),
 // position integration, and one relax solve (the same rows with no bias, removing the push-out
 // velocity). Restitution comes first, as pairwise collisions before the sub-steps (shared with
-// pgs: ApplyCollisions in contact_solver.h); the early-bounce shifts follow the last sub-step.
+// pgs: ApplyCollisions in contact_constraints.h); the early-bounce shifts follow the last sub-step.
 // With RestitutionPolicy::kBox2d it is Box2D's velocity target instead, applied after the first
 // sub-step (ApplyBox2dRestitution).
 //
@@ -41,11 +41,16 @@
 // too, and the states go back to the bodies once, after the position pass. Base-100 pyramid,
 // instructions per step (callgrind, 1 thread): 80.9M at c70fd1b, 38.9M now (solver 62.1M ->
 // 22.7M); docs/soft_step.md has the steps.
+//
+// Shared with pgs as components this solver holds: the colouring (constraint_graph.h: graph_)
+// and the prepared constraints with the collision passes and row kernels (contact_constraints.h:
+// constraints_, kept only with restitution).
 #include <cmath>
 #include <cstring>
 #include <numbers>
 
-#include "contact_solver.h"
+#include "constraint_graph.h"
+#include "contact_constraints.h"
 #include "soft_rows.h"
 
 namespace quadrant {
@@ -70,17 +75,13 @@ Softness MakeSoftness(Real hertz, Real zeta, Real h) {
   return {omega / a1, a2 * a3, a3};
 }
 
-class SoftStepSolver final : public ContactSolverBase {
+class SoftStepSolver final : public Solver {
  public:
   const char* Name() const override { return "soft_step"; }
 
   void Step(StepContext& ctx) override {
-    const Effects& fx = ctx.def->effects;
-    if (fx.rotation) {
-      fx.friction ? Run<true, true>(ctx) : Run<true, false>(ctx);
-    } else {
-      fx.friction ? Run<false, true>(ctx) : Run<false, false>(ctx);
-    }
+    DispatchEffects(ctx.def->effects,
+                    [&](auto rotation, auto friction) { Run<decltype(rotation)::value, decltype(friction)::value>(ctx); });
   }
 
  private:
@@ -108,8 +109,9 @@ class SoftStepSolver final : public ContactSolverBase {
 
     double integrateMs = 0;
     auto t0 = Clock::now();
-    Color(run, ctx, /*clearLater=*/true);  // LoadFixedStates clears the masks
-    const int m = static_cast<int>(constraints_.size());
+    graph_.Color(run, ctx, /*clearLater=*/true);  // LoadFixedStates clears the masks
+    const int m = graph_.Count();
+    if (def.effects.restitution) constraints_.Resize(m);  // only restitution reads the list (lean, below)
     contacts_ = ctx.contacts;
     inv_ = bodies.inv.data();
     // The sub-steps run on the compact solver state (velocity and motion since the step began,
@@ -133,11 +135,12 @@ class SoftStepSolver final : public ContactSolverBase {
     // reads only those without one).
     auto rows = [&] {
       if (!lean) {
-        run.For(Stage::kSolve, m, run.MinHeavyItems(), [&](int b, int e, int) { Prepare<kRotation, true>(ctx, b, e); });
+        run.For(Stage::kSolve, m, run.MinHeavyItems(),
+                [&](int b, int e, int) { constraints_.Prepare<kRotation, true>(ctx, graph_, b, e); });
       }
       if (def.effects.restitution && !box2dRestitution) {
         const Vec2 stepGravity = def.effects.gravity ? ctx.dt * def.gravity : Vec2{};
-        ApplyCollisionPasses<kRotation>(run, bodies, def, Real(1) / ctx.dt, stepGravity);
+        constraints_.ApplyCollisionPasses<kRotation>(run, graph_, bodies, def, Real(1) / ctx.dt, stepGravity);
       }
       lean ? BuildRows<kRotation, true>(ctx, soft, staticSoft, def.softMassRatioLimit)
            : BuildRows<kRotation, false>(ctx, soft, staticSoft, def.softMassRatioLimit);
@@ -205,7 +208,9 @@ class SoftStepSolver final : public ContactSolverBase {
         EndRegion(run);
         if (box2dRestitution && sub == 0 && m > 0) ApplyBox2dRestitution<kRotation, kFriction>(run, def, h);
       }
-      if (def.effects.restitution && m > 0) ForEachColor(run, [&](int b, int e) { ApplyStateBounceShifts(b, e); });
+      if (def.effects.restitution && m > 0) {
+        graph_.ForEachColor(run, [&](int b, int e) { ApplyStateBounceShifts(b, e); });
+      }
       // Overlap deeper than the soft contacts push out (contactPushMaxDepth) is moved out here, by pgs's
       // position pass (on the solver states): positions change, velocities do not, so deep overlap
       // cannot fling bodies.
@@ -216,7 +221,7 @@ class SoftStepSolver final : public ContactSolverBase {
         StoreRowImpulses<true>(run);
       } else {
         StoreRowImpulses<false>(run);
-        run.For(Stage::kSolve, m, run.MinHeavyItems(), [&](int b, int e, int) { StoreImpulses(ctx.contacts, b, e); });
+        run.For(Stage::kSolve, m, run.MinHeavyItems(), [&](int b, int e, int) { constraints_.StoreImpulses(ctx.contacts, b, e); });
       }
     };
     // Few rows among many bodies (the sparse stress scenes): the rows' part runs on one thread
@@ -277,21 +282,21 @@ class SoftStepSolver final : public ContactSolverBase {
   template <bool kRotation, bool kLean>
   void BuildRows(StepContext& ctx, const Softness& soft, const Softness& staticSoft, Real massLimit) {
     StageRunner& run = *ctx.run;
-    groupStart_.assign(kColors + 2, 0);
-    for (int k = 0; k <= kColors; ++k) {
-      const int count = colorStart_[k + 1] - colorStart_[k];
+    groupStart_.assign(ConstraintGraph::kColors + 2, 0);
+    for (int k = 0; k <= ConstraintGraph::kColors; ++k) {
+      const int count = graph_.ColorBegin(k + 1) - graph_.ColorBegin(k);
       groupStart_[k + 1] = groupStart_[k] + (count + kGroupRows - 1) / kGroupRows;
     }
-    groups_.resize(groupStart_[kColors + 1]);
+    groups_.resize(groupStart_[ConstraintGraph::kColors + 1]);
     relaxBias_.resize(groups_.size());
     // One region, a stage per colour (the groups are independent; a stage tells its groups their
     // colour): one hand-over instead of one per colour (ForEachColor).
     stagePlan_.clear();
     stageFirst_.clear();  // here: each stage's colour
-    for (int k = 0; k <= kColors; ++k) {
+    for (int k = 0; k <= ConstraintGraph::kColors; ++k) {
       const int count = groupStart_[k + 1] - groupStart_[k];
       if (count == 0) continue;
-      stagePlan_.push_back({count, kColorGrain / kGroupRows});
+      stagePlan_.push_back({count, ConstraintGraph::kColorGrain / kGroupRows});
       stageFirst_.push_back(k);
     }
     run.Stages(Stage::kSolve, stagePlan_, std::max(1, run.MinHeavyItems() / kGroupRows), [&](int stage, int gb, int ge) {
@@ -300,8 +305,8 @@ class SoftStepSolver final : public ContactSolverBase {
         for (int gi = begin + gb; gi < begin + ge; ++gi) {
           SoftRowGroup& g = groups_[gi];
           for (int lane = 0; lane < kGroupRows; ++lane) {
-            const int c = colorStart_[k] + (gi - begin) * kGroupRows + lane;
-            if (c >= colorStart_[k + 1]) {
+            const int c = graph_.ColorBegin(k) + (gi - begin) * kGroupRows + lane;
+            if (c >= graph_.ColorBegin(k + 1)) {
               PadLane(g, lane);
               continue;
             }
@@ -391,7 +396,7 @@ class SoftStepSolver final : public ContactSolverBase {
   void FillLeanLane(const StepContext& ctx, SoftRowGroup& g, int lane, int c, const Softness& soft,
                     const Softness& staticSoft, Real massLimit) {
     const Bodies& bodies = *ctx.bodies;
-    const Contact& contact = contacts_[order_[c]];
+    const Contact& contact = contacts_[graph_.ContactOf(c)];
     const int a = contact.a, b = contact.b;
     const Vec2 n = contact.manifold.normal;
     const Real invMassA = inv_[a].invMass, invMassB = inv_[b].invMass;
@@ -476,7 +481,7 @@ class SoftStepSolver final : public ContactSolverBase {
     Real invMassA, invMassB;
   };
   RowEnds Ends(int c) const {
-    const Contact& contact = contacts_[order_[c]];
+    const Contact& contact = contacts_[graph_.ContactOf(c)];
     return {contact.a, contact.b, inv_[contact.a].invMass, inv_[contact.b].invMass};
   }
 
@@ -496,7 +501,7 @@ class SoftStepSolver final : public ContactSolverBase {
       }
     }
     const uint32_t stamp = stamp_;
-    ForEachColor(run, [&](int b, int e) {
+    graph_.ForEachColor(run, [&](int b, int e) {
       for (int c = b; c < e; ++c) {
         const RowEnds cc = Ends(c);
         if (cc.invMassA > 0) inRows_[cc.a] = 1;
@@ -549,13 +554,13 @@ class SoftStepSolver final : public ContactSolverBase {
     // groups are one chunk, run row by row.
     stagePlan_.clear();
     stageFirst_.clear();
-    for (int color = 0; color <= kColors; ++color) {
+    for (int color = 0; color <= ConstraintGraph::kColors; ++color) {
       const int begin = groupStart_[color], count = groupStart_[color + 1] - begin;
       if (count == 0) continue;
-      stagePlan_.push_back({count, color < kColors ? kColorGrain / kGroupRows : count});
+      stagePlan_.push_back({count, color < ConstraintGraph::kColors ? ConstraintGraph::kColorGrain / kGroupRows : count});
       stageFirst_.push_back(begin);
     }
-    const int overflow = groupStart_[kColors];
+    const int overflow = groupStart_[ConstraintGraph::kColors];
     run.Stages(Stage::kSolve, stagePlan_, std::max(1, run.MinHeavyItems() / kGroupRows), [&](int s, int b, int e) {
       RunGroups(simd && stageFirst_[s] < overflow, fn, stageFirst_[s] + b, stageFirst_[s] + e);
     });
@@ -610,31 +615,15 @@ class SoftStepSolver final : public ContactSolverBase {
       SolverBody& A = states[cc.a];
       SolverBody& B = states[cc.b];
       SolverBody a = A, b = B;
-      auto relative = [&](const PointConstraint& pc) {
-        Vec2 dv = b.v - a.v;
-        if constexpr (kRotation) dv += Cross(b.w, pc.rB) - Cross(a.w, pc.rA);
-        return dv;
-      };
-      auto apply = [&](const PointConstraint& pc, Vec2 P) {
-        a.v -= cc.invMassA * P;
-        b.v += cc.invMassB * P;
-        if constexpr (kRotation) {
-          a.w -= cc.invIA * Cross(pc.rA, P);
-          b.w += cc.invIB * Cross(pc.rB, P);
-        }
-      };
+      auto relative = [&](const PointConstraint& pc) { return RelativeVelocity<kRotation>(a, b, pc); };
+      auto apply = [&](const PointConstraint& pc, Vec2 P) { ApplyPointImpulse<kRotation>(cc, pc, P, a, b); };
       Real bounce[2] = {0, 0};  // the normal rows' bounce impulses
       for (int it = 0; it < def.restitutionIterations; ++it) {
         if constexpr (kFriction) {
           for (int k = 0; k < cc.pointCount; ++k) {
-            const PointConstraint& pc = cc.points[k];
             SoftPointRows& p = g.p[k];
-            const Real vt = Dot(relative(pc), t);
-            const Real maxFriction = cc.friction * (p.normalImpulse[lane] + bounce[k]);
-            const Real ti = p.tangentImpulse[lane];
-            const Real newImpulse = std::clamp(ti - pc.tangentMass * vt, -maxFriction, maxFriction);
-            p.tangentImpulse[lane] = newImpulse;
-            apply(pc, (newImpulse - ti) * t);
+            p.tangentImpulse[lane] = SolveFrictionRow<kRotation>(cc, cc.points[k], t, p.tangentImpulse[lane],
+                                                                 p.normalImpulse[lane] + bounce[k], a, b);
           }
         }
         const PointConstraint& p0 = cc.points[0];
@@ -685,12 +674,12 @@ class SoftStepSolver final : public ContactSolverBase {
     });
   }
 
-  // ApplyBounceShifts (contact_solver.h) on the solver states.
+  // ApplyBounceShifts (contact_constraints.h) on the solver states.
   void ApplyStateBounceShifts(int begin, int end) {
     for (int c = begin; c < end; ++c) {
       const ContactConstraint& cc = constraints_[c];
       Vec2 d;
-      if (!BounceShift(cc, d)) continue;
+      if (!ContactConstraints::BounceShift(cc, d)) continue;
       if (cc.invMassA > 0) states_[cc.a].dp += cc.invMassA * d;
       if (cc.invMassB > 0) states_[cc.b].dp -= cc.invMassB * d;
     }
@@ -731,7 +720,7 @@ class SoftStepSolver final : public ContactSolverBase {
         for (int lane = 0; lane < kGroupRows; ++lane) {
           if (g.constraint[lane] < 0) continue;
           if constexpr (kLean) {
-            Manifold& mf = contacts_[order_[g.constraint[lane]]].manifold;
+            Manifold& mf = contacts_[graph_.ContactOf(g.constraint[lane])].manifold;
             for (int pt = 0; pt < mf.pointCount; ++pt) {
               mf.points[pt].normalImpulse = g.p[pt].normalImpulse[lane];
               mf.points[pt].tangentImpulse = g.p[pt].tangentImpulse[lane];
@@ -764,7 +753,7 @@ class SoftStepSolver final : public ContactSolverBase {
     states_.resize(count);
     inRows_.resize(count + kFlagPad);  // padded: the scans below read several flags at a time
     run.For(Stage::kIntegrate, count, run.MinItems(), [&](int b, int e, int) {
-      if (clearColors) ClearColors(b, e);
+      if (clearColors) graph_.ClearColors(b, e);
       // Raw pointers: with the vectors' own, every store reloaded their data pointers.
       const BodyInverseMass* inv = bodies.inv.data();
       const BodyVelocity* vel = bodies.vel.data();
@@ -1266,14 +1255,14 @@ class SoftStepSolver final : public ContactSolverBase {
   // in Run until EndRegion.
   template <class Fn>
   void QueueGroups(bool simd, Fn fn) {
-    const int overflow = groupStart_[kColors];
+    const int overflow = groupStart_[ConstraintGraph::kColors];
     const int pass = static_cast<int>(regionFns_.size());
     regionFns_.emplace_back(
         [this, simd, fn, overflow](int gb, int ge) mutable { RunGroups(simd && gb < overflow, fn, gb, ge); });
-    for (int color = 0; color <= kColors; ++color) {
+    for (int color = 0; color <= ConstraintGraph::kColors; ++color) {
       const int begin = groupStart_[color], count = groupStart_[color + 1] - begin;
       if (count == 0) continue;
-      regionPlan_.push_back({count, color < kColors ? kColorGrain / kGroupRows : count});
+      regionPlan_.push_back({count, color < ConstraintGraph::kColors ? ConstraintGraph::kColorGrain / kGroupRows : count});
       regionFirst_.push_back(begin);
       regionPass_.push_back(pass);
     }
@@ -1298,6 +1287,12 @@ class SoftStepSolver final : public ContactSolverBase {
   const BodyInverseMass* inv_ = nullptr;  // this step's bodies' (Run)
   std::vector<RelaxBiasRows> relaxBias_;  // per group: the relax passes' speculative bias (RelaxBias)
   std::vector<int> groupStart_;
+  std::vector<TaskSystem::StagePlan> stagePlan_;  // BuildRows' and ForEachGroup's region: a stage per colour
+  std::vector<int> stageFirst_;                   // the first item (or colour) of each stage
+  std::vector<Vec2> center0_;                     // LoadStates: where the rows' bodies start
+  std::vector<Rot> rot0_;
+  ConstraintGraph graph_;
+  ContactConstraints constraints_;  // kept only with restitution (Run: lean)
 };
 
 }  // namespace

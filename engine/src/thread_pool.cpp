@@ -41,7 +41,7 @@
 //   same word. A thread with nothing left in the current stage spins (then sleeps) until the
 //   word moves on. The solver's colours are such a region (one per pass; pgs's 8 velocity
 //   iterations are one region), so a pass costs one hand-over instead of one per colour, and
-//   chunks of 64 constraints (ContactSolverBase::kColorGrain, at most four per thread and stage)
+//   chunks of 64 constraints (ConstraintGraph::kColorGrain, at most four per thread and stage)
 //   balance the threads and leave a late thread little to wait on. A ParallelFor is a region of
 //   one stage whose chunks are the blocks of the static partition (their indices index per-block
 //   outputs, so determinism is unchanged). Any thread takes any chunk, the caller included: a

@@ -1,5 +1,5 @@
 // Unit tests for the step's parts that only had tests through whole worlds: the 2x2 block solve
-// (SolveLcp2, contact_solver.h), the contact cache (contact_cache.h), the islands
+// (SolveLcp2, contact_constraints.h), the contact cache (contact_cache.h), the islands
 // (islands.h) and the contact sort (World::Impl::SortContacts, seen through GetContacts).
 #include <gtest/gtest.h>
 
@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "contact_cache.h"
-#include "contact_solver.h"
+#include "contact_constraints.h"
 #include "islands.h"
 #include "quadrant/world.h"
 #include "test_helpers.h"

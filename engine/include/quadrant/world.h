@@ -143,7 +143,7 @@ struct Effects {
 
 /// How the pgs and soft_step solvers apply restitution (WorldDef::restitution).
 enum class RestitutionPolicy : uint8_t {
-  /// Pairwise collisions before the velocity iterations or sub-steps (contact_solver.h, ApplyCollisions): each
+  /// Pairwise collisions before the velocity iterations or sub-steps (contact_constraints.h, ApplyCollisions): each
   /// approaching contact gets the impulse of a collision of its two bodies alone, sequentially, so
   /// a row of touching balls passes the impulse on as Newton's cradle does. The default.
   kCollisions,

@@ -1,20 +1,19 @@
-// The contact constraints shared by the iterative solvers (pgs, soft_step): preparation,
-// graph colouring for parallel solving, warm starting, restitution, early-bounce correction and
-// storing impulses for the next step.
-//
-// Parallelism: constraints are coloured greedily (in contact order) so that no two of one
-// colour share a dynamic body, and solved colour by colour. Within a colour the constraints
-// are independent, so splitting a colour across threads gives exactly the serial result: the
-// solve is bit-identical for any thread count. Static and kinematic bodies are read, never
-// written, so they do not constrain the colouring (as in Box2D 3's constraint graph).
+// The contact constraints shared by the iterative solvers (pgs, soft_step) as a component each
+// holds (ContactConstraints): preparation, warm starting, restitution as pairwise collisions,
+// early-bounce correction, the position pass and storing impulses for the next step; and the
+// row kernels both solvers' loops call (relative velocity, applying an impulse, the friction
+// row, the 2x2 block problem). The passes that go colour by colour take the solver's
+// constraint graph (constraint_graph.h), which orders the constraints: constraint k is the
+// k-th in colour order.
 #pragma once
 
 #include <algorithm>
 #include <atomic>
-#include <bit>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
+#include "constraint_graph.h"
 #include "integrate.h"
 #include "restitution_policy.h"
 #include "solver.h"
@@ -67,117 +66,83 @@ struct ContactConstraint {
   return b0 >= 0 && b1 >= 0;
 }
 
-class ContactSolverBase : public Solver {
- protected:
-  // Colours beyond this share one overflow group solved on one thread (rare: a body would
-  // need 64 simultaneous contacts).
-  static constexpr int kColors = 64;
+// The relative velocity of a point's two bodies (b's minus a's), for body velocities or
+// soft_step's solver states (anything with v and w).
+template <bool kRotation, class State>
+[[gnu::always_inline]] inline Vec2 RelativeVelocity(const State& va, const State& vb, const PointConstraint& pc) {
+  Vec2 dv = vb.v - va.v;
+  if constexpr (kRotation) dv += Cross(vb.w, pc.rB) - Cross(va.w, pc.rA);
+  return dv;
+}
 
-  // Greedy colouring in contact order (deterministic): each constraint takes the lowest colour
-  // that neither of its dynamic bodies has yet. Then the constraints' order is grouped by colour.
-  //
-  // The greedy pass is inherently serial (a constraint's colour depends on every earlier one
-  // that shares a body), so everything else is moved out of it: the contacts' dynamic ends are
-  // gathered in parallel first (the serial loop then reads 8 bytes per contact, in order, not
-  // the contact and both bodies' masses), and the body masks are cleared in parallel after.
-  // clearLater: the caller clears the body masks (ClearColors) in a pass of its own over the
-  // bodies before the next step, instead of a pass here.
-  void Color(StageRunner& run, const StepContext& ctx, bool clearLater = false) {
-    const Bodies& bodies = *ctx.bodies;
-    const int m = static_cast<int>(ctx.contacts.size());
-    bodyColors_.resize(bodies.Count(), 0);  // all zero between steps
-    ends_.resize(m);
-    colorOf_.resize(m);
-    run.For(Stage::kSolve, m, run.MinHeavyItems(), [&](int begin, int end, int) {
-      for (int c = begin; c < end; ++c) {
-        const int a = ctx.contacts[c].a, b = ctx.contacts[c].b;
-        ends_[c] = {bodies.inv[a].invMass > 0 ? a : -1, bodies.inv[b].invMass > 0 ? b : -1};
-      }
-    });
-    run.Serial(Stage::kSolve, [&] {
-      int counts[kColors + 1] = {};
-      for (int c = 0; c < m; ++c) {
-        const auto [a, b] = ends_[c];
-        const uint64_t used = (a >= 0 ? bodyColors_[a] : 0) | (b >= 0 ? bodyColors_[b] : 0);
-        const int color = used == ~uint64_t(0) ? kColors : std::countr_one(used);
-        colorOf_[c] = color;
-        ++counts[color];
-        if (color < kColors) {
-          if (a >= 0) bodyColors_[a] |= uint64_t(1) << color;
-          if (b >= 0) bodyColors_[b] |= uint64_t(1) << color;
-        }
-      }
-      colorStart_.assign(kColors + 2, 0);
-      for (int k = 0; k <= kColors; ++k) colorStart_[k + 1] = colorStart_[k] + counts[k];
-      order_.resize(m);
-      fill_.assign(colorStart_.begin(), colorStart_.end() - 1);
-      for (int c = 0; c < m; ++c) order_[fill_[colorOf_[c]]++] = c;
-    });
-    if (m > 0 && !clearLater) {  // leave the masks zeroed for the next step
-      run.For(Stage::kSolve, bodies.Count(), run.MinItems(), [&](int begin, int end, int) {
-        std::fill(bodyColors_.begin() + begin, bodyColors_.begin() + end, uint64_t(0));
-      });
-    }
-    constraints_.resize(m);
+// Impulse P at a point: -P on a's velocity, +P on b's, in this order of operations (the rows'
+// loops keep both bodies' velocities in locals and write them back once).
+template <bool kRotation, class State>
+[[gnu::always_inline]] inline void ApplyPointImpulse(const ContactConstraint& cc, const PointConstraint& pc, Vec2 P,
+                                                     State& va, State& vb) {
+  va.v -= cc.invMassA * P;
+  vb.v += cc.invMassB * P;
+  if constexpr (kRotation) {
+    va.w -= cc.invIA * Cross(pc.rA, P);
+    vb.w += cc.invIB * Cross(pc.rB, P);
   }
+}
 
-  // Bodies [begin, end)'s colour masks back to zero (Color's clearLater).
-  void ClearColors(int begin, int end) {
-    if (begin < end && static_cast<size_t>(end) <= bodyColors_.size()) {
-      std::fill(bodyColors_.begin() + begin, bodyColors_.begin() + end, uint64_t(0));
-    }
+// Static and kinematic bodies (inverse mass 0) are never written: other threads may be
+// reading them for constraints of the same colour.
+template <bool kRotation>
+inline void ApplyImpulse(Bodies& bodies, const ContactConstraint& cc, const PointConstraint& pc, Vec2 P) {
+  if (cc.invMassA > 0) {
+    BodyVelocity& va = bodies.vel[cc.a];
+    va.v -= cc.invMassA * P;
+    if constexpr (kRotation) va.w -= cc.invIA * Cross(pc.rA, P);
   }
+  if (cc.invMassB > 0) {
+    BodyVelocity& vb = bodies.vel[cc.b];
+    vb.v += cc.invMassB * P;
+    if constexpr (kRotation) vb.w += cc.invIB * Cross(pc.rB, P);
+  }
+}
 
-  // The smallest colour split across threads. The first colour holds most constraints
-  // (polygon stress, N = 16000: 1259, 140 and 9 of 1408; circle stress: 679 and 39 of 718); the
-  // next ones are small but would stay serial through every pass (about 20 per step) at the
-  // heavy-item grain (256 by default). In a solve large enough to run in parallel at all (at
-  // least that grain of constraints) they are split from a 128th of the grain (16): the solve
-  // stage's load-balance bound at 4 threads on polygon stress went from 2.35 to 3.05 at 64 and
-  // on circles at N = 8000 (315, 16 and 1) the 16 are no longer serial. A small solve stays on
-  // one thread: each split costs a hand-over to the other threads (about a microsecond, see
-  // task_overhead.txt), more than a colour of a few dozen constraints takes (about 40 ns each),
-  // and a step has some 17 passes (circle stress at N = 1000: about 40 constraints).
-  int MinColorItems(const StageRunner& run) const {
-    return static_cast<int>(constraints_.size()) >= run.MinHeavyItems() ? std::max(1, run.MinItems() / 128)
-                                                                       : run.MinHeavyItems();
-  }
+// One point's friction row: the accumulated tangent impulse `impulse` moves toward stopping
+// the sliding, within mu times `load` (pgs: the normal impulse plus this step's collision
+// impulse, Coulomb over the whole impact; soft_step's Box2D restitution: plus its bounce
+// impulse); the change is applied to va and vb and the new impulse returned.
+template <bool kRotation, class State>
+[[gnu::always_inline]] inline Real SolveFrictionRow(const ContactConstraint& cc, const PointConstraint& pc, Vec2 t,
+                                                    Real impulse, Real load, State& va, State& vb) {
+  const Real vt = Dot(RelativeVelocity<kRotation>(va, vb, pc), t);
+  const Real maxFriction = cc.friction * load;
+  const Real newImpulse = std::clamp(impulse - pc.tangentMass * vt, -maxFriction, maxFriction);
+  ApplyPointImpulse<kRotation>(cc, pc, (newImpulse - impulse) * t, va, vb);
+  return newImpulse;
+}
 
-  // fn(begin, end) over every colour's constraints, colour by colour, `repeat` times over, as
-  // one region of stages (StageRunner::Stages): the threads go from colour to colour inside one
-  // job instead of being handed one job per colour (a hand-over and a join each, for colours of
-  // a few microseconds' work): with pgs's 8 velocity iterations in one region too, the base-100
-  // pyramid went from 71 jobs per step to 26. Chunks of kColorGrain constraints (a few
-  // microseconds) are claimed dynamically. The overflow colour is one chunk (its rows may share
-  // bodies: in order, on one thread).
-  static constexpr int kColorGrain = 64;
-  template <class Fn>
-  void ForEachColor(StageRunner& run, Fn&& fn, int repeat = 1) {
-    stagePlan_.clear();
-    stageFirst_.clear();
-    const int overflowBegin = colorStart_[kColors], overflow = colorStart_[kColors + 1] - overflowBegin;
-    for (int r = 0; r < repeat; ++r) {
-      for (int color = 0; color < kColors; ++color) {
-        const int count = colorStart_[color + 1] - colorStart_[color];
-        if (count == 0) continue;
-        stagePlan_.push_back({count, kColorGrain});
-        stageFirst_.push_back(colorStart_[color]);
-      }
-      if (overflow > 0) {
-        stagePlan_.push_back({overflow, overflow});
-        stageFirst_.push_back(overflowBegin);
-      }
-    }
-    run.Stages(Stage::kSolve, stagePlan_, run.MinHeavyItems() * repeat,
-               [&](int s, int b, int e) { fn(stageFirst_[s] + b, stageFirst_[s] + e); });
+// The effects' dispatch of both solvers: fn(rotation, friction) with each as a
+// std::bool_constant, so a world with an effect off runs a path without its rows or terms.
+template <class Fn>
+void DispatchEffects(const Effects& fx, Fn&& fn) {
+  if (fx.rotation) {
+    fx.friction ? fn(std::true_type{}, std::true_type{}) : fn(std::true_type{}, std::false_type{});
+  } else {
+    fx.friction ? fn(std::false_type{}, std::true_type{}) : fn(std::false_type{}, std::false_type{});
   }
+}
+
+class ContactConstraints {
+ public:
+  // One constraint per coloured contact (call after ConstraintGraph::Color).
+  void Resize(int count) { list_.resize(count); }
+  int Size() const { return static_cast<int>(list_.size()); }
+  ContactConstraint& operator[](int k) { return list_[k]; }
+  const ContactConstraint& operator[](int k) const { return list_[k]; }
 
   // kBlock: also the 2x2 block data (k12, block), which pgs's normal rows and the restitution
   // passes read; soft_step without restitution reads neither (base-100 pyramid: 237 -> 199
   // instructions a contact without them).
   template <bool kRotation, bool kBlock = true>
-  void Prepare(StepContext& ctx, int begin, int end) {
-    for (int k = begin; k < end; ++k) PrepareContact<kRotation, kBlock>(ctx, order_[k], constraints_[k]);
+  void Prepare(const StepContext& ctx, const ConstraintGraph& graph, int begin, int end) {
+    for (int k = begin; k < end; ++k) PrepareContact<kRotation, kBlock>(ctx, graph.ContactOf(k), list_[k]);
   }
 
   // One contact's constraint (Prepare's body; soft_step prepares into a local one where it keeps
@@ -251,39 +216,16 @@ class ContactSolverBase : public Solver {
     }
   }
 
-  // Static and kinematic bodies (inverse mass 0) are never written: other threads may be
-  // reading them for constraints of the same colour.
-  template <bool kRotation>
-  static void ApplyImpulse(Bodies& bodies, const ContactConstraint& cc, const PointConstraint& pc, Vec2 P) {
-    if (cc.invMassA > 0) {
-      BodyVelocity& va = bodies.vel[cc.a];
-      va.v -= cc.invMassA * P;
-      if constexpr (kRotation) va.w -= cc.invIA * Cross(pc.rA, P);
-    }
-    if (cc.invMassB > 0) {
-      BodyVelocity& vb = bodies.vel[cc.b];
-      vb.v += cc.invMassB * P;
-      if constexpr (kRotation) vb.w += cc.invIB * Cross(pc.rB, P);
-    }
-  }
-
   template <bool kRotation>
   void WarmStart(Bodies& bodies, int begin, int end) {
     for (int k = begin; k < end; ++k) {
-      const ContactConstraint& cc = constraints_[k];
+      const ContactConstraint& cc = list_[k];
       const Vec2 t = RightPerp(cc.normal);
       for (int k = 0; k < cc.pointCount; ++k) {
         const PointConstraint& pc = cc.points[k];
         ApplyImpulse<kRotation>(bodies, cc, pc, pc.normalImpulse * cc.normal + pc.tangentImpulse * t);
       }
     }
-  }
-
-  template <bool kRotation>
-  static Vec2 RelativeVelocity(const BodyVelocity& va, const BodyVelocity& vb, const PointConstraint& pc) {
-    Vec2 dv = vb.v - va.v;
-    if constexpr (kRotation) dv += Cross(vb.w, pc.rB) - Cross(va.w, pc.rA);
-    return dv;
   }
 
   // Restitution as pairwise collisions, before the velocity iterations (pgs). Each contact
@@ -316,7 +258,7 @@ class ContactSolverBase : public Solver {
   bool ApplyCollisions(Bodies& bodies, Real threshold, Real invDt, Vec2 stepGravity, int begin, int end) {
     bool any = false;
     for (int c = begin; c < end; ++c) {
-      ContactConstraint& cc = constraints_[c];
+      ContactConstraint& cc = list_[c];
       if (cc.restitution == 0) continue;
       const Real e = cc.restitution;
       const Vec2 n = cc.normal;
@@ -331,13 +273,7 @@ class ContactSolverBase : public Solver {
         return vn < -threshold && vn + gap < 0;
       };
       auto apply = [&](PointConstraint& pc, Real x) {
-        const Vec2 P = x * n;
-        va.v -= cc.invMassA * P;
-        vb.v += cc.invMassB * P;
-        if constexpr (kRotation) {
-          va.w -= cc.invIA * Cross(pc.rA, P);
-          vb.w += cc.invIB * Cross(pc.rB, P);
-        }
+        ApplyPointImpulse<kRotation>(cc, pc, x * n, va, vb);
         pc.collisionImpulse += x;
         if (pc.separation > 0) pc.bounceShift = std::max(pc.bounceShift, (Real(1) + e) * pc.separation);
       };
@@ -391,7 +327,7 @@ class ContactSolverBase : public Solver {
 
   void ApplyBounceShifts(Bodies& bodies, int begin, int end) {
     for (int c = begin; c < end; ++c) {
-      const ContactConstraint& cc = constraints_[c];
+      const ContactConstraint& cc = list_[c];
       Vec2 d;
       if (!BounceShift(cc, d)) continue;
       if (cc.invMassA > 0) {
@@ -407,7 +343,7 @@ class ContactSolverBase : public Solver {
 
   void StoreImpulses(std::span<Contact> contacts, int begin, int end) const {
     for (int c = begin; c < end; ++c) {
-      const ContactConstraint& cc = constraints_[c];
+      const ContactConstraint& cc = list_[c];
       Manifold& m = contacts[cc.contact].manifold;
       for (int k = 0; k < cc.pointCount; ++k) {
         m.points[k].normalImpulse = cc.points[k].normalImpulse;
@@ -430,10 +366,10 @@ class ContactSolverBase : public Solver {
 
   // Re-derives the origins of the bodies a position correction moved (dynamic ones only:
   // re-deriving a static body's origin could change its bits).
-  void SyncContactBodies(StageRunner& run, Bodies& bodies) {
-    ForEachColor(run, [&](int b, int e) {
+  void SyncContactBodies(StageRunner& run, ConstraintGraph& graph, Bodies& bodies) {
+    graph.ForEachColor(run, [&](int b, int e) {
       for (int k = b; k < e; ++k) {
-        const ContactConstraint& cc = constraints_[k];
+        const ContactConstraint& cc = list_[k];
         if (cc.invMassA > 0) SyncTransform(bodies, cc.a);
         if (cc.invMassB > 0) SyncTransform(bodies, cc.b);
       }
@@ -466,7 +402,7 @@ class ContactSolverBase : public Solver {
   bool SolvePositions(Bodies& bodies, const WorldDef& def, Real allowed, int begin, int end) {
     bool moved = false;
     for (int c = begin; c < end; ++c) {
-      const ContactConstraint& cc = constraints_[c];
+      const ContactConstraint& cc = list_[c];
       const Vec2 n = cc.normal;
       for (int k = 0; k < cc.pointCount; ++k) {
         const PointConstraint& pc = cc.points[k];
@@ -503,26 +439,26 @@ class ContactSolverBase : public Solver {
   // nearly always) costs one pass instead of positionIterations passes and a sync. Results are
   // the same bits either way.
   template <bool kRotation>
-  void CorrectPositions(StageRunner& run, Bodies& bodies, const WorldDef& def, Real allowed, int iterations) {
+  void CorrectPositions(StageRunner& run, ConstraintGraph& graph, Bodies& bodies, const WorldDef& def, Real allowed, int iterations) {
     bool anyMoved = false;
     for (int it = 0; it < iterations; ++it) {
       std::atomic<bool> moved{false};
-      ForEachColor(run, [&](int b, int e) {
+      graph.ForEachColor(run, [&](int b, int e) {
         if (SolvePositions<kRotation>(bodies, def, allowed, b, e)) moved.store(true, std::memory_order_relaxed);
       });
       if (!moved.load(std::memory_order_relaxed)) break;  // read after the last colour's join
       anyMoved = true;
     }
-    if (anyMoved) SyncContactBodies(run, bodies);
+    if (anyMoved) SyncContactBodies(run, graph, bodies);
   }
 
   // Restitution: passes of ApplyCollisions, colour by colour, until one finds no collision (at
   // most restitutionIterations). stepGravity as ApplyCollisions says.
   template <bool kRotation>
-  void ApplyCollisionPasses(StageRunner& run, Bodies& bodies, const WorldDef& def, Real invDt, Vec2 stepGravity) {
+  void ApplyCollisionPasses(StageRunner& run, ConstraintGraph& graph, Bodies& bodies, const WorldDef& def, Real invDt, Vec2 stepGravity) {
     for (int it = 0; it < def.restitutionIterations; ++it) {
       std::atomic<bool> collided{false};
-      ForEachColor(run, [&](int b, int e) {
+      graph.ForEachColor(run, [&](int b, int e) {
         if (ApplyCollisions<kRotation>(bodies, def.restitutionThreshold, invDt, stepGravity, b, e)) {
           collided.store(true, std::memory_order_relaxed);
         }
@@ -531,13 +467,9 @@ class ContactSolverBase : public Solver {
     }
   }
 
-  std::vector<ContactConstraint> constraints_;
-  std::vector<uint64_t> bodyColors_;
-  std::vector<int> colorOf_, colorStart_, order_, fill_;
-  std::vector<TaskSystem::StagePlan> stagePlan_;  // ForEachColor's region: a stage per colour
-  std::vector<int> stageFirst_;                   // the first item of each stage
-  std::vector<std::pair<int, int>> ends_;  // per contact: its dynamic bodies, -1 for others
-  std::vector<Vec2> center0_;
+ private:
+  std::vector<ContactConstraint> list_;  // in colour order
+  std::vector<Vec2> center0_;            // SnapshotPositions: where each body was before the step
   std::vector<Rot> rot0_;
 };
 
