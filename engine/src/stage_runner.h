@@ -172,9 +172,9 @@ class StageRunner {
     // The caller claims from the front (thread_pool.cpp), so it takes alone() unless a worker
     // is there first.
     const int items = 4 * Workers(), blocks = items - 1;
-    const std::vector<TaskSystem::StagePlan> plan{{items, 1}};
+    const TaskSystem::StagePlan plan{items, 1};  // one stage: no list to allocate every step
     chunkMs_.assign(items, 0.0);
-    tasks_.ParallelStages(1, plan.data(), [&](int, int b, int e, int) {
+    tasks_.ParallelStages(1, &plan, [&](int, int b, int e, int) {
       for (int item = b; item < e; ++item) {
         const double t0 = measure_ ? NowMs() : 0.0;
         if (item == 0) {
