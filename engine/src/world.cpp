@@ -67,7 +67,7 @@ struct World::Impl {
   std::unique_ptr<BroadPhase> broadPhase;
   std::unique_ptr<Solver> solver;
   std::unique_ptr<QuadrantsScheme> quadrants;  // only for ParallelScheme::kQuadrants
-  std::vector<std::vector<Contact>> workerContacts;
+  WorkerLists<Contact> workerContacts;  // the narrow phase's output, per worker
   ContactCache cache;
   Islands islands;  // only used when def.effects.sleep is on
   std::vector<CandidatePair> pairs;
@@ -450,8 +450,7 @@ void World::Impl::CountContacts(int candidatePairs) {
 }
 
 void World::Impl::NarrowPhase(Real dt) {
-  workerContacts.resize(run->Workers());
-  for (std::vector<Contact>& part : workerContacts) part.clear();
+  workerContacts.Reset(run->Workers());
   run->For(Stage::kNarrowPhase, static_cast<int>(pairs.size()), run->MinHeavyItems(),
            [&](int begin, int end, int worker) {
              CollidePairs(bodies, def, dt, std::span<const CandidatePair>(pairs).subspan(begin, end - begin),
