@@ -5,9 +5,9 @@
 
 namespace quadrant {
 
-void MergePairs(std::vector<std::vector<CandidatePair>>& perWorker, std::vector<CandidatePair>& out) {
+void MergePairs(const WorkerLists<CandidatePair>& perWorker, std::vector<CandidatePair>& out) {
   out.clear();
-  for (const auto& part : perWorker) out.insert(out.end(), part.begin(), part.end());
+  for (int w = 0; w < perWorker.Count(); ++w) out.insert(out.end(), perWorker[w].begin(), perWorker[w].end());
 }
 
 bool SegmentTouchesBox(Vec2 p1, Vec2 p2, const AABB& box) {

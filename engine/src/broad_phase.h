@@ -13,6 +13,7 @@
 #include "quadrant/math.h"
 #include "quadrant/world.h"
 #include "stage_runner.h"
+#include "worker_lists.h"
 
 namespace quadrant {
 
@@ -53,7 +54,7 @@ class BroadPhase {
 bool SegmentTouchesBox(Vec2 p1, Vec2 p2, const AABB& box);
 
 /// Concatenates per-worker pair buffers in worker order.
-void MergePairs(std::vector<std::vector<CandidatePair>>& perWorker, std::vector<CandidatePair>& out);
+void MergePairs(const WorkerLists<CandidatePair>& perWorker, std::vector<CandidatePair>& out);
 
 std::unique_ptr<BroadPhase> MakeQuadTree(int maxDepth);
 std::unique_ptr<BroadPhase> MakeUniformGrid();

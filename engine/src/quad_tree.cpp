@@ -38,9 +38,8 @@ class QuadTree final : public BroadPhase {
       AssignNodes(aabbs);
       Bucket(n);
     });
-    perWorker_.resize(run.Workers());
-    stacks_.resize(run.Workers());
-    for (auto& part : perWorker_) part.clear();
+    perWorker_.Reset(run.Workers());
+    stacks_.Reset(run.Workers());
     // Blocks of bodies in node order: each body pairs with its node's later bodies and with
     // the bodies below it, so blocks are independent.
     run.For(Stage::kBroadPhase, n, run.MinItems(), [&](int begin, int end, int worker) {
@@ -241,8 +240,8 @@ class QuadTree final : public BroadPhase {
   std::vector<int> node_;
   std::vector<CellRange> range_;
   std::vector<int> start_, fill_, subtree_, items_;
-  std::vector<std::vector<CandidatePair>> perWorker_;
-  std::vector<std::vector<NodeRef>> stacks_;
+  WorkerLists<CandidatePair> perWorker_;  // per worker, apart (worker_lists.h)
+  WorkerLists<NodeRef> stacks_;
 };
 
 }  // namespace

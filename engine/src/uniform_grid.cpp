@@ -15,6 +15,7 @@
 #include <limits>
 
 #include "broad_phase.h"
+#include "worker_lists.h"
 
 #if defined(__SSE2__) && !defined(QUADRANT_DOUBLE)
 #include <emmintrin.h>
@@ -36,8 +37,8 @@ class UniformGrid final : public BroadPhase {
     if (aabbs.size() < 2) return;
     Build(aabbs, movable, run, true);
     if (!ready_) return;
-    for (const auto& part : scanPairs_) out.insert(out.end(), part.begin(), part.end());
-    for (const auto& part : largePairs_) out.insert(out.end(), part.begin(), part.end());
+    for (int b = 0; b < scanPairs_.Count(); ++b) out.insert(out.end(), scanPairs_[b].begin(), scanPairs_[b].end());
+    for (int b = 0; b < largePairs_.Count(); ++b) out.insert(out.end(), largePairs_[b].begin(), largePairs_[b].end());
   }
 
   void BuildForQueries(std::span<const AABB> aabbs, StageRunner& run) override {
@@ -179,16 +180,14 @@ class UniformGrid final : public BroadPhase {
     if (scan) {
       add(Op::kScan, blocks_);
       add(Op::kLarge, blocks_);
-      scanPairs_.resize(blocks_);
-      largePairs_.resize(blocks_);
-      for (auto& part : scanPairs_) part.clear();
-      for (auto& part : largePairs_) part.clear();
+      scanPairs_.Reset(blocks_);
+      largePairs_.Reset(blocks_);
     }
     extent_.resize(n);
     partial_.resize(chunks_);
     cellMax_.resize(chunks_);
     keyOf_.resize(n);
-    largePart_.resize(blocks_);
+    largePart_.Reset(blocks_);
     const int minParallel = parallel ? 2 : std::numeric_limits<int>::max();
     run.Stages(Stage::kBroadPhase, plan_, minParallel, [&](int s, int begin, int end) {
       const Step step = steps_[s];
@@ -347,7 +346,7 @@ class UniformGrid final : public BroadPhase {
   void Offsets(int p) {
     if (p == 0) {
       large_.clear();  // blocks are in index order, so the oversized bodies are too
-      for (const std::vector<int>& part : largePart_) large_.insert(large_.end(), part.begin(), part.end());
+      for (int b = 0; b < largePart_.Count(); ++b) large_.insert(large_.end(), largePart_[b].begin(), largePart_[b].end());
     }
     const int digits = 1 << digitBits_;
     int total = 0;
@@ -526,8 +525,10 @@ class UniformGrid final : public BroadPhase {
   std::vector<Real> extent_;
   std::vector<Partial> partial_;
   std::vector<double> cellMax_;
-  std::vector<std::vector<int>> largePart_;
-  std::vector<std::vector<CandidatePair>> scanPairs_, largePairs_;
+  // Per block, each alone on its cache lines (worker_lists.h: blocks scanned at once by two
+  // threads appended to neighbouring headers).
+  WorkerLists<int> largePart_;
+  WorkerLists<CandidatePair> scanPairs_, largePairs_;
 };
 
 }  // namespace
