@@ -6,30 +6,17 @@
 
 namespace quadrant {
 
-void ConstraintGraph::Color(StageRunner& run, const StepContext& ctx, bool clearLater) {
-  const Bodies& bodies = *ctx.bodies;
-  const int m = static_cast<int>(ctx.contacts.size());
-  bodyColors_.resize(bodies.Count(), 0);  // all zero between steps
+void ConstraintGraph::Prepare(StageRunner& run, int bodyCount, int m) {
+  bodyColors_.resize(bodyCount, 0);  // all zero between steps
   ends_.resize(m);
   colorOf_.resize(m);
-  // The colouring is a function of the sequence of dynamic ends alone, so where that sequence is
-  // last step's (a pile at rest keeps its contacts, in key order), last step's colouring is this
-  // step's, bit for bit, and the serial pass is skipped. The gather compares as it goes (each
-  // block counts its changed entries; ends_ keeps last step's until overwritten here).
-  const bool comparable = m == lastCount_ && m > 0;
+  comparable_ = m == lastCount_ && m > 0;
   changed_.assign(size_t(run.Workers()), 0);
-  run.For(Stage::kSolve, m, run.MinHeavyItems(), [&](int begin, int end, int worker) {
-    int changed = 0;
-    for (int c = begin; c < end; ++c) {
-      const int a = ctx.contacts[c].a, b = ctx.contacts[c].b;
-      const std::pair<int, int> e{bodies.inv[a].invMass > 0 ? a : -1, bodies.inv[b].invMass > 0 ? b : -1};
-      changed += comparable && e != ends_[c] ? 1 : 0;
-      ends_[c] = e;
-    }
-    changed_[size_t(worker)] += changed;
-  });
+}
+
+void ConstraintGraph::Finish(StageRunner& run, int bodyCount, int m, bool clearLater) {
   lastCount_ = m;
-  bool same = comparable;
+  bool same = comparable_;
   for (int changed : changed_) same = same && changed == 0;
   ++colorings_;
   if (same) {
@@ -56,7 +43,7 @@ void ConstraintGraph::Color(StageRunner& run, const StepContext& ctx, bool clear
     for (int c = 0; c < m; ++c) order_[fill_[colorOf_[c]]++] = c;
   });
   if (m > 0 && !clearLater) {  // leave the masks zeroed for the next step
-    run.For(Stage::kSolve, bodies.Count(), run.MinItems(), [&](int begin, int end, int) {
+    run.For(Stage::kSolve, bodyCount, run.MinItems(), [&](int begin, int end, int) {
       std::fill(bodyColors_.begin() + begin, bodyColors_.begin() + end, uint64_t(0));
     });
   }

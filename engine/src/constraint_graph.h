@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "solver.h"
+#include "stage_runner.h"
 
 namespace quadrant {
 
@@ -38,7 +39,36 @@ class ConstraintGraph {
   // the contact and both bodies' masses), and the body masks are cleared in parallel after.
   // clearLater: the caller clears the body masks (ClearColors) in a pass of its own over the
   // bodies before the next step, instead of a pass here.
-  void Color(StageRunner& run, const StepContext& ctx, bool clearLater = false);
+  void Color(StageRunner& run, const StepContext& ctx, bool clearLater = false) {
+    Color(run, ctx, clearLater, [](int, int) {});
+  }
+  // The same, calling onEnds(a, b) for every contact from the parallel gather of its dynamic ends
+  // (a body index, or -1 for an end that is static, kinematic or asleep), on any worker, in no
+  // particular order: a solver marks its per-body flags there instead of in a pass of its own.
+  //
+  // The colouring is a function of the sequence of dynamic ends alone, so where that sequence is
+  // last step's (a pile at rest keeps its contacts, in key order), last step's colouring is this
+  // step's, bit for bit, and the serial pass is skipped. The gather compares as it goes (each
+  // block counts its changed entries; ends_ keeps last step's until overwritten here).
+  template <class OnEnds>
+  void Color(StageRunner& run, const StepContext& ctx, bool clearLater, OnEnds&& onEnds) {
+    const Bodies& bodies = *ctx.bodies;
+    const int m = static_cast<int>(ctx.contacts.size());
+    Prepare(run, bodies.Count(), m);
+    const bool comparable = comparable_;
+    run.For(Stage::kSolve, m, run.MinHeavyItems(), [&](int begin, int end, int worker) {
+      int changed = 0;
+      for (int c = begin; c < end; ++c) {
+        const int a = ctx.contacts[c].a, b = ctx.contacts[c].b;
+        const std::pair<int, int> e{bodies.inv[a].invMass > 0 ? a : -1, bodies.inv[b].invMass > 0 ? b : -1};
+        changed += comparable && e != ends_[c] ? 1 : 0;
+        ends_[c] = e;
+        onEnds(e.first, e.second);
+      }
+      changed_[size_t(worker)] += changed;
+    });
+    Finish(run, bodies.Count(), m, clearLater);
+  }
 
   // Bodies [begin, end)'s colour masks back to zero (Color's clearLater).
   void ClearColors(int begin, int end) {
@@ -90,6 +120,12 @@ class ConstraintGraph {
   std::vector<std::pair<int, int>> ends_;         // per contact: its dynamic bodies, -1 for others
   std::vector<int> changed_;                      // per worker: ends that differ from last step's
   int lastCount_ = -1;                            // the contacts coloured last step (-1: none yet)
+  bool comparable_ = false;                       // this step has as many contacts as the last
+
+  void Prepare(StageRunner& run, int bodyCount, int m);
+  // After the gather: last step's colouring kept, or the greedy pass; then the masks cleared
+  // (unless clearLater).
+  void Finish(StageRunner& run, int bodyCount, int m, bool clearLater);
 
  public:
   // How many colourings were asked for and how many reused last step's (for the tests).

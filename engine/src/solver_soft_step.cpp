@@ -45,6 +45,7 @@
 // Shared with pgs as components this solver holds: the colouring (constraint_graph.h: graph_)
 // and the prepared constraints with the collision passes and row kernels (contact_constraints.h:
 // constraints_, kept only with restitution).
+#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <numbers>
@@ -109,18 +110,24 @@ class SoftStepSolver final : public Solver {
 
     double integrateMs = 0;
     auto t0 = Clock::now();
-    graph_.Color(run, ctx, /*clearLater=*/true);  // LoadFixedStates clears the masks
+    // The sub-steps run on the compact solver state (velocity and motion since the step began,
+    // 32 bytes a body) and on the rows in groups of eight (soft_rows.h), not on the body arrays
+    // and the constraints. LoadFixedStates clears last step's flags and colour masks first; the
+    // colouring's gather then marks the rows' bodies (MarkRow).
+    auto ti = Clock::now();
+    LoadFixedStates(run, bodies, def.effects.sleep);
+    integrateMs += Ms(ti, Clock::now());
+    const bool supported = def.softMassRatioLimit > 0;
+    NextStamp(bodies.Count(), supported);
+    if (supported) {
+      graph_.Color(run, ctx, /*clearLater=*/true, [this](int a, int b) { MarkRow<true>(a, b); });
+    } else {
+      graph_.Color(run, ctx, /*clearLater=*/true, [this](int a, int b) { MarkRow<false>(a, b); });
+    }
     const int m = graph_.Count();
     if (def.effects.restitution) constraints_.Resize(m);  // only restitution reads the list (lean, below)
     contacts_ = ctx.contacts;
     inv_ = bodies.inv.data();
-    // The sub-steps run on the compact solver state (velocity and motion since the step began,
-    // 32 bytes a body) and on the rows in groups of eight (soft_rows.h), not on the body arrays
-    // and the constraints.
-    auto ti = Clock::now();
-    LoadFixedStates(run, bodies, def.effects.sleep, m > 0);
-    integrateMs += Ms(ti, Clock::now());
-    MarkRows(run, bodies.Count(), def.softMassRatioLimit > 0);
     const bool simd = def.softSimd;
     vex_ = simd && def.softVex && CpuHasAvx();  // soft_rows.h: the rows eight at a time with AVX
     // Without restitution nothing but the rows reads a prepared constraint: each is prepared into
@@ -131,7 +138,7 @@ class SoftStepSolver final : public Solver {
     // The rows' part of the step: from preparing the constraints and the restitution passes to
     // storing the rows' bodies and impulses. The free bodies (MoveFreeBodies) do not depend on it:
     // no row reads or writes them (the restitution passes change the velocities of bodies with
-    // an inverse mass in a contact only, which MarkRows has flagged as in rows, and LoadFixedStates
+    // an inverse mass in a contact only, which MarkRow has flagged as in rows, and LoadFixedStates
     // reads only those without one).
     auto rows = [&] {
       if (!lean) {
@@ -613,44 +620,34 @@ class SoftStepSolver final : public Solver {
     Store(p.tangentMass, lane, Masked(Greater(kt, z), Div(one, kt)));
   }
 
-  // Constraint c's bodies and inverse masses, read from its contact and the bodies (the prepared
-  // constraint holds the same, but is not kept in the lean path: Run says when).
-  struct RowEnds {
-    int a, b;
-    Real invMassA, invMassB;
-  };
-  RowEnds Ends(int c) const {
-    const Contact& contact = contacts_[graph_.ContactOf(c)];
-    return {contact.a, contact.b, inv_[contact.a].invMass, inv_[contact.b].invMass};
+
+  // The flags of the rows' ends, set from the colouring's gather (ConstraintGraph::Color) for a
+  // contact with dynamic ends a and b (-1 for an end that is not dynamic): inRows_[i] = 1 for
+  // every dynamic body in a row (LoadStates says what for; LoadFixedStates has cleared the flags
+  // and set the kinematic ones), and, with kSupported, supported_[i] = stamp_ for every dynamic
+  // body with a contact against a static, kinematic or sleeping one (WorldDef::softMassRatioLimit
+  // acts only on those). Workers may write one flag at once, always the same value: relaxed
+  // atomic stores (plain stores on x86), so that is no data race. The stamp changes every step,
+  // so supported_ needs no clearing pass. This was a pass of its own, colour by colour (a stage
+  // and a barrier per colour at 2 threads; base-100 pyramid: 0.32M instructions a step).
+  template <bool kSupported>
+  void MarkRow(int a, int b) {
+    if (a >= 0) std::atomic_ref<uint8_t>(inRows_[a]).store(1, std::memory_order_relaxed);
+    if (b >= 0) std::atomic_ref<uint8_t>(inRows_[b]).store(1, std::memory_order_relaxed);
+    if constexpr (kSupported) {
+      if (a >= 0 && b < 0) std::atomic_ref<uint32_t>(supported_[a]).store(stamp_, std::memory_order_relaxed);
+      if (b >= 0 && a < 0) std::atomic_ref<uint32_t>(supported_[b]).store(stamp_, std::memory_order_relaxed);
+    }
   }
 
-  // One pass over the rows' ends, colour by colour (no two rows of a colour share a dynamic body,
-  // so no two threads write one flag): inRows_[i] = 1 for every dynamic body in a row (LoadStates
-  // says what for; LoadFixedStates has cleared the flags and set the kinematic ones), and, with
-  // `supported`, supported_[i] = stamp_ for every dynamic body with a contact against a static or
-  // kinematic one (WorldDef::softMassRatioLimit acts only on those). The stamp changes every step,
-  // so the flags need no clearing pass; base-100 pyramid: the two marking passes and the clearing
-  // one were 0.69M instructions a step, this one 0.34M.
-  void MarkRows(StageRunner& run, int bodyCount, bool supported) {
-    if (supported) {
-      supported_.resize(bodyCount, 0);
-      if (++stamp_ == 0) {  // wrapped (after 2^32 steps): no flag may hold the new stamp
-        std::fill(supported_.begin(), supported_.end(), 0u);
-        stamp_ = 1;
-      }
+  // This step's stamp for supported_ (MarkRow).
+  void NextStamp(int bodyCount, bool supported) {
+    if (!supported) return;
+    supported_.resize(bodyCount, 0);
+    if (++stamp_ == 0) {  // wrapped (after 2^32 steps): no flag may hold the new stamp
+      std::fill(supported_.begin(), supported_.end(), 0u);
+      stamp_ = 1;
     }
-    const uint32_t stamp = stamp_;
-    graph_.ForEachColor(run, [&](int b, int e) {
-      for (int c = b; c < e; ++c) {
-        const RowEnds cc = Ends(c);
-        if (cc.invMassA > 0) inRows_[cc.a] = 1;
-        if (cc.invMassB > 0) inRows_[cc.b] = 1;
-        if (supported) {
-          if (cc.invMassA > 0 && cc.invMassB == 0) supported_[cc.a] = stamp;
-          if (cc.invMassB > 0 && cc.invMassA == 0) supported_[cc.b] = stamp;
-        }
-      }
-    });
   }
 
   static void PadPoint(SoftPointRows& p, int lane) {
@@ -882,17 +879,17 @@ class SoftStepSolver final : public Solver {
   // marked from the rows). The rest are free: nothing acts on them but gravity within the step,
   // and StoreStates moves them over the whole step at once.
   // First the bodies that rows read but never write (inverse mass 0: static, kinematic, sleeping),
-  // with the flags cleared (kinematic ones set); MarkRows then flags the dynamic bodies in rows.
-  // With clearColors the same pass clears Color's masks: one pass over the bodies instead of
-  // three (this, the masks' clearing and SnapshotPositions, whose snapshot LoadStates now takes
+  // with the flags cleared (kinematic ones set); the colouring then flags the dynamic bodies in
+  // rows (MarkRow). The same pass clears the colour masks Color left last step (before this step's
+  // colouring, which needs them zero): one pass over the bodies instead of three (this, the masks' clearing and SnapshotPositions, whose snapshot LoadStates now takes
   // of the rows' bodies only), each a hand-over and a join at 2 threads (circle stress N = 16000:
   // 3 of the step's 5 solver passes over all 16004 bodies).
-  void LoadFixedStates(StageRunner& run, const Bodies& bodies, bool sleep, bool clearColors) {
+  void LoadFixedStates(StageRunner& run, const Bodies& bodies, bool sleep) {
     const int count = bodies.Count();
     states_.resize(count);
     inRows_.resize(count + kFlagPad);  // padded: the scans below read several flags at a time
     run.For(Stage::kIntegrate, count, run.MinItems(), [&](int b, int e, int) {
-      if (clearColors) graph_.ClearColors(b, e);
+      graph_.ClearColors(b, e);
       // Raw pointers: with the vectors' own, every store reloaded their data pointers.
       const BodyInverseMass* inv = bodies.inv.data();
       const BodyVelocity* vel = bodies.vel.data();
@@ -917,7 +914,7 @@ class SoftStepSolver final : public Solver {
     for (int k = 0; k < kFlagPad; ++k) inRows_[count + k] = 0;
   }
 
-  // After MarkRows: the list of the bodies in rows and their states.
+  // After the colouring (MarkRow): the list of the bodies in rows and their states.
   void LoadStates(StageRunner& run, const Bodies& bodies) {
     const int count = bodies.Count();
     // The bodies the sub-steps integrate, in index order (so in the same order on any thread
@@ -1416,7 +1413,7 @@ class SoftStepSolver final : public Solver {
   std::vector<int> regionFirst_, regionPass_;
   std::vector<std::function<void(int, int)>> regionFns_;
   std::vector<int> active_;      // the bodies with inRows_ set, ascending
-  std::vector<uint32_t> supported_;  // MarkRows: stamp_ for a supported body this step
+  std::vector<uint32_t> supported_;  // MarkRow: stamp_ for a supported body this step
   uint32_t stamp_ = 0;
   Real collisionShare_ = 1;  // a sub-step's share of the step's collision impulses (Run says why)
   std::vector<SolverBody> states_;
