@@ -296,6 +296,7 @@ class SoftStepSolver final : public Solver {
     }
     groups_.resize(groupStart_[ConstraintGraph::kColors + 1]);
     relaxBias_.resize(groups_.size());
+    PlanPassStages();
     // One region, a stage per colour (the groups are independent; a stage tells its groups their
     // colour): one hand-over instead of one per colour (ForEachColor).
     stagePlan_.clear();
@@ -690,11 +691,9 @@ class SoftStepSolver final : public Solver {
     // groups are one chunk, run row by row.
     stagePlan_.clear();
     stageFirst_.clear();
-    for (int color = 0; color <= ConstraintGraph::kColors; ++color) {
-      const int begin = groupStart_[color], count = groupStart_[color + 1] - begin;
-      if (count == 0) continue;
-      stagePlan_.push_back({count, color < ConstraintGraph::kColors ? ConstraintGraph::kColorGrain / kGroupRows : count});
-      stageFirst_.push_back(begin);
+    for (const StagePart& part : passStages_) {
+      stagePlan_.push_back({part.count, part.grain});
+      stageFirst_.push_back(part.first);
     }
     const int overflow = groupStart_[ConstraintGraph::kColors];
     run.Stages(Stage::kSolve, stagePlan_, std::max(1, run.MinHeavyItems() / kGroupRows), [&](int s, int b, int e) {
@@ -1395,12 +1394,43 @@ class SoftStepSolver final : public Solver {
     const int pass = static_cast<int>(regionFns_.size());
     regionFns_.emplace_back(
         [this, simd, fn, overflow](int gb, int ge) mutable { RunGroups(simd && gb < overflow, fn, gb, ge); });
+    for (const StagePart& part : passStages_) {
+      regionPlan_.push_back({part.count, part.grain});
+      regionFirst_.push_back(part.first);
+      regionPass_.push_back(pass);
+    }
+  }
+
+  // The stages of a pass over the rows (ForEachGroup, QueueGroups): one per colour, except that
+  // consecutive colours of at most one chunk each (kColorGrain rows) share one stage of one chunk,
+  // run on one thread in colour order: the same order of row solves as a stage each, so the same
+  // bits, without a barrier between them. The greedy colouring leaves a few such colours at the
+  // end: the base-100 pyramid's contacts take four colours of about 2500 rows and two of 45 and
+  // 12, which cost two stages (and barriers, the other thread idle) in every pass.
+  struct StagePart {
+    int first, count, grain;
+  };
+  void PlanPassStages() {
+    passStages_.clear();
+    constexpr int kGrain = ConstraintGraph::kColorGrain / kGroupRows;
+    bool lastSmall = false;
     for (int color = 0; color <= ConstraintGraph::kColors; ++color) {
       const int begin = groupStart_[color], count = groupStart_[color + 1] - begin;
       if (count == 0) continue;
-      regionPlan_.push_back({count, color < ConstraintGraph::kColors ? ConstraintGraph::kColorGrain / kGroupRows : count});
-      regionFirst_.push_back(begin);
-      regionPass_.push_back(pass);
+      if (color == ConstraintGraph::kColors) {  // the overflow colour: its own chunk, row by row
+        passStages_.push_back({begin, count, count});
+        lastSmall = false;
+        continue;
+      }
+      const bool small = count <= kGrain;
+      if (small && lastSmall) {
+        StagePart& last = passStages_.back();
+        last.count += count;
+        last.grain = last.count;
+        continue;
+      }
+      passStages_.push_back({begin, count, small ? count : kGrain});
+      lastSmall = small;
     }
   }
 
@@ -1423,6 +1453,7 @@ class SoftStepSolver final : public Solver {
   const BodyInverseMass* inv_ = nullptr;  // this step's bodies' (Run)
   std::vector<RelaxBiasRows> relaxBias_;  // per group: the relax passes' speculative bias (RelaxBias)
   std::vector<int> groupStart_;
+  std::vector<StagePart> passStages_;  // PlanPassStages
   std::vector<TaskSystem::StagePlan> stagePlan_;  // BuildRows' and ForEachGroup's region: a stage per colour
   std::vector<int> stageFirst_;                   // the first item (or colour) of each stage
   std::vector<Vec2> center0_;                     // LoadStates: where the rows' bodies start
