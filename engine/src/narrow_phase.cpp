@@ -238,7 +238,7 @@ inline Real MaxSeparationFour(const Polygon& a, Four b, int* edgeOut) {
 template <int kA, int kB>
 [[gnu::always_inline]] inline Manifold ClipPolygons(const Polygon& a, Transform xfA, const Polygon& b, Transform xfB,
                                                     Real speculative, Real sepA, int edgeA, Real sepB, int edgeB,
-                                                    const Vec2* aVerts, const Vec2* bVerts) {
+                                                    const Vec2* aVerts, const Vec2* bVerts, Rot bInAq, Rot aInBq) {
   Manifold m;
   const bool flip = sepB > sepA + kAxisPreference;
   const Polygon& ref = flip ? b : a;
@@ -252,7 +252,7 @@ template <int kA, int kB>
 
   // Incident edge: the one whose normal is most anti-parallel to the reference normal.
   const Vec2 refNormal = ref.normals[refEdge];
-  const Rot incInRef = flip ? InvMul(xfB.q, xfA.q) : InvMul(xfA.q, xfB.q);
+  const Rot incInRef = flip ? aInBq : bInAq;  // InvMul(xfB.q, xfA.q) or InvMul(xfA.q, xfB.q)
   int incEdge = 0;
 #if QUADRANT_NARROW_SIMD
   if constexpr (kA == 4 && kB == 4) {
@@ -329,7 +329,7 @@ template <int kA, int kB>
     sepB = MaxSeparation<kB, kA>(b, aVerts, aCount, &edgeB);
     if (sepB > speculative) return Manifold{};
   }
-  return ClipPolygons<kA, kB>(a, xfA, b, xfB, speculative, sepA, edgeA, sepB, edgeB, aVerts, bVerts);
+  return ClipPolygons<kA, kB>(a, xfA, b, xfB, speculative, sepA, edgeA, sepB, edgeB, aVerts, bVerts, bInA.q, aInB.q);
 }
 
 #if QUADRANT_NARROW_SIMD && defined(__x86_64__) && defined(__GNUC__)
@@ -342,21 +342,36 @@ template <int kA, int kB>
 // (base-100 pyramid: 9998 contacts of 10000 pairs; the bounding circles reject the rest first).
 // Before, with the four-lane searches one after the other: 478 instructions a pair (590 in SSE2's
 // encoding); after: see the commit that added it.
-[[gnu::target("avx"), gnu::always_inline]] inline __m256 Halves(Real low, Real high) {
-  return _mm256_set_m128(_mm_set1_ps(high), _mm_set1_ps(low));
-}
-
-[[gnu::target("avx"), gnu::noinline]] Manifold CollideBoxesVex(const Polygon& a, Transform xfA, const Polygon& b,
-                                                                Transform xfB, Real speculative) {
-  const Transform bInA = InvMulTransforms(xfA, xfB);
-  const Transform aInB = InvMulTransforms(xfB, xfA);
+[[gnu::target("avx"), gnu::noinline]] Manifold CollideBoxesVex(const Polygon& a, const Transform& xfA, const Polygon& b,
+                                                                const Transform& xfB, Real speculative) {
+  // InvMulTransforms(xfA, xfB) in lanes 0-1 and InvMulTransforms(xfB, xfA) in lanes 2-3, the
+  // same products and sums (a - b is a + (-b) exactly, so the sign flips are exact): bInA and
+  // aInB from one load of each transform ([p.x, p.y, q.c, q.s]) instead of unpacking two
+  // register pairs (the transforms came by value in two registers each, then 30 instructions of
+  // moves and shifts went into taking them apart).
+  const __m128 A = _mm_loadu_ps(&xfA.p.x), B = _mm_loadu_ps(&xfB.p.x);
+  const __m128 negOdd = _mm_castsi128_ps(_mm_set_epi32(int(0x80000000u), 0, int(0x80000000u), 0));
+  const __m128 dBA = _mm_sub_ps(B, A), dAB = _mm_sub_ps(A, B);
+  // InvRotate(q, d) = {c d.x + s d.y, (-s) d.x + c d.y}
+  const __m128 relP = _mm_add_ps(
+      _mm_mul_ps(_mm_xor_ps(_mm_shuffle_ps(A, B, _MM_SHUFFLE(3, 2, 3, 2)), negOdd), _mm_shuffle_ps(dBA, dAB, 0x00)),
+      _mm_mul_ps(_mm_shuffle_ps(A, B, _MM_SHUFFLE(2, 3, 2, 3)), _mm_shuffle_ps(dBA, dAB, 0x55)));
+  // InvMul(q, r) = {q.c r.c + q.s r.s, q.c r.s - q.s r.c}
+  const __m128 relQ = _mm_add_ps(
+      _mm_mul_ps(_mm_shuffle_ps(A, B, 0xAA), _mm_shuffle_ps(B, A, _MM_SHUFFLE(3, 2, 3, 2))),
+      _mm_xor_ps(_mm_mul_ps(_mm_shuffle_ps(A, B, 0xFF), _mm_shuffle_ps(B, A, _MM_SHUFFLE(2, 3, 2, 3))), negOdd));
+  alignas(16) Real q[4];
+  _mm_store_ps(q, relQ);
+  // Each transform's values in all four lanes of its half: bInA's in 0-3, aInB's in 4-7.
+  const __m256 relP8 = _mm256_set_m128(_mm_movehl_ps(relP, relP), relP);
+  const __m256 relQ8 = _mm256_set_m128(_mm_movehl_ps(relQ, relQ), relQ);
   const Four av = LoadFour(a.vertices.data()), bv = LoadFour(b.vertices.data());
   const Four an = LoadFour(a.normals.data()), bn = LoadFour(b.normals.data());
   // TransformFour in each half: b's vertices by bInA, a's by aInB.
   const __m256 vx = _mm256_set_m128(av.x, bv.x), vy = _mm256_set_m128(av.y, bv.y);
-  const __m256 c = Halves(bInA.q.c, aInB.q.c), s = Halves(bInA.q.s, aInB.q.s);
-  const __m256 tx = _mm256_add_ps(_mm256_sub_ps(_mm256_mul_ps(c, vx), _mm256_mul_ps(s, vy)), Halves(bInA.p.x, aInB.p.x));
-  const __m256 ty = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(s, vx), _mm256_mul_ps(c, vy)), Halves(bInA.p.y, aInB.p.y));
+  const __m256 c = _mm256_permute_ps(relQ8, 0x00), s = _mm256_permute_ps(relQ8, 0x55);
+  const __m256 tx = _mm256_add_ps(_mm256_sub_ps(_mm256_mul_ps(c, vx), _mm256_mul_ps(s, vy)), _mm256_permute_ps(relP8, 0x00));
+  const __m256 ty = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(s, vx), _mm256_mul_ps(c, vy)), _mm256_permute_ps(relP8, 0x55));
   // MaxSeparationFour in each half: the faces' normals and first vertices, the other's vertices
   // splatted one at a time (an in-lane permute splats within each half).
   const __m256 nx = _mm256_set_m128(bn.x, an.x), ny = _mm256_set_m128(bn.y, an.y);
@@ -382,7 +397,8 @@ template <int kA, int kB>
   const __m256 lo = _mm256_unpacklo_ps(tx, ty), hi = _mm256_unpackhi_ps(tx, ty);
   _mm256_store_ps(&verts[0].x, _mm256_permute2f128_ps(lo, hi, 0x20));
   _mm256_store_ps(&verts[4].x, _mm256_permute2f128_ps(lo, hi, 0x31));
-  return ClipPolygons<4, 4>(a, xfA, b, xfB, speculative, sepA, edgeA, sepB, edgeB, verts + 4, verts);
+  return ClipPolygons<4, 4>(a, xfA, b, xfB, speculative, sepA, edgeA, sepB, edgeB, verts + 4, verts, Rot{q[0], q[1]},
+                            Rot{q[2], q[3]});
 }
 
 bool BoxesVex() {
@@ -405,8 +421,8 @@ bool BoxesVex() {
 // CollidePolygons and Collide inlined into the pair loop below, which then calls the box-box
 // collider straight (base-100 pyramid: Collide and CollidePolygons were 53 instructions a pair
 // on the way to it).
-[[gnu::always_inline]] inline Manifold CollidePolygonsInline(const Polygon& a, Transform xfA, const Polygon& b,
-                                                              Transform xfB, Real speculative) {
+[[gnu::always_inline]] inline Manifold CollidePolygonsInline(const Polygon& a, const Transform& xfA, const Polygon& b,
+                                                              const Transform& xfB, Real speculative) {
   if (a.count == 4 && b.count == 4) {
 #if QUADRANT_NARROW_SIMD && defined(__x86_64__) && defined(__GNUC__)
     if (BoxesVex()) return CollideBoxesVex(a, xfA, b, xfB, speculative);
@@ -416,8 +432,8 @@ bool BoxesVex() {
   return CollideAnyPolygons(a, xfA, b, xfB, speculative);
 }
 
-[[gnu::always_inline]] inline Manifold CollideInline(const ShapeDef& a, Transform xfA, const ShapeDef& b, Transform xfB,
-                                                     Real speculative) {
+[[gnu::always_inline]] inline Manifold CollideInline(const ShapeDef& a, const Transform& xfA, const ShapeDef& b,
+                                                     const Transform& xfB, Real speculative) {
   if (a.type == ShapeType::kCircle) {
     if (b.type == ShapeType::kCircle) return CollideCircles(a.circle, xfA, b.circle, xfB, speculative);
     Manifold m = CollidePolygonAndCircle(b.polygon, xfB, a.circle, xfA, speculative);
