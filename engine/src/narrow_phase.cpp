@@ -77,6 +77,29 @@ struct ClipVertex {
   return count;
 }
 
+// ClipSegment when only a two-point result is of use (the caller gives up on fewer): the same
+// operations and the same order of the points (kept ends first, in order, then the crossing),
+// on values instead of arrays. Both ends inside: no crossing (their product is not negative);
+// one inside: two points only if the other is strictly outside and the inside one strictly
+// inside, which is the product's sign test. Why: the arrays went through the stack (zeroed,
+// stored, reloaded) in the box-box collider, and the count's branches (base-100 pyramid).
+[[gnu::always_inline]] inline bool ClipToTwo(ClipVertex& out0, ClipVertex& out1, ClipVertex in0, ClipVertex in1, Vec2 n,
+                                             Real offset, uint32_t side) {
+  const Real d0 = Dot(n, in0.v) - offset;
+  const Real d1 = Dot(n, in1.v) - offset;
+  const bool keep0 = d0 <= 0, keep1 = d1 <= 0;
+  if (keep0 && keep1) {
+    out0 = in0;
+    out1 = in1;
+    return true;
+  }
+  if (!(d0 * d1 < 0)) return false;
+  const Real t = d0 / (d0 - d1);
+  out0 = keep0 ? in0 : in1;
+  out1 = {in0.v + t * (in1.v - in0.v), 0x80u | side};
+  return true;
+}
+
 }  // namespace
 
 Manifold CollideCircles(const Circle& a, Transform xfA, const Circle& b, Transform xfB, Real speculative) {
@@ -282,8 +305,15 @@ template <int kA, int kB>
   const Vec2 tangent = Normalize(r2 - r1);
   ClipVertex clip1[2];
   ClipVertex clip2[2];
-  if (ClipSegment(clip1, incident, -tangent, -Dot(tangent, r1), 0) < 2) return m;
-  if (ClipSegment(clip2, clip1, tangent, Dot(tangent, r2), 1) < 2) return m;
+  if constexpr (kA == 4 && kB == 4) {
+    // Boxes: the two-point clip on values (the general path keeps ClipSegment, so the box paths'
+    // comparison with it in NarrowPhaseBoxes checks this one too).
+    if (!ClipToTwo(clip1[0], clip1[1], incident[0], incident[1], -tangent, -Dot(tangent, r1), 0)) return m;
+    if (!ClipToTwo(clip2[0], clip2[1], clip1[0], clip1[1], tangent, Dot(tangent, r2), 1)) return m;
+  } else {
+    if (ClipSegment(clip1, incident, -tangent, -Dot(tangent, r1), 0) < 2) return m;
+    if (ClipSegment(clip2, clip1, tangent, Dot(tangent, r2), 1) < 2) return m;
+  }
 
   m.normal = Rotate(refXf.q, flip ? -refNormal : refNormal);
   for (const ClipVertex& cv : clip2) {
