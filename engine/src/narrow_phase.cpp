@@ -439,13 +439,22 @@ bool BoxesVex() {
 
 // Out of line, so the dispatcher below stays a few instructions (with both inlined it set up a
 // frame for both: 45 instructions a call).
-[[gnu::noinline]] Manifold CollideBoxes(const Polygon& a, Transform xfA, const Polygon& b, Transform xfB,
-                                        Real speculative) {
+[[gnu::noinline]] Manifold CollideBoxes(const Polygon& a, const Transform& xfA, const Polygon& b,
+                                        const Transform& xfB, Real speculative) {
   return CollidePolygonsT<4, 4>(a, xfA, b, xfB, speculative);
 }
 [[gnu::noinline]] Manifold CollideAnyPolygons(const Polygon& a, Transform xfA, const Polygon& b, Transform xfB,
                                               Real speculative) {
   return CollidePolygonsT<0, 0>(a, xfA, b, xfB, speculative);
+}
+
+// The box-box collider for this CPU, chosen once per block of pairs by CollidePairs.
+using BoxCollider = Manifold (*)(const Polygon&, const Transform&, const Polygon&, const Transform&, Real);
+BoxCollider PickBoxCollider() {
+#if QUADRANT_NARROW_SIMD && defined(__x86_64__) && defined(__GNUC__)
+  if (BoxesVex()) return CollideBoxesVex;
+#endif
+  return CollideBoxes;
 }
 
 // CollidePolygons and Collide inlined into the pair loop below, which then calls the box-box
@@ -490,27 +499,45 @@ Manifold Collide(const ShapeDef& a, Transform xfA, const ShapeDef& b, Transform 
 
 // The pair loop of the narrow phase (the world runs it over blocks of the broad phase's pairs,
 // one output list per worker).
+//
+// The body rows' addresses, the world's settings and the box collider (AVX or not) are read once
+// per block into locals: read through `bodies` and `def` in the loop, the compiler loaded them
+// again after every push_back (its stores might have changed them, as far as it could tell),
+// and the box pairs went through the general dispatch and the CPU check each time. Base-100
+// pyramid (10000 box pairs a step, 9998 contacts): see the commit that made this change.
 void CollidePairs(const Bodies& bodies, const WorldDef& def, Real dt, std::span<const CandidatePair> pairs,
                   std::vector<Contact>& out) {
+  const uint8_t* const dynamic = bodies.dynamic.data();
+  const BodyVelocity* const vel = bodies.vel.data();
+  const Real* const boundRadius = bodies.boundRadius.data();
+  const Vec2* const center = bodies.center.data();
+  const Transform* const xf = bodies.xf.data();
+  const ShapeDef* const shape = bodies.shape.data();
+  const Real speculativeDistance = def.speculativeDistance;
+  const Real sweep = def.effects.continuous ? dt : Real(0);
+  const BoxCollider boxes = PickBoxCollider();
   for (const CandidatePair& p : pairs) {
     const int a = p.a, b = p.b;
     // Two bodies that cannot be moved by contacts (kinematic vs kinematic) need no manifold.
-    if (!(bodies.dynamic[a] | bodies.dynamic[b])) continue;
+    if (!(dynamic[a] | dynamic[b])) continue;
     // How far the two surfaces can approach each other this step, plus the base distance: points
     // closer than this become speculative constraints (the solver lets the gap close, no more).
-    const BodyVelocity& va = bodies.vel[a];
-    const BodyVelocity& vb = bodies.vel[b];
-    const Real sweep = def.effects.continuous ? dt : Real(0);
+    const BodyVelocity& va = vel[a];
+    const BodyVelocity& vb = vel[b];
     // Without continuous collision the sweep term is 0 (times a finite speed): not computed (a
     // square root a pair).
-    const Real spec = sweep > 0 ? def.speculativeDistance +
-                                      sweep * (Length(vb.v - va.v) + std::abs(va.w) * bodies.boundRadius[a] +
-                                               std::abs(vb.w) * bodies.boundRadius[b])
-                                : def.speculativeDistance;
+    const Real spec = sweep > 0 ? speculativeDistance + sweep * (Length(vb.v - va.v) + std::abs(va.w) * boundRadius[a] +
+                                                                 std::abs(vb.w) * boundRadius[b])
+                                : speculativeDistance;
     // Bounding circles reject most AABB-overlapping pairs before any shape test.
-    const Real reach = bodies.boundRadius[a] + bodies.boundRadius[b] + spec;
-    if (LengthSquared(bodies.center[b] - bodies.center[a]) > reach * reach) continue;
-    Manifold m = CollideInline(bodies.shape[a], bodies.xf[a], bodies.shape[b], bodies.xf[b], spec);
+    const Real reach = boundRadius[a] + boundRadius[b] + spec;
+    if (LengthSquared(center[b] - center[a]) > reach * reach) continue;
+    const ShapeDef& sa = shape[a];
+    const ShapeDef& sb = shape[b];
+    Manifold m = sa.type == ShapeType::kPolygon && sb.type == ShapeType::kPolygon && sa.polygon.count == 4 &&
+                         sb.polygon.count == 4
+                     ? boxes(sa.polygon, xf[a], sb.polygon, xf[b], spec)
+                     : CollideInline(sa, xf[a], sb, xf[b], spec);
     if (m.pointCount == 0) continue;
     // Keep a point that is still apart only if it can close within the step at its current
     // approach speed (plus the base distance for gravity and other contacts' pushes). The rest
@@ -519,12 +546,12 @@ void CollidePairs(const Bodies& bodies, const WorldDef& def, Real dt, std::span<
     int kept = 0;
     for (int k = 0; k < m.pointCount; ++k) {
       const ManifoldPoint& mp = m.points[k];
-      if (mp.separation > def.speculativeDistance) {
-        const Vec2 rA = mp.point - bodies.center[a];
-        const Vec2 rB = mp.point - bodies.center[b];
+      if (mp.separation > speculativeDistance) {
+        const Vec2 rA = mp.point - center[a];
+        const Vec2 rB = mp.point - center[b];
         const Vec2 dv = vb.v + Cross(vb.w, rB) - va.v - Cross(va.w, rA);
         const Real approach = -Dot(dv, m.normal);
-        if (mp.separation > def.speculativeDistance + sweep * approach) continue;
+        if (mp.separation > speculativeDistance + sweep * approach) continue;
       }
       m.points[kept++] = mp;
     }
@@ -534,8 +561,8 @@ void CollidePairs(const Bodies& bodies, const WorldDef& def, Real dt, std::span<
     c.a = a;
     c.b = b;
     // Mixing as Box2D: friction geometric mean, restitution the larger.
-    c.friction = std::sqrt(bodies.shape[a].friction * bodies.shape[b].friction);
-    c.restitution = std::max(bodies.shape[a].restitution, bodies.shape[b].restitution);
+    c.friction = std::sqrt(sa.friction * sb.friction);
+    c.restitution = std::max(sa.restitution, sb.restitution);
     c.manifold = m;
     out.push_back(c);
   }
