@@ -259,7 +259,7 @@ inline Real MaxSeparationFour(const Polygon& a, Four b, int* edgeOut) {
 // other's frame and the best face of each (edge, separation), picks the reference face, finds the
 // incident edge and clips it. Shared by the general search below and the boxes' eight-lane one.
 template <int kA, int kB>
-[[gnu::always_inline]] inline Manifold ClipPolygons(const Polygon& a, Transform xfA, const Polygon& b, Transform xfB,
+[[gnu::always_inline]] inline Manifold ClipPolygons(const Polygon& a, const Transform& xfA, const Polygon& b, const Transform& xfB,
                                                     Real speculative, Real sepA, int edgeA, Real sepB, int edgeB,
                                                     const Vec2* aVerts, const Vec2* bVerts, Rot bInAq, Rot aInBq) {
   Manifold m;
