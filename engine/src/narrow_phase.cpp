@@ -543,20 +543,24 @@ void CollidePairs(const Bodies& bodies, const WorldDef& def, Real dt, std::span<
     // approach speed (plus the base distance for gravity and other contacts' pushes). The rest
     // are far more numerous in sparse scenes (99 % at the stress scenes' density) and would
     // only cost solver iterations.
-    int kept = 0;
-    for (int k = 0; k < m.pointCount; ++k) {
-      const ManifoldPoint& mp = m.points[k];
-      if (mp.separation > speculativeDistance) {
-        const Vec2 rA = mp.point - center[a];
-        const Vec2 rB = mp.point - center[b];
-        const Vec2 dv = vb.v + Cross(vb.w, rB) - va.v - Cross(va.w, rA);
-        const Real approach = -Dot(dv, m.normal);
-        if (mp.separation > speculativeDistance + sweep * approach) continue;
+    // (Points within the base distance, every point of a resting pile, are kept as they are.)
+    if (m.points[0].separation > speculativeDistance ||
+        (m.pointCount == 2 && m.points[1].separation > speculativeDistance)) {
+      int kept = 0;
+      for (int k = 0; k < m.pointCount; ++k) {
+        const ManifoldPoint& mp = m.points[k];
+        if (mp.separation > speculativeDistance) {
+          const Vec2 rA = mp.point - center[a];
+          const Vec2 rB = mp.point - center[b];
+          const Vec2 dv = vb.v + Cross(vb.w, rB) - va.v - Cross(va.w, rA);
+          const Real approach = -Dot(dv, m.normal);
+          if (mp.separation > speculativeDistance + sweep * approach) continue;
+        }
+        m.points[kept++] = mp;
       }
-      m.points[kept++] = mp;
+      m.pointCount = kept;
+      if (kept == 0) continue;
     }
-    m.pointCount = kept;
-    if (kept == 0) continue;
     Contact c;
     c.a = a;
     c.b = b;
