@@ -370,8 +370,10 @@ template <int kA, int kB>
 // NarrowPhaseBoxes compares it with the general path). The searches no longer stop after a's
 // when it already separates the boxes: nearly every box pair that reaches this test touches
 // (base-100 pyramid: 9998 contacts of 10000 pairs; the bounding circles reject the rest first).
-// Before, with the four-lane searches one after the other: 478 instructions a pair (590 in SSE2's
-// encoding); after: see the commit that added it.
+// Base-100 pyramid (callgrind, 10 steps from rest, 100000 calls): 478 instructions a pair with
+// the four-lane searches one after the other (590 in SSE2's encoding); 439 with the eight-lane
+// search and ArgMaxFour; 413 with the relative transforms below (the transforms by reference);
+// 403 with ClipToTwo; 394 with ClipPolygons taking the transforms by reference.
 [[gnu::target("avx"), gnu::noinline]] Manifold CollideBoxesVex(const Polygon& a, const Transform& xfA, const Polygon& b,
                                                                 const Transform& xfB, Real speculative) {
   // InvMulTransforms(xfA, xfB) in lanes 0-1 and InvMulTransforms(xfB, xfA) in lanes 2-3, the
@@ -504,7 +506,8 @@ Manifold Collide(const ShapeDef& a, Transform xfA, const ShapeDef& b, Transform 
 // per block into locals: read through `bodies` and `def` in the loop, the compiler loaded them
 // again after every push_back (its stores might have changed them, as far as it could tell),
 // and the box pairs went through the general dispatch and the CPU check each time. Base-100
-// pyramid (10000 box pairs a step, 9998 contacts): see the commit that made this change.
+// pyramid (10000 box pairs a step, 9998 contacts; callgrind, 10 steps): the loop's own
+// instructions 156 -> 144 a pair, and 133 once the point filter below skips resting manifolds.
 void CollidePairs(const Bodies& bodies, const WorldDef& def, Real dt, std::span<const CandidatePair> pairs,
                   std::vector<Contact>& out) {
   const uint8_t* const dynamic = bodies.dynamic.data();
