@@ -316,15 +316,20 @@ template <int kA, int kB>
   }
 
   m.normal = Rotate(refXf.q, flip ? -refNormal : refNormal);
+  // The count in a local and the id's fixed part once (MakeFeatureId's fields): kept in memory
+  // and recomputed, they were reloaded for every point.
+  const uint32_t idBase = MakeFeatureId(uint32_t(refEdge), 0, flip);
+  int count = 0;
   for (const ClipVertex& cv : clip2) {
     const Real separation = Dot(refNormal, cv.v - r1);
     if (separation > speculative) continue;
-    ManifoldPoint& mp = m.points[m.pointCount++];
+    ManifoldPoint& mp = m.points[count++];
     mp.separation = separation;
     // Halfway between the incident vertex and the reference face.
     mp.point = TransformPoint(refXf, cv.v - Real(0.5) * separation * refNormal);
-    mp.id = MakeFeatureId(uint32_t(refEdge), cv.feature, flip);
+    mp.id = idBase | ((cv.feature & 0xFFu) << 8);
   }
+  m.pointCount = count;
   return m;
 }
 
