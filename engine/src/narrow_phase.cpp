@@ -379,8 +379,9 @@ template <int kA, int kB>
 // the four-lane searches one after the other (590 in SSE2's encoding); 439 with the eight-lane
 // search and ArgMaxFour; 413 with the relative transforms below (the transforms by reference);
 // 403 with ClipToTwo; 394 with ClipPolygons taking the transforms by reference.
-[[gnu::target("avx"), gnu::noinline]] Manifold CollideBoxesVex(const Polygon& a, const Transform& xfA, const Polygon& b,
-                                                                const Transform& xfB, Real speculative) {
+[[gnu::target("avx"), gnu::always_inline]] inline Manifold CollideBoxesVexInline(const Polygon& a, const Transform& xfA,
+                                                                              const Polygon& b, const Transform& xfB,
+                                                                              Real speculative) {
   // InvMulTransforms(xfA, xfB) in lanes 0-1 and InvMulTransforms(xfB, xfA) in lanes 2-3, the
   // same products and sums (a - b is a + (-b) exactly, so the sign flips are exact): bInA and
   // aInB from one load of each transform ([p.x, p.y, q.c, q.s]) instead of unpacking two
@@ -436,6 +437,11 @@ template <int kA, int kB>
   _mm256_store_ps(&verts[4].x, _mm256_permute2f128_ps(lo, hi, 0x31));
   return ClipPolygons<4, 4>(a, xfA, b, xfB, speculative, sepA, edgeA, sepB, edgeB, verts + 4, verts, Rot{q[0], q[1]},
                             Rot{q[2], q[3]});
+}
+
+[[gnu::target("avx"), gnu::noinline]] Manifold CollideBoxesVex(const Polygon& a, const Transform& xfA, const Polygon& b,
+                                                                const Transform& xfB, Real speculative) {
+  return CollideBoxesVexInline(a, xfA, b, xfB, speculative);
 }
 
 bool BoxesVex() {
@@ -513,71 +519,55 @@ Manifold Collide(const ShapeDef& a, Transform xfA, const ShapeDef& b, Transform 
 // and the box pairs went through the general dispatch and the CPU check each time. Base-100
 // pyramid (10000 box pairs a step, 9998 contacts; callgrind, 10 steps): the loop's own
 // instructions 156 -> 144 a pair, and 133 once the point filter below skips resting manifolds.
+namespace {
+
+struct CallBoxes {
+  BoxCollider fn;
+  Manifold operator()(const Polygon& a, const Transform& xfA, const Polygon& b, const Transform& xfB, Real spec) const {
+    return fn(a, xfA, b, xfB, spec);
+  }
+};
+
+namespace pairs_default {
+#include "narrow_pair_loop.inc"
+}  // namespace pairs_default
+
+#if QUADRANT_NARROW_SIMD && defined(__x86_64__) && defined(__GNUC__)
+struct VexBoxes {
+  [[gnu::target("avx"), gnu::always_inline]] Manifold operator()(const Polygon& a, const Transform& xfA, const Polygon& b,
+                                                                   const Transform& xfB, Real spec) const {
+    return CollideBoxesVexInline(a, xfA, b, xfB, spec);
+  }
+};
+
+// The pair loop compiled for AVX with the box collider inlined into it: called, the collider
+// cost about 40 instructions a pair in the call itself (arguments, the caller's spills and
+// reloads around it, the callee's frame) and the copy of its manifold out of the return slot.
+#pragma GCC push_options
+#pragma GCC target("avx")
+namespace pairs_vex {
+#include "narrow_pair_loop.inc"
+}  // namespace pairs_vex
+#pragma GCC pop_options
+
+[[gnu::target("avx"), gnu::noinline]] void CollidePairsVex(const Bodies& bodies, const WorldDef& def, Real dt,
+                                                            std::span<const CandidatePair> pairs,
+                                                            std::vector<Contact>& out) {
+  pairs_vex::PairLoop(bodies, def, dt, pairs, out, VexBoxes{});
+}
+#endif
+
+}  // namespace
+
 void CollidePairs(const Bodies& bodies, const WorldDef& def, Real dt, std::span<const CandidatePair> pairs,
                   std::vector<Contact>& out) {
-  const uint8_t* const dynamic = bodies.dynamic.data();
-  const BodyVelocity* const vel = bodies.vel.data();
-  const Real* const boundRadius = bodies.boundRadius.data();
-  const Vec2* const center = bodies.center.data();
-  const Transform* const xf = bodies.xf.data();
-  const ShapeDef* const shape = bodies.shape.data();
-  const Real speculativeDistance = def.speculativeDistance;
-  const Real sweep = def.effects.continuous ? dt : Real(0);
-  const BoxCollider boxes = PickBoxCollider();
-  for (const CandidatePair& p : pairs) {
-    const int a = p.a, b = p.b;
-    // Two bodies that cannot be moved by contacts (kinematic vs kinematic) need no manifold.
-    if (!(dynamic[a] | dynamic[b])) continue;
-    // How far the two surfaces can approach each other this step, plus the base distance: points
-    // closer than this become speculative constraints (the solver lets the gap close, no more).
-    const BodyVelocity& va = vel[a];
-    const BodyVelocity& vb = vel[b];
-    // Without continuous collision the sweep term is 0 (times a finite speed): not computed (a
-    // square root a pair).
-    const Real spec = sweep > 0 ? speculativeDistance + sweep * (Length(vb.v - va.v) + std::abs(va.w) * boundRadius[a] +
-                                                                 std::abs(vb.w) * boundRadius[b])
-                                : speculativeDistance;
-    // Bounding circles reject most AABB-overlapping pairs before any shape test.
-    const Real reach = boundRadius[a] + boundRadius[b] + spec;
-    if (LengthSquared(center[b] - center[a]) > reach * reach) continue;
-    const ShapeDef& sa = shape[a];
-    const ShapeDef& sb = shape[b];
-    Manifold m = sa.type == ShapeType::kPolygon && sb.type == ShapeType::kPolygon && sa.polygon.count == 4 &&
-                         sb.polygon.count == 4
-                     ? boxes(sa.polygon, xf[a], sb.polygon, xf[b], spec)
-                     : CollideInline(sa, xf[a], sb, xf[b], spec);
-    if (m.pointCount == 0) continue;
-    // Keep a point that is still apart only if it can close within the step at its current
-    // approach speed (plus the base distance for gravity and other contacts' pushes). The rest
-    // are far more numerous in sparse scenes (99 % at the stress scenes' density) and would
-    // only cost solver iterations.
-    // (Points within the base distance, every point of a resting pile, are kept as they are.)
-    if (m.points[0].separation > speculativeDistance ||
-        (m.pointCount == 2 && m.points[1].separation > speculativeDistance)) {
-      int kept = 0;
-      for (int k = 0; k < m.pointCount; ++k) {
-        const ManifoldPoint& mp = m.points[k];
-        if (mp.separation > speculativeDistance) {
-          const Vec2 rA = mp.point - center[a];
-          const Vec2 rB = mp.point - center[b];
-          const Vec2 dv = vb.v + Cross(vb.w, rB) - va.v - Cross(va.w, rA);
-          const Real approach = -Dot(dv, m.normal);
-          if (mp.separation > speculativeDistance + sweep * approach) continue;
-        }
-        m.points[kept++] = mp;
-      }
-      m.pointCount = kept;
-      if (kept == 0) continue;
-    }
-    Contact c;
-    c.a = a;
-    c.b = b;
-    // Mixing as Box2D: friction geometric mean, restitution the larger.
-    c.friction = std::sqrt(sa.friction * sb.friction);
-    c.restitution = std::max(sa.restitution, sb.restitution);
-    c.manifold = m;
-    out.push_back(c);
+#if QUADRANT_NARROW_SIMD && defined(__x86_64__) && defined(__GNUC__)
+  if (BoxesVex()) {
+    CollidePairsVex(bodies, def, dt, pairs, out);
+    return;
   }
+#endif
+  pairs_default::PairLoop(bodies, def, dt, pairs, out, CallBoxes{PickBoxCollider()});
 }
 
 }  // namespace quadrant
