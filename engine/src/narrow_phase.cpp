@@ -461,15 +461,6 @@ bool BoxesVex() {
   return CollidePolygonsT<0, 0>(a, xfA, b, xfB, speculative);
 }
 
-// The box-box collider for this CPU, chosen once per block of pairs by CollidePairs.
-using BoxCollider = Manifold (*)(const Polygon&, const Transform&, const Polygon&, const Transform&, Real);
-BoxCollider PickBoxCollider() {
-#if QUADRANT_NARROW_SIMD && defined(__x86_64__) && defined(__GNUC__)
-  if (BoxesVex()) return CollideBoxesVex;
-#endif
-  return CollideBoxes;
-}
-
 // CollidePolygons and Collide inlined into the pair loop below, which then calls the box-box
 // collider straight (base-100 pyramid: Collide and CollidePolygons were 53 instructions a pair
 // on the way to it).
@@ -510,21 +501,13 @@ Manifold Collide(const ShapeDef& a, Transform xfA, const ShapeDef& b, Transform 
   return CollideInline(a, xfA, b, xfB, speculative);
 }
 
-// The pair loop of the narrow phase (the world runs it over blocks of the broad phase's pairs,
-// one output list per worker).
-//
-// The body rows' addresses, the world's settings and the box collider (AVX or not) are read once
-// per block into locals: read through `bodies` and `def` in the loop, the compiler loaded them
-// again after every push_back (its stores might have changed them, as far as it could tell),
-// and the box pairs went through the general dispatch and the CPU check each time. Base-100
-// pyramid (10000 box pairs a step, 9998 contacts; callgrind, 10 steps): the loop's own
-// instructions 156 -> 144 a pair, and 133 once the point filter below skips resting manifolds.
+// The pair loop of the narrow phase (narrow_pair_loop.inc), in two builds: for CPUs with AVX
+// (the box collider inlined) and for the rest (the SSE2 box collider called).
 namespace {
 
 struct CallBoxes {
-  BoxCollider fn;
   Manifold operator()(const Polygon& a, const Transform& xfA, const Polygon& b, const Transform& xfB, Real spec) const {
-    return fn(a, xfA, b, xfB, spec);
+    return CollideBoxes(a, xfA, b, xfB, spec);
   }
 };
 
@@ -567,7 +550,7 @@ void CollidePairs(const Bodies& bodies, const WorldDef& def, Real dt, std::span<
     return;
   }
 #endif
-  pairs_default::PairLoop(bodies, def, dt, pairs, out, CallBoxes{PickBoxCollider()});
+  pairs_default::PairLoop(bodies, def, dt, pairs, out, CallBoxes{});
 }
 
 }  // namespace quadrant
