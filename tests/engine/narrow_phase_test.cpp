@@ -63,6 +63,52 @@ TEST(NarrowPhaseBoxes, FourLanePathMatchesTheGeneralPathBitForBit) {
   EXPECT_GT(touching, 400);  // the comparison saw manifolds, not only misses
 }
 
+// The same comparison where stacks and pyramids live: unturned or quarter-turned boxes placed on
+// a grid, so faces touch exactly (separations of exactly 0), axes tie between the two boxes and
+// between faces of one box, and clipped ends land exactly on the side planes. These are the
+// cases where the box paths' first-lane arg-max/min and two-point clip must pick what the
+// general path's scalar loops pick.
+TEST(NarrowPhaseBoxes, FourLanePathMatchesTheGeneralPathOnAlignedStacks) {
+  const Real offsets[] = {-1, Real(-0.75), Real(-0.5), Real(-0.25), 0, Real(0.25), Real(0.5), Real(0.75), 1};
+  const Real gaps[] = {Real(-0.01), 0, Real(0.005), Real(0.02), Real(0.03)};
+  const Real angles[] = {0, Real(1e-7), Real(-1e-7), Real(test::kPi / 2), Real(test::kPi)};
+  const Polygon unit = MakeBox(Real(0.5), Real(0.5));
+  const Polygon wide = MakeBox(2, Real(0.5));
+  int touching = 0, cases = 0;
+  for (const Polygon* lower : {&unit, &wide}) {
+    for (Real dx : offsets) {
+      for (Real gap : gaps) {
+        for (Real angle : angles) {
+          // b on top of a, and b beside a (the gap along x), each in both orders.
+          const Transform xfA = Xf(Real(3.25), Real(-1.5));
+          const Transform onTop = Xf(Real(3.25) + dx, Real(-1.5) + 1 + gap, angle);
+          const Transform beside = Xf(Real(3.25) + (lower == &wide ? Real(2.5) : 1) + gap, Real(-1.5) + dx, angle);
+          for (const Transform& xfB : {onTop, beside}) {
+            for (int order = 0; order < 2; ++order) {
+              const Polygon& a = order == 0 ? *lower : unit;
+              const Polygon& b = order == 0 ? unit : *lower;
+              const Transform& xa = order == 0 ? xfA : xfB;
+              const Transform& xb = order == 0 ? xfB : xfA;
+              const Manifold fast = CollidePolygons(a, xa, b, xb, kSpec);
+              const Manifold general = CollidePolygonsGeneral(a, xa, b, xb, kSpec);
+              ++cases;
+              ASSERT_EQ(fast.pointCount, general.pointCount) << "case " << cases;
+              touching += fast.pointCount > 0;
+              if (fast.pointCount == 0) continue;
+              EXPECT_EQ(std::memcmp(&fast.normal, &general.normal, sizeof(Vec2)), 0) << "case " << cases;
+              for (int k = 0; k < fast.pointCount; ++k) {
+                EXPECT_EQ(std::memcmp(&fast.points[k], &general.points[k], sizeof(ManifoldPoint)), 0)
+                    << "case " << cases << " point " << k;
+              }
+            }
+          }
+        }
+      }
+    }
+  }
+  EXPECT_GT(touching, cases / 3);  // most placements touch or are within the speculative distance
+}
+
 // ---------------------------------------------------------------- circle vs circle
 
 TEST(NarrowPhaseCircles, SeparatedBeyondSpeculativeGivesNoPoints) {
