@@ -27,7 +27,12 @@ class ContactSorter {
     std::vector<uint32_t> radixCounts;
     std::vector<Contact> sorted;
   };
+  // Counting sort on body a up to this many bodies (the counts, 64 KB, stay in L2); the radix
+  // sort of the key a*n+b above it.
+  static constexpr int kMaxBuckets = 1 << 14;
+  static constexpr size_t kInsertionBucket = 16;  // larger buckets: std::sort
   static void SortPart(const std::vector<Contact>& in, int bodyCount, Part& part);
+  static void RadixSort(const std::vector<Contact>& in, int bodyCount, Part& part);
   void Merge(StageRunner& run, int ranges, std::vector<Contact>& contacts);
 
   std::vector<Part> parts_;
