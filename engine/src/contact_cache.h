@@ -16,6 +16,14 @@ class ContactCache {
   /// Copies last step's impulses into the points of `contacts` whose pair and feature id match.
   /// Returns the number of points matched. Fastest when `contacts` are in key order.
   int Restore(std::span<Contact> contacts) const;
+  /// Where a walk of Restore calls over contacts in key order has got to: consecutive chunks of
+  /// one sorted list restored with the same cursor walk the store once, as one call would.
+  struct Cursor {
+    size_t at = 0;
+    uint64_t previous = 0;
+  };
+  /// Restore, continuing from `cursor` (same result as Restore for any cursor state).
+  int Restore(std::span<Contact> contacts, Cursor& cursor) const;
   /// Remembers the impulses of `contacts` for the next step (replacing what was stored), on
   /// the calling thread.
   void Store(std::span<const Contact> contacts);

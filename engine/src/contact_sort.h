@@ -5,15 +5,17 @@
 #include <cstdint>
 #include <vector>
 
+#include "contact_cache.h"
 #include "world_internal.h"
 
 namespace quadrant {
 
 class ContactSorter {
  public:
-  /// Writes the contacts of all `workerContacts` lists into `contacts` in key order (a, b).
+  /// Writes the contacts of all `workerContacts` lists into `contacts` in key order (a, b),
+  /// with last step's impulses restored from `cache` (ContactCache::Restore) unless it is null.
   void Sort(StageRunner& run, int bodyCount, const std::vector<std::vector<Contact>>& workerContacts,
-            std::vector<Contact>& contacts);
+            std::vector<Contact>& contacts, const ContactCache* cache = nullptr);
 
  private:
   static constexpr int kMaxParts = 64;  // WorldDef::threadCount's limit
@@ -31,7 +33,7 @@ class ContactSorter {
   // sort of the key a*n+b above it.
   static constexpr int kMaxBuckets = 1 << 14;
   static constexpr size_t kInsertionBucket = 16;  // larger buckets: std::sort
-  static void SortPart(const std::vector<Contact>& in, int bodyCount, Part& part);
+  static void SortPart(const std::vector<Contact>& in, int bodyCount, Part& part, const ContactCache* cache);
   static void RadixSort(const std::vector<Contact>& in, int bodyCount, Part& part);
   void Merge(StageRunner& run, int ranges, std::vector<Contact>& contacts);
 

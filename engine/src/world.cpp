@@ -117,7 +117,11 @@ struct World::Impl {
   BodyId IdOf(int i) const { return BodyId{bodies.slot[i], generation[bodies.slot[i]]}; }  // one pass of every stage
   void CountContacts(int candidatePairs);
   void NarrowPhase(Real dt);
-  void SortContacts() { sorter.Sort(*run, bodies.Count(), workerContacts, contacts); }
+  // Sorts the narrow phase's contacts and restores last step's impulses into them (warm starting).
+  void SortContacts() {
+    const bool persist = def.solver != SolverType::kThesis && def.effects.warmStarting;
+    sorter.Sort(*run, bodies.Count(), workerContacts, contacts, persist ? &cache : nullptr);
+  }
 };
 
 World::World(const WorldDef& def) : impl_(std::make_unique<Impl>()) {
@@ -372,7 +376,7 @@ void World::Impl::RunPipeline(Real dt) {
   auto t1 = Clock::now();
   NarrowPhase(dt);
   auto t2 = Clock::now();
-  SortContacts();  // times itself (kPersistence); the narrow phase's contacts are in `contacts` after it
+  SortContacts();  // times itself (kPersistence); the narrow phase's contacts, restored, are in `contacts` after it
   if (sleepOn) {
     // An awake body touches a sleeping island: the island wakes in this step. Its bodies' pairs
     // (among themselves and with the ground) were not searched, so the broad and narrow phases
@@ -386,10 +390,6 @@ void World::Impl::RunPipeline(Real dt) {
     }
   }
   const bool persist = def.solver != SolverType::kThesis && def.effects.warmStarting;
-  if (persist) {
-    run->For(Stage::kPersistence, static_cast<int>(contacts.size()), run->MinHeavyItems(),
-             [&](int begin, int end, int) { cache.Restore(std::span<Contact>(contacts).subspan(begin, end - begin)); });
-  }
   auto t3 = Clock::now();
 
   StepContext ctx;
