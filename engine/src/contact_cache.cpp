@@ -36,7 +36,46 @@ ContactCache::Entry ContactCache::MakeEntry(const Contact& c) {
   return e;
 }
 
-void ContactCache::Store(std::span<const Contact> contacts) {
+// Contacts in strictly increasing key order (the world's always are) get one entry each, in
+// one pass: a contact that carries nothing gets an entry of no points, which matches nothing,
+// exactly as if it were absent. That saves the pass that counted the carrying contacts to
+// place them (and the check of the order afterwards): callgrind on the base-100 pyramid, Store
+// and Finish 607 000 instructions a step before, see the commit for after. Any other order
+// (repeated keys: the first carrying entry of a key must be the one found) takes the filtered
+// store.
+bool ContactCache::StoreEach(std::span<const Contact> contacts, int begin, int end) {
+  if (begin >= end) return true;
+  // Straight-line (both point slots copied; Restore reads only the first pointCount, and a
+  // contact that carries nothing gets pointCount 0): the loops of Carries and MakeEntry cost
+  // 46 instructions a contact on the pyramid, see the commit for after.
+  auto put = [&](const Contact& c, uint64_t key) {
+    const Manifold& m = c.manifold;
+    const ManifoldPoint& p0 = m.points[0];
+    const ManifoldPoint& p1 = m.points[1];
+    const bool carries0 = m.pointCount > 0 && (p0.normalImpulse != 0 || p0.tangentImpulse != 0);
+    const bool carries1 = m.pointCount > 1 && (p1.normalImpulse != 0 || p1.tangentImpulse != 0);
+    entries_[size_t(&c - contacts.data())] = Entry{key,
+                                                   carries0 || carries1 ? m.pointCount : 0,
+                                                   {p0.id, p1.id},
+                                                   {p0.normalImpulse, p1.normalImpulse},
+                                                   {p0.tangentImpulse, p1.tangentImpulse}};
+  };
+  // The first contact of the list has nothing before it; a block's first is checked against
+  // the contact before the block.
+  uint64_t previous = contacts[size_t(begin)].Key();
+  bool increasing = begin == 0 || contacts[size_t(begin) - 1].Key() < previous;
+  put(contacts[size_t(begin)], previous);
+  for (int i = begin + 1; i < end; ++i) {
+    const Contact& c = contacts[size_t(i)];
+    const uint64_t key = c.Key();
+    increasing = increasing && previous < key;
+    previous = key;
+    put(c, key);
+  }
+  return increasing;
+}
+
+void ContactCache::StoreFiltered(std::span<const Contact> contacts) {
   entries_.clear();
   for (const Contact& c : contacts) {
     if (Carries(c)) entries_.push_back(MakeEntry(c));
@@ -44,25 +83,24 @@ void ContactCache::Store(std::span<const Contact> contacts) {
   Finish();
 }
 
+void ContactCache::Store(std::span<const Contact> contacts) {
+  entries_.resize(contacts.size());
+  if (!StoreEach(contacts, 0, static_cast<int>(contacts.size()))) StoreFiltered(contacts);
+}
+
 void ContactCache::Store(std::span<const Contact> contacts, StageRunner& run) {
   const int count = static_cast<int>(contacts.size());
-  const int workers = run.Workers();
-  workerCount_.assign(size_t(workers) + 1, 0);
-  // Both passes split the same count with the same grain, so each worker sees the same block.
+  entries_.resize(size_t(count));
+  increasing_.assign(size_t(run.Workers()), 1);
   run.For(Stage::kPersistence, count, run.MinHeavyItems(), [&](int begin, int end, int worker) {
-    size_t n = 0;
-    for (int i = begin; i < end; ++i) n += Carries(contacts[i]) ? 1 : 0;
-    workerCount_[size_t(worker) + 1] = n;
+    if (!StoreEach(contacts, begin, end)) increasing_[size_t(worker)] = 0;
   });
-  for (int w = 0; w < workers; ++w) workerCount_[w + 1] += workerCount_[w];
-  entries_.resize(workerCount_[workers]);
-  run.For(Stage::kPersistence, count, run.MinHeavyItems(), [&](int begin, int end, int worker) {
-    size_t out = workerCount_[worker];
-    for (int i = begin; i < end; ++i) {
-      if (Carries(contacts[i])) entries_[out++] = MakeEntry(contacts[i]);
+  for (char ok : increasing_) {
+    if (!ok) {
+      run.Serial(Stage::kPersistence, [&] { StoreFiltered(contacts); });
+      return;
     }
-  });
-  Finish();
+  }
 }
 
 void ContactCache::Finish() {

@@ -40,12 +40,15 @@ class ContactCache {
     Real tangentImpulse[2];
   };
   static Entry MakeEntry(const Contact& c);
+  bool StoreEach(std::span<const Contact> contacts, int begin, int end);
+  void StoreFiltered(std::span<const Contact> contacts);
   void Finish();
 
-  // Sorted by key (the world's contacts already are; other input is stably sorted, so among
-  // equal keys the first stored is found, as before).
+  // Sorted by key: one entry per contact for contacts in strictly increasing key order (an
+  // entry of no points for one that carries nothing), else only the carrying ones, stably
+  // sorted, so among equal keys the first stored is found, as before.
   std::vector<Entry> entries_;
-  std::vector<size_t> workerCount_;
+  std::vector<char> increasing_;  // per block of the parallel store
 };
 
 }  // namespace quadrant
