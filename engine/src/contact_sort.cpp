@@ -10,20 +10,30 @@ namespace quadrant {
 // Contacts are solved in pair-key order, not broad-phase order, so the result does not depend
 // on which broad phase found them or on how threads split the work. Keys are unique (the
 // broad phase reports a pair once), so the order is the same whichever way it is reached:
-// every worker sorts its own contacts (in parallel), then the sorted parts are merged in
-// parallel, each worker producing one range of keys.
+// every worker sorts its own contacts' (key, index) pairs, then each worker merges one range
+// of keys of all parts and gathers those contacts into the output, restoring last step's
+// impulses as it goes. Both stages are one parallel region (one hand-over, one barrier), and
+// each contact is moved once at any thread count: the parts used to gather their own sorted
+// contacts, which a merge then copied again (all 760 KB of the pyramid's), in a second
+// parallel-for, and a third restored them; at 2 threads the stage took as long as at 1.
 void ContactSorter::Sort(StageRunner& run, int bodyCount, const std::vector<std::vector<Contact>>& workerContacts,
                          std::vector<Contact>& contacts, const ContactCache* cache) {
   const int parts = static_cast<int>(workerContacts.size());
   parts_.resize(parts);
   size_t total = 0;
   for (const std::vector<Contact>& part : workerContacts) total += part.size();
-  // Few contacts: one thread does it all (a parallel-for would cost more than it saves).
+  contacts.resize(total);
+  if (total == 0) return;
+  // Few contacts: one thread does it all (a parallel region would cost more than it saves).
   const bool parallel = total >= size_t(run.MinHeavyItems());
-  run.For(Stage::kPersistence, parts, parallel ? 1 : parts + 1, [&](int begin, int end, int) {
-    for (int p = begin; p < end; ++p) SortPart(workerContacts[p], bodyCount, parts_[p], cache);
+  const int ranges = parallel ? run.Workers() : 1;
+  plan_.assign({TaskSystem::StagePlan{parts, 1}, TaskSystem::StagePlan{ranges, 1}});
+  run.Stages(Stage::kPersistence, plan_, parallel ? 1 : parts + ranges + 1, [&](int stage, int begin, int end) {
+    for (int i = begin; i < end; ++i) {
+      if (stage == 0) SortPart(workerContacts[i], bodyCount, parts_[i]);
+      else MergeRange(i, ranges, workerContacts, contacts, cache);
+    }
   });
-  Merge(run, parallel ? run.Workers() : 1, contacts);
 }
 
 // Up to kMaxBuckets bodies, one counting pass on body a (a < n) puts the contacts in a-order,
@@ -35,18 +45,13 @@ void ContactSorter::Sort(StageRunner& run, int bodyCount, const std::vector<std:
 // callgrind on the base-100 pyramid (5051 bodies, 10 000 contacts), SortPart 822 000
 // instructions a step before (two 13-bit passes), see the commit for after.
 // Keys are unique, so every way of sorting gives the same order.
-void ContactSorter::SortPart(const std::vector<Contact>& in, int bodyCount, Part& part, const ContactCache* cache) {
+void ContactSorter::SortPart(const std::vector<Contact>& in, int bodyCount, Part& part) {
   const size_t count = in.size();
-  part.sorted.resize(count);
-  if (count < 2) {
-    std::copy(in.begin(), in.end(), part.sorted.begin());
-    if (cache != nullptr) cache->Restore(part.sorted);
-    return;
-  }
   std::vector<SortKey>& keys = part.keys;
   std::vector<SortKey>& keyScratch = part.keyScratch;
   keys.resize(count);
   keyScratch.resize(count);
+  if (count == 0) return;
   std::vector<uint32_t>& radixCounts = part.radixCounts;
   if (bodyCount <= kMaxBuckets) {
     const size_t buckets = size_t(bodyCount);
@@ -73,20 +78,6 @@ void ContactSorter::SortPart(const std::vector<Contact>& in, int bodyCount, Part
     }
   } else {
     RadixSort(in, bodyCount, part);
-  }
-  // The gather, and last step's impulses restored into each chunk of it while it is in L1 (a
-  // separate pass read and wrote the 760 KB of the pyramid's contacts again, and cost a
-  // parallel-for of its own). Merging restored parts gives the restored whole.
-  if (cache == nullptr) {
-    for (size_t i = 0; i < count; ++i) part.sorted[i] = in[keys[i].index];
-    return;
-  }
-  ContactCache::Cursor cursor;
-  constexpr size_t kChunk = 64;  // 64 contacts: 4.9 KB
-  for (size_t begin = 0; begin < count; begin += kChunk) {
-    const size_t end = std::min(count, begin + kChunk);
-    for (size_t i = begin; i < end; ++i) part.sorted[i] = in[keys[i].index];
-    cache->Restore(std::span<Contact>(part.sorted).subspan(begin, end - begin), cursor);
   }
 }
 
@@ -124,64 +115,94 @@ void ContactSorter::RadixSort(const std::vector<Contact>& in, int bodyCount, Par
   }
 }
 
-// Merges the sorted parts into `contacts`. The key space is cut into `ranges` ranges at evenly
-// spaced keys of the largest part (the parts are samples of the same scene, so the ranges hold
-// similar numbers of contacts); each range finds its start in every part by binary search, its
-// place in the output by adding those starts, and merges its share on its own.
-void ContactSorter::Merge(StageRunner& run, int ranges, std::vector<Contact>& contacts) {
-  int live = 0, largest = -1;
-  size_t total = 0;
-  for (int p = 0; p < static_cast<int>(parts_.size()); ++p) {
-    const size_t size = parts_[p].sorted.size();
-    total += size;
-    if (size == 0) continue;
-    ++live;
-    if (largest < 0 || size > parts_[largest].sorted.size()) largest = p;
-  }
-  if (live <= 1) {  // one thread's case: the sorted part is the result
-    if (live == 0) contacts.clear();
-    else contacts.swap(parts_[largest].sorted);
-    return;
-  }
-  contacts.resize(total);
-  const std::vector<Contact>& sample = parts_[largest].sorted;
-  auto split = [&](int r) -> uint64_t {  // the first key of range r
-    if (r <= 0) return 0;
-    if (r >= ranges) return ~uint64_t(0);
-    return sample[sample.size() * size_t(r) / size_t(ranges)].Key();
-  };
-  auto lowerBound = [](const std::vector<Contact>& v, uint64_t key) -> size_t {
-    if (key == ~uint64_t(0)) return v.size();
-    return size_t(std::partition_point(v.begin(), v.end(), [&](const Contact& c) { return c.Key() < key; }) - v.begin());
-  };
+// The key space is cut into `ranges` ranges holding equal numbers of contacts: range r starts
+// at the least key with r/ranges of all contacts below it, found by bisecting the key (each
+// probe a binary search in every part; keys are unique, so the count below a key grows by at
+// most one a key and hits the target exactly). The parts are not samples of the same keys:
+// the narrow phase's blocks are runs of the broad phase's spatial order, so on the pyramid one
+// worker's part held the low keys and the other's the high ones, and cutting at the largest
+// part's median (as before) gave one range a quarter of the contacts and the other three
+// quarters. Range r finds its start in every part by binary search, its place in the output
+// by adding those starts, merges its share and gathers the contacts, restoring each chunk of 64
+// (4.9 KB) while it is in L1 (a separate pass read and wrote the pyramid's 760 KB again).
+void ContactSorter::MergeRange(int r, int ranges, const std::vector<std::vector<Contact>>& workerContacts,
+                               std::vector<Contact>& contacts, const ContactCache* cache) const {
   const int parts = static_cast<int>(parts_.size());
-  run.For(Stage::kPersistence, ranges, ranges > 1 ? 1 : 2, [&](int r0, int r1, int) {
-    size_t head[kMaxParts], end[kMaxParts];
-    for (int r = r0; r < r1; ++r) {
-      const uint64_t lo = split(r), hi = split(r + 1);
-      size_t out = 0;
-      for (int p = 0; p < parts; ++p) {
-        const std::vector<Contact>& v = parts_[p].sorted;
-        head[p] = lowerBound(v, lo);
-        end[p] = lowerBound(v, hi);
-        out += head[p];
-      }
-      for (;;) {
+  auto lowerBound = [](const std::vector<SortKey>& v, uint64_t key) -> size_t {
+    return size_t(std::partition_point(v.begin(), v.end(), [&](const SortKey& k) { return k.key < key; }) - v.begin());
+  };
+  size_t total = 0;
+  uint64_t maxKey = 0;
+  for (int p = 0; p < parts; ++p) {
+    total += parts_[p].keys.size();
+    if (!parts_[p].keys.empty()) maxKey = std::max(maxKey, parts_[p].keys.back().key);
+  }
+  auto split = [&](int at) -> uint64_t {  // the first key of range `at`
+    if (at <= 0) return 0;
+    if (at >= ranges) return ~uint64_t(0);
+    const size_t target = total * size_t(at) / size_t(ranges);
+    uint64_t lo = 0, hi = maxKey + 1;  // count below lo < target... or lo == 0; count below hi = total
+    while (lo < hi) {
+      const uint64_t mid = lo + (hi - lo) / 2;
+      size_t below = 0;
+      for (int p = 0; p < parts; ++p) below += lowerBound(parts_[p].keys, mid);
+      if (below >= target) hi = mid;
+      else lo = mid + 1;
+    }
+    return lo;
+  };
+  auto bound = [&](const std::vector<SortKey>& v, uint64_t key) -> size_t {
+    return key == ~uint64_t(0) ? v.size() : lowerBound(v, key);
+  };
+  const uint64_t lo = split(r), hi = split(r + 1);
+  size_t head[kMaxParts], end[kMaxParts];
+  size_t out = 0;
+  int live = 0, last = 0;
+  for (int p = 0; p < parts; ++p) {
+    const std::vector<SortKey>& v = parts_[p].keys;
+    head[p] = bound(v, lo);
+    end[p] = bound(v, hi);
+    out += head[p];
+    if (head[p] < end[p]) {
+      ++live;
+      last = p;
+    }
+  }
+  ContactCache::Cursor cursor;
+  constexpr size_t kChunk = 64;
+  while (live > 0) {
+    const size_t chunkBegin = out;
+    if (live == 1) {  // one part left in the range (always so on one thread): a straight gather
+      const std::vector<SortKey>& keys = parts_[last].keys;
+      const std::vector<Contact>& in = workerContacts[last];
+      const size_t n = std::min(kChunk, end[last] - head[last]);
+      for (size_t i = 0; i < n; ++i) contacts[out++] = in[keys[head[last]++].index];
+      if (head[last] == end[last]) live = 0;
+    } else {
+      for (size_t i = 0; i < kChunk && live > 1; ++i) {
         int best = -1;
         uint64_t bestKey = 0;
         for (int p = 0; p < parts; ++p) {
           if (head[p] == end[p]) continue;
-          const uint64_t key = parts_[p].sorted[head[p]].Key();
+          const uint64_t key = parts_[p].keys[head[p]].key;
           if (best < 0 || key < bestKey) {
             best = p;
             bestKey = key;
           }
         }
-        if (best < 0) break;
-        contacts[out++] = parts_[best].sorted[head[best]++];
+        contacts[out++] = workerContacts[best][parts_[best].keys[head[best]++].index];
+        if (head[best] == end[best]) {
+          --live;
+          if (live == 1) {
+            for (int p = 0; p < parts; ++p) {
+              if (head[p] < end[p]) last = p;
+            }
+          }
+        }
       }
     }
-  });
+    if (cache != nullptr) cache->Restore(std::span<Contact>(contacts).subspan(chunkBegin, out - chunkBegin), cursor);
+  }
 }
 
 }  // namespace quadrant

@@ -1,11 +1,13 @@
-// The contacts of a step in pair-key order, from the narrow phase's per-worker lists: each list
-// radix-sorted on its own worker, then the sorted lists merged in parallel ranges of keys.
+// The contacts of a step in pair-key order, from the narrow phase's per-worker lists: each
+// list's (key, index) pairs sorted on its own worker, then the sorted key lists merged in
+// parallel ranges of keys, each range gathering its contacts straight into the output.
 #pragma once
 
 #include <cstdint>
 #include <vector>
 
 #include "contact_cache.h"
+#include "quadrant/task_system.h"
 #include "world_internal.h"
 
 namespace quadrant {
@@ -19,25 +21,28 @@ class ContactSorter {
 
  private:
   static constexpr int kMaxParts = 64;  // WorldDef::threadCount's limit
-  struct SortKey {
-    uint64_t key;
-    uint32_t index;
-  };
-  // One per worker: the radix sort's buffers and the worker's contacts in key order.
-  struct Part {
-    std::vector<SortKey> keys, keyScratch;
-    std::vector<uint32_t> radixCounts;
-    std::vector<Contact> sorted;
-  };
   // Counting sort on body a up to this many bodies (the counts, 64 KB, stay in L2); the radix
   // sort of the key a*n+b above it.
   static constexpr int kMaxBuckets = 1 << 14;
   static constexpr size_t kInsertionBucket = 16;  // larger buckets: std::sort
-  static void SortPart(const std::vector<Contact>& in, int bodyCount, Part& part, const ContactCache* cache);
+  struct SortKey {
+    uint64_t key;
+    uint32_t index;
+  };
+  // One per worker: the sort's buffers and the worker's (key, index) pairs in key order.
+  struct Part {
+    std::vector<SortKey> keys, keyScratch;
+    std::vector<uint32_t> radixCounts;
+  };
+  static void SortPart(const std::vector<Contact>& in, int bodyCount, Part& part);
   static void RadixSort(const std::vector<Contact>& in, int bodyCount, Part& part);
-  void Merge(StageRunner& run, int ranges, std::vector<Contact>& contacts);
+  // Range r of `ranges`: merges the parts' keys in its key range and gathers (and restores)
+  // their contacts into `contacts`.
+  void MergeRange(int r, int ranges, const std::vector<std::vector<Contact>>& workerContacts,
+                  std::vector<Contact>& contacts, const ContactCache* cache) const;
 
   std::vector<Part> parts_;
+  std::vector<TaskSystem::StagePlan> plan_;
 };
 
 }  // namespace quadrant
