@@ -24,7 +24,6 @@ class ContactSorter {
   // Counting sort on body a up to this many bodies (the counts, 64 KB, stay in L2); the radix
   // sort of the key a*n+b above it.
   static constexpr int kMaxBuckets = 1 << 14;
-  static constexpr size_t kInsertionBucket = 16;  // larger buckets: std::sort
   struct SortKey {
     uint64_t key;
     uint32_t index;
