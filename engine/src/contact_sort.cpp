@@ -27,10 +27,20 @@ void ContactSorter::Sort(StageRunner& run, int bodyCount, const std::vector<std:
   // Few contacts: one thread does it all (a parallel region would cost more than it saves).
   const bool parallel = total >= size_t(run.MinHeavyItems());
   const int ranges = parallel ? run.Workers() : 1;
+  // The counting sort's fixed cost is a pass over n buckets, the radix sort's one over 2^10 to
+  // 2^13 buckets a digit; a contact costs about 3 steps in the one (count, scatter, check) and
+  // 2 a digit plus 1 in the other. The cheaper by that estimate is taken, for all parts alike
+  // (their keys are merged). Circle stress 16000 (n = 16004, few contacts) cost 1.2 % more
+  // instructions a step by counting sort; circle stress 1000 1.5 % less, the pyramid less.
+  const size_t perPart = total / size_t(parts) + 1;
+  const uint64_t n = uint64_t(bodyCount);
+  const RadixDigits digits = RadixDigitsFor(n * n);
+  const bool byBody = bodyCount <= kMaxBuckets &&
+                      n + 3 * perPart <= size_t(digits.passes) * ((size_t(1) << digits.bits) + 2 * perPart) + perPart;
   plan_.assign({TaskSystem::StagePlan{parts, 1}, TaskSystem::StagePlan{ranges, 1}});
   run.Stages(Stage::kPersistence, plan_, parallel ? 1 : parts + ranges + 1, [&](int stage, int begin, int end) {
     for (int i = begin; i < end; ++i) {
-      if (stage == 0) SortPart(workerContacts[i], bodyCount, parts_[i]);
+      if (stage == 0) SortPart(workerContacts[i], bodyCount, byBody, parts_[i]);
       else MergeRange(i, ranges, workerContacts, contacts, cache);
     }
   });
@@ -39,11 +49,11 @@ void ContactSorter::Sort(StageRunner& run, int bodyCount, const std::vector<std:
 // Up to kMaxBuckets bodies, one counting pass on body a (a < n) puts the contacts in a-order,
 // each a's contacts in input order; then each bucket is put in b-order. A bucket holds the
 // pairs whose lower body is a: a handful (a box of the pyramid has at most 4), so an insertion
-// sort, which the broad phase's near-sorted order makes a compare or two, does it. One scatter pass instead of the radix sort's two (three above 8192 bodies):
-// callgrind on the base-100 pyramid (5051 bodies, 10 000 contacts), SortPart 822 000
-// instructions a step before (two 13-bit passes), see the commit for after.
+// sort, which the broad phase's near-sorted order makes a compare or two, does it. One scatter
+// pass instead of the radix sort's two: callgrind on the base-100 pyramid (5051 bodies, 10 000
+// contacts), SortPart 822 000 instructions a step with two 13-bit radix passes, 325 000 so.
 // Keys are unique, so every way of sorting gives the same order.
-void ContactSorter::SortPart(const std::vector<Contact>& in, int bodyCount, Part& part) {
+void ContactSorter::SortPart(const std::vector<Contact>& in, int bodyCount, bool byBody, Part& part) {
   const size_t count = in.size();
   std::vector<SortKey>& keys = part.keys;
   std::vector<SortKey>& keyScratch = part.keyScratch;
@@ -51,7 +61,7 @@ void ContactSorter::SortPart(const std::vector<Contact>& in, int bodyCount, Part
   keyScratch.resize(count);
   if (count == 0) return;
   std::vector<uint32_t>& radixCounts = part.radixCounts;
-  if (bodyCount <= kMaxBuckets) {
+  if (byBody) {
     const size_t buckets = size_t(bodyCount);
     radixCounts.assign(buckets + 1, 0u);
     for (size_t i = 0; i < count; ++i) ++radixCounts[size_t(in[i].a) + 1];
@@ -82,8 +92,19 @@ void ContactSorter::SortPart(const std::vector<Contact>& in, int bodyCount, Part
   }
 }
 
-// More bodies than kMaxBuckets: the key a*n+b (32 bits for up to 65536 bodies) LSD
-// radix-sorted as (key, index).
+// As few passes as digits of at most 13 bits allow, the key's bits shared evenly between them
+// (the counts, 32 KB at 13 bits, stay in L1). Any digit width gives the same order (the keys are
+// unique).
+ContactSorter::RadixDigits ContactSorter::RadixDigitsFor(uint64_t maxKey) {
+  constexpr int kMaxDigitBits = 13;
+  int keyBits = 0;
+  while (keyBits < 64 && (maxKey >> keyBits) != 0) ++keyBits;
+  const int passes = (keyBits + kMaxDigitBits - 1) / kMaxDigitBits;
+  return {passes, passes > 0 ? (keyBits + passes - 1) / passes : 1};
+}
+
+// More bodies than kMaxBuckets, or few contacts for many bodies: the key a*n+b (32 bits for up
+// to 65536 bodies) LSD radix-sorted as (key, index).
 void ContactSorter::RadixSort(const std::vector<Contact>& in, int bodyCount, Part& part) {
   const size_t count = in.size();
   const uint64_t n = uint64_t(bodyCount);
@@ -95,14 +116,8 @@ void ContactSorter::RadixSort(const std::vector<Contact>& in, int bodyCount, Par
     keys[i] = {key, uint32_t(i)};
     maxKey = std::max(maxKey, key);
   }
-  // As few passes as digits of at most 13 bits allow, the key's bits shared evenly between them
-  // (the counts, 32 KB at 13 bits, stay in L1). Any digit width gives the same order (the keys
-  // are unique).
-  constexpr int kMaxDigitBits = 13;
-  int keyBits = 0;
-  while (keyBits < 64 && (maxKey >> keyBits) != 0) ++keyBits;
-  const int passes = (keyBits + kMaxDigitBits - 1) / kMaxDigitBits;
-  const int digitBits = passes > 0 ? (keyBits + passes - 1) / passes : 1;
+  const RadixDigits digits = RadixDigitsFor(maxKey);
+  const int passes = digits.passes, digitBits = digits.bits;
   const size_t buckets = size_t(1) << digitBits;
   const uint64_t mask = buckets - 1;
   std::vector<uint32_t>& radixCounts = part.radixCounts;

@@ -21,8 +21,8 @@ class ContactSorter {
 
  private:
   static constexpr int kMaxParts = 64;  // WorldDef::threadCount's limit
-  // Counting sort on body a up to this many bodies (the counts, 64 KB, stay in L2); the radix
-  // sort of the key a*n+b above it.
+  // Counting sort on body a up to this many bodies (the counts, 64 KB, stay in L2) when it is
+  // the cheaper; the radix sort of the key a*n+b otherwise.
   static constexpr int kMaxBuckets = 1 << 14;
   struct SortKey {
     uint64_t key;
@@ -33,7 +33,12 @@ class ContactSorter {
     std::vector<SortKey> keys, keyScratch;
     std::vector<uint32_t> radixCounts;
   };
-  static void SortPart(const std::vector<Contact>& in, int bodyCount, Part& part);
+  struct RadixDigits {
+    int passes;
+    int bits;
+  };
+  static RadixDigits RadixDigitsFor(uint64_t maxKey);
+  static void SortPart(const std::vector<Contact>& in, int bodyCount, bool byBody, Part& part);
   static void RadixSort(const std::vector<Contact>& in, int bodyCount, Part& part);
   // Range r of `ranges`: merges the parts' keys in its key range and gathers (and restores)
   // their contacts into `contacts`.
