@@ -23,7 +23,24 @@ bool Carries(const Contact& c) {
 
 }  // namespace
 
-void ContactCache::Clear() { entries_.clear(); }
+void ContactCache::Clear() {
+  entries_.clear();
+  last_.clear();
+  kept_ = false;
+}
+
+// Last step's contacts themselves instead of a copy of their impulses: Store read every
+// contact and wrote a 40-byte entry for each (352 000 instructions a step on the base-100
+// pyramid, and a parallel-for of its own after the solve).
+void ContactCache::Keep(std::vector<Contact>& contacts, bool strictlyIncreasing) {
+  if (!strictlyIncreasing) {
+    Store(contacts);
+    return;
+  }
+  last_.swap(contacts);
+  entries_.clear();
+  kept_ = true;
+}
 
 ContactCache::Entry ContactCache::MakeEntry(const Contact& c) {
   const Manifold& m = c.manifold;
@@ -84,12 +101,14 @@ void ContactCache::StoreFiltered(std::span<const Contact> contacts) {
 }
 
 void ContactCache::Store(std::span<const Contact> contacts) {
+  kept_ = false;
   entries_.resize(contacts.size());
   if (!StoreEach(contacts, 0, static_cast<int>(contacts.size()))) StoreFiltered(contacts);
 }
 
 void ContactCache::Store(std::span<const Contact> contacts, StageRunner& run) {
   const int count = static_cast<int>(contacts.size());
+  kept_ = false;
   entries_.resize(size_t(count));
   increasing_.assign(size_t(run.Workers()), 1);
   run.For(Stage::kPersistence, count, run.MinHeavyItems(), [&](int begin, int end, int worker) {
@@ -115,10 +134,31 @@ int ContactCache::Restore(std::span<Contact> contacts) const {
   return Restore(contacts, cursor);
 }
 
+namespace {
+
+// What Restore reads of a stored entry or of a kept contact of last step. A kept contact that
+// carries nothing has no points, exactly as the store leaves it out.
+uint64_t KeyOf(const ContactCache::Entry& e) { return e.key; }
+int PointsOf(const ContactCache::Entry& e) { return e.pointCount; }
+uint32_t IdOf(const ContactCache::Entry& e, int j) { return e.ids[j]; }
+Real NormalOf(const ContactCache::Entry& e, int j) { return e.normalImpulse[j]; }
+Real TangentOf(const ContactCache::Entry& e, int j) { return e.tangentImpulse[j]; }
+uint64_t KeyOf(const Contact& c) { return c.Key(); }
+int PointsOf(const Contact& c) { return Carries(c) ? c.manifold.pointCount : 0; }
+uint32_t IdOf(const Contact& c, int j) { return c.manifold.points[j].id; }
+Real NormalOf(const Contact& c, int j) { return c.manifold.points[j].normalImpulse; }
+Real TangentOf(const Contact& c, int j) { return c.manifold.points[j].tangentImpulse; }
+
+}  // namespace
+
 int ContactCache::Restore(std::span<Contact> contacts, Cursor& cursor) const {
+  if (kept_) return RestoreFrom(last_.data(), last_.size(), contacts, cursor);
+  return RestoreFrom(entries_.data(), entries_.size(), contacts, cursor);
+}
+
+template <class Source>
+int ContactCache::RestoreFrom(const Source* entries, size_t size, std::span<Contact> contacts, Cursor& cursor) {
   int matched = 0;
-  const size_t size = entries_.size();
-  const Entry* entries = entries_.data();
   size_t at = cursor.at;
   uint64_t previous = cursor.previous;
   for (Contact& c : contacts) {
@@ -130,38 +170,40 @@ int ContactCache::Restore(std::span<Contact> contacts, Cursor& cursor) const {
     // or two compares. Otherwise gallop from there, then binary search the bracket. (Galloping
     // from `at` itself took 84 % of the pyramid's lookups into the search: `at` is last
     // contact's entry.)
-    if (at < size && entries[at].key < key && ++at < size && entries[at].key < key) {
+    if (at < size && KeyOf(entries[at]) < key && ++at < size && KeyOf(entries[at]) < key) {
       size_t lo = at + 1, hi = at + 1, step = 1;
-      while (hi < size && entries[hi].key < key) {
+      while (hi < size && KeyOf(entries[hi]) < key) {
         lo = hi + 1;
         hi += step;
         step *= 2;
       }
       hi = std::min(hi, size);
-      at = size_t(std::partition_point(entries + lo, entries + hi, [&](const Entry& x) { return x.key < key; }) - entries);
+      at = size_t(std::partition_point(entries + lo, entries + hi, [&](const Source& x) { return KeyOf(x) < key; }) -
+                  entries);
     }
-    if (at == size || entries[at].key != key) continue;
-    const Entry& e = entries[at];
+    if (at == size || KeyOf(entries[at]) != key) continue;
+    const Source& e = entries[at];
+    const int stored = PointsOf(e);
     ManifoldPoint* points = c.manifold.points;
     const int count = c.manifold.pointCount;
     // Mostly the same two features in the same places: both copied at once. (The first
     // matching entry point is taken for each point, as the loop below does: the second point
     // takes entry point 1 only if entry point 0 does not match it.)
-    if (count == 2 && e.pointCount == 2 && e.ids[0] == points[0].id && e.ids[1] == points[1].id &&
-        e.ids[0] != points[1].id) {
-      points[0].normalImpulse = e.normalImpulse[0];
-      points[0].tangentImpulse = e.tangentImpulse[0];
-      points[1].normalImpulse = e.normalImpulse[1];
-      points[1].tangentImpulse = e.tangentImpulse[1];
+    if (count == 2 && stored == 2 && IdOf(e, 0) == points[0].id && IdOf(e, 1) == points[1].id &&
+        IdOf(e, 0) != points[1].id) {
+      points[0].normalImpulse = NormalOf(e, 0);
+      points[0].tangentImpulse = TangentOf(e, 0);
+      points[1].normalImpulse = NormalOf(e, 1);
+      points[1].tangentImpulse = TangentOf(e, 1);
       matched += 2;
       continue;
     }
     for (int k = 0; k < count; ++k) {
       ManifoldPoint& p = points[k];
-      for (int j = 0; j < e.pointCount; ++j) {
-        if (e.ids[j] == p.id) {
-          p.normalImpulse = e.normalImpulse[j];
-          p.tangentImpulse = e.tangentImpulse[j];
+      for (int j = 0; j < stored; ++j) {
+        if (IdOf(e, j) == p.id) {
+          p.normalImpulse = NormalOf(e, j);
+          p.tangentImpulse = TangentOf(e, j);
           ++matched;
           break;
         }

@@ -29,9 +29,13 @@ class ContactCache {
   void Store(std::span<const Contact> contacts);
   /// The same, in parallel over `run`'s workers (timed as kPersistence).
   void Store(std::span<const Contact> contacts, StageRunner& run);
+  /// Remembers the impulses of `contacts` for the next Restore by taking the vector itself
+  /// (swapping it with the cache's previous one, so `contacts` is left with stale contacts to
+  /// overwrite), if the caller has checked that their keys strictly increase (ContactSorter::
+  /// StrictlyIncreasing); otherwise stores them (Store) and leaves `contacts` as it was.
+  void Keep(std::vector<Contact>& contacts, bool strictlyIncreasing);
   void Clear();
 
- private:
   struct Entry {
     uint64_t key;
     int pointCount;
@@ -39,6 +43,10 @@ class ContactCache {
     Real normalImpulse[2];
     Real tangentImpulse[2];
   };
+
+ private:
+  template <class Source>
+  static int RestoreFrom(const Source* entries, size_t size, std::span<Contact> contacts, Cursor& cursor);
   static Entry MakeEntry(const Contact& c);
   bool StoreEach(std::span<const Contact> contacts, int begin, int end);
   void StoreFiltered(std::span<const Contact> contacts);
@@ -49,6 +57,9 @@ class ContactCache {
   // sorted, so among equal keys the first stored is found, as before.
   std::vector<Entry> entries_;
   std::vector<char> increasing_;  // per block of the parallel store
+  // Or (kept_) last step's contacts themselves, in strictly increasing key order (Keep).
+  std::vector<Contact> last_;
+  bool kept_ = false;
 };
 
 }  // namespace quadrant

@@ -18,6 +18,9 @@ class ContactSorter {
   /// with last step's impulses restored from `cache` (ContactCache::Restore) unless it is null.
   void Sort(StageRunner& run, int bodyCount, const std::vector<std::vector<Contact>>& workerContacts,
             std::vector<Contact>& contacts, const ContactCache* cache = nullptr);
+  /// Whether the last Sort's output had strictly increasing keys (checked as it was written;
+  /// the broad phase reports a pair once, so it always has): ContactCache::Keep's condition.
+  bool StrictlyIncreasing() const { return increasing_; }
 
  private:
   static constexpr int kMaxParts = 64;  // WorldDef::threadCount's limit
@@ -32,6 +35,7 @@ class ContactSorter {
   struct Part {
     std::vector<SortKey> keys, keyScratch;
     std::vector<uint32_t> radixCounts;
+    bool increasing = true;  // keys strictly increase (no pair twice)
   };
   struct RadixDigits {
     int passes;
@@ -43,10 +47,12 @@ class ContactSorter {
   // Range r of `ranges`: merges the parts' keys in its key range and gathers (and restores)
   // their contacts into `contacts`.
   void MergeRange(int r, int ranges, const std::vector<std::vector<Contact>>& workerContacts,
-                  std::vector<Contact>& contacts, const ContactCache* cache) const;
+                  std::vector<Contact>& contacts, const ContactCache* cache);
 
   std::vector<Part> parts_;
   std::vector<TaskSystem::StagePlan> plan_;
+  std::vector<char> rangeIncreasing_;  // per merge range
+  bool increasing_ = true;
 };
 
 }  // namespace quadrant

@@ -184,6 +184,55 @@ TEST(ContactCache, StrictlyIncreasingAndOtherInputRestoreTheSame) {
   }
 }
 
+// Keep takes last step's contacts themselves (strictly increasing keys, as the sorter checked)
+// instead of storing a copy: it restores exactly what Store does, including contacts that
+// carried nothing (absent) and a -0 impulse; without the order's check it stores a copy.
+TEST(ContactCache, KeepRestoresWhatStoreRestores) {
+  std::mt19937 rng(7);
+  std::vector<Contact> last;
+  for (int a = 0; a < 300; ++a) {
+    for (int b = a + 1; b < a + 4; ++b) {
+      if (rng() % 3 == 0) continue;
+      last.push_back(MakeContact(a, b, 1 + int(rng() % 2), rng() % 4, rng() % 4, Real(rng() % 3)));
+      if (rng() % 5 == 0) last.back().manifold.points[0].tangentImpulse = Real(-0.0);
+    }
+  }
+  std::vector<Contact> now;
+  for (int a = 0; a < 300; ++a) {
+    for (int b = a + 1; b < a + 4; ++b) {
+      if (rng() % 4 != 0) now.push_back(MakeContact(a, b, 1 + int(rng() % 2), rng() % 4, rng() % 4, -7));
+    }
+  }
+  ContactCache stored;
+  stored.Store(last);
+  std::vector<Contact> expected = now;
+  const int matched = stored.Restore(expected);
+  EXPECT_GT(matched, 100);
+  for (bool checked : {true, false}) {
+    ContactCache kept;
+    std::vector<Contact> taken = last;
+    kept.Keep(taken, checked);
+    if (!checked) {
+      EXPECT_EQ(taken.size(), last.size());  // stored: the caller's list is left as it was
+    }
+    std::vector<Contact> got = now;
+    EXPECT_EQ(kept.Restore(got), matched) << checked;
+    for (size_t i = 0; i < now.size(); ++i) {
+      for (int k = 0; k < 2; ++k) {
+        ASSERT_EQ(got[i].manifold.points[k].normalImpulse, expected[i].manifold.points[k].normalImpulse) << i;
+        ASSERT_EQ(got[i].manifold.points[k].tangentImpulse, expected[i].manifold.points[k].tangentImpulse) << i;
+      }
+    }
+    // A Store after Keep replaces what was kept; Clear forgets both.
+    kept.Store(std::vector<Contact>{MakeContact(0, 1, 1, 99, 0, 4)});
+    std::vector<Contact> one = {MakeContact(0, 1, 1, 99, 0, -7), MakeContact(0, 2, 1, 0, 0, -7)};
+    EXPECT_EQ(kept.Restore(one), 1);
+    EXPECT_EQ(one[0].manifold.points[0].normalImpulse, 4);
+    kept.Clear();
+    EXPECT_EQ(kept.Restore(one), 0);
+  }
+}
+
 // Restoring a list chunk by chunk with one cursor (as the contact sort does) gives what one
 // call gives, also when a chunk goes back in key order.
 TEST(ContactCache, ChunkedRestoreWithACursorEqualsOneCall) {
@@ -386,6 +435,7 @@ TEST(ContactSort, EveryPathGivesKeyOrderWithImpulsesRestored) {
             ContactSorter sorter;
             std::vector<Contact> contacts;
             sorter.Sort(run, bodyCount, workerContacts, contacts, restore ? &cache : nullptr);
+            EXPECT_TRUE(sorter.StrictlyIncreasing());
             ASSERT_EQ(contacts.size(), expected.size());
             for (size_t i = 0; i < contacts.size(); ++i) {
               ASSERT_EQ(contacts[i].Key(), expected[i].Key()) << bodyCount << " bodies, " << parts << " parts, " << i;
@@ -398,6 +448,30 @@ TEST(ContactSort, EveryPathGivesKeyOrderWithImpulsesRestored) {
           }
         }
       }
+    }
+  }
+}
+
+
+// A pair reported twice (never by the broad phase) is still sorted, and the sorter says the
+// keys do not strictly increase, so the world stores a copy instead of keeping the list.
+TEST(ContactSort, ARepeatedPairIsReported) {
+  for (int bodyCount : {50, 20000}) {
+    for (int parts : {1, 2}) {
+      std::vector<std::vector<Contact>> workerContacts(static_cast<size_t>(parts));
+      for (int a = 0; a < 40; ++a) workerContacts[size_t(a % parts)].push_back(MakeContact(a, a + 1, 1, 0, 0, 0));
+      workerContacts[size_t(parts - 1)].push_back(MakeContact(7, 8, 1, 0, 0, 0));  // (7, 8) again
+      auto pool = MakeThreadPool(parts);
+      StageRunner run(*pool, 4);
+      ContactSorter sorter;
+      std::vector<Contact> contacts;
+      sorter.Sort(run, bodyCount, workerContacts, contacts);
+      EXPECT_FALSE(sorter.StrictlyIncreasing()) << bodyCount << " bodies, " << parts << " parts";
+      ASSERT_EQ(contacts.size(), 41u);
+      for (size_t i = 1; i < contacts.size(); ++i) EXPECT_LE(contacts[i - 1].Key(), contacts[i].Key()) << i;
+      workerContacts[size_t(parts - 1)].pop_back();
+      sorter.Sort(run, bodyCount, workerContacts, contacts);
+      EXPECT_TRUE(sorter.StrictlyIncreasing()) << bodyCount << " bodies, " << parts << " parts";
     }
   }
 }
