@@ -416,7 +416,6 @@ void World::Impl::RunPipeline(Real dt) {
     profile.solve += Ms(ts, Clock::now());
   }
 
-
   profile.broadPhase += Ms(t0, t1);
   profile.narrowPhase += Ms(t1, t2);
   profile.persistence += Ms(t2, t3);
