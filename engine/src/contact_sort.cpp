@@ -16,12 +16,11 @@ namespace quadrant {
 // each contact is moved once at any thread count: the parts used to gather their own sorted
 // contacts, which a merge then copied again (all 760 KB of the pyramid's), in a second
 // parallel-for, and a third restored them; at 2 threads the stage took as long as at 1.
-void ContactSorter::Sort(StageRunner& run, int bodyCount, const std::vector<std::vector<Contact>>& workerContacts,
+void ContactSorter::Sort(StageRunner& run, int bodyCount, const WorkerLists<Contact>& workerContacts,
                          std::vector<Contact>& contacts, const ContactCache* cache) {
-  const int parts = static_cast<int>(workerContacts.size());
+  const int parts = workerContacts.Count();
   parts_.resize(parts);
-  size_t total = 0;
-  for (const std::vector<Contact>& part : workerContacts) total += part.size();
+  const size_t total = workerContacts.TotalSize();
   contacts.resize(total);
   increasing_ = true;
   if (total == 0) return;
@@ -149,7 +148,7 @@ void ContactSorter::RadixSort(const std::vector<Contact>& in, int bodyCount, Par
 // quarters. Range r finds its start in every part by binary search, its place in the output
 // by adding those starts, merges its share and gathers the contacts, restoring each chunk of 64
 // (4.9 KB) while it is in L1 (a separate pass read and wrote the pyramid's 760 KB again).
-void ContactSorter::MergeRange(int r, int ranges, const std::vector<std::vector<Contact>>& workerContacts,
+void ContactSorter::MergeRange(int r, int ranges, const WorkerLists<Contact>& workerContacts,
                                std::vector<Contact>& contacts, const ContactCache* cache) {
   const int parts = static_cast<int>(parts_.size());
   auto lowerBound = [](const std::vector<SortKey>& v, uint64_t key) -> size_t {

@@ -8,6 +8,7 @@
 
 #include "contact_cache.h"
 #include "quadrant/task_system.h"
+#include "worker_lists.h"
 #include "world_internal.h"
 
 namespace quadrant {
@@ -16,7 +17,7 @@ class ContactSorter {
  public:
   /// Writes the contacts of all `workerContacts` lists into `contacts` in key order (a, b),
   /// with last step's impulses restored from `cache` (ContactCache::Restore) unless it is null.
-  void Sort(StageRunner& run, int bodyCount, const std::vector<std::vector<Contact>>& workerContacts,
+  void Sort(StageRunner& run, int bodyCount, const WorkerLists<Contact>& workerContacts,
             std::vector<Contact>& contacts, const ContactCache* cache = nullptr);
   /// Whether the last Sort's output had strictly increasing keys (checked as it was written;
   /// the broad phase reports a pair once, so it always has): ContactCache::Keep's condition.
@@ -32,7 +33,8 @@ class ContactSorter {
     uint32_t index;
   };
   // One per worker: the sort's buffers and the worker's (key, index) pairs in key order.
-  struct Part {
+  // Alone on its cache lines: the workers sort their parts at once (worker_lists.h says why).
+  struct alignas(kCacheLine) Part {
     std::vector<SortKey> keys, keyScratch;
     std::vector<uint32_t> radixCounts;
     bool increasing = true;  // keys strictly increase (no pair twice)
@@ -46,7 +48,7 @@ class ContactSorter {
   static void RadixSort(const std::vector<Contact>& in, int bodyCount, Part& part);
   // Range r of `ranges`: merges the parts' keys in its key range and gathers (and restores)
   // their contacts into `contacts`.
-  void MergeRange(int r, int ranges, const std::vector<std::vector<Contact>>& workerContacts,
+  void MergeRange(int r, int ranges, const WorkerLists<Contact>& workerContacts,
                   std::vector<Contact>& contacts, const ContactCache* cache);
 
   std::vector<Part> parts_;

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "contact_cache.h"
+#include "constraint_graph.h"
 #include "contact_constraints.h"
 #include "contact_sort.h"
 #include "islands.h"
@@ -417,16 +418,17 @@ TEST(ContactSort, EveryPathGivesKeyOrderWithImpulsesRestored) {
     cache.Restore(expected);
     for (int parts : {1, 2, 4}) {
       for (bool bySpace : {false, true}) {
-        std::vector<std::vector<Contact>> workerContacts(static_cast<size_t>(parts));
+        WorkerLists<Contact> workerContacts;
+        workerContacts.Reset(parts);
         std::vector<Contact> shuffled = all;
         std::shuffle(shuffled.begin(), shuffled.end(), rng);
         if (bySpace) {  // part p gets the p-th run of keys (the last part nothing when there are 4)
           std::sort(shuffled.begin(), shuffled.end(), [](const Contact& x, const Contact& y) { return x.Key() < y.Key(); });
           const int used = parts == 4 ? 3 : parts;
-          for (size_t i = 0; i < shuffled.size(); ++i) workerContacts[i * size_t(used) / shuffled.size()].push_back(shuffled[i]);
-          for (std::vector<Contact>& w : workerContacts) std::shuffle(w.begin(), w.end(), rng);
+          for (size_t i = 0; i < shuffled.size(); ++i) workerContacts[int(i * size_t(used) / shuffled.size())].push_back(shuffled[i]);
+          for (int p = 0; p < parts; ++p) std::shuffle(workerContacts[p].begin(), workerContacts[p].end(), rng);
         } else {
-          for (size_t i = 0; i < shuffled.size(); ++i) workerContacts[i % size_t(parts)].push_back(shuffled[i]);
+          for (size_t i = 0; i < shuffled.size(); ++i) workerContacts[int(i % size_t(parts))].push_back(shuffled[i]);
         }
         for (int threads : {1, 3}) {
           auto pool = MakeThreadPool(threads);
@@ -452,15 +454,115 @@ TEST(ContactSort, EveryPathGivesKeyOrderWithImpulsesRestored) {
   }
 }
 
+// ---- The constraint graph's colouring ------------------------------------------------------------
+
+// The colouring as a list of (colour, contact) in colour order.
+std::vector<std::pair<int, int>> Coloring(const ConstraintGraph& g) {
+  std::vector<std::pair<int, int>> out;
+  for (int k = 0; k <= ConstraintGraph::kColors; ++k) {
+    for (int i = g.ColorBegin(k); i < g.ColorBegin(k + 1); ++i) out.push_back({k, g.ContactOf(i)});
+  }
+  return out;
+}
+
+// A step whose contacts have last step's dynamic ends, in the same order, reuses last step's
+// colouring; any change (another body, a body turned static, one contact more) colours afresh,
+// and either way the colouring is the one a new graph computes, for 1 and 3 threads.
+TEST(ConstraintGraph, ReusesTheColoringOnlyWhenTheEndsAreUnchanged) {
+  WorldDef def;
+  Bodies bodies;
+  BodyDef ground;
+  ground.shape = ShapeDef::Box(50, Real(0.5));
+  AppendBody(bodies, ground, def, 0);
+  for (int i = 0; i < 60; ++i) {
+    BodyDef box;
+    box.type = BodyType::kDynamic;
+    box.position = {Real(i % 10), Real(1 + i / 10)};
+    box.shape = ShapeDef::Box(Real(0.5), Real(0.5));
+    AppendBody(bodies, box, def, uint32_t(i + 1));
+  }
+  std::mt19937 rng(3);
+  std::uniform_int_distribution<int> pick(0, 60);
+  std::vector<Contact> contacts;
+  for (int c = 0; c < 400; ++c) {
+    Contact k;
+    k.a = pick(rng);
+    k.b = pick(rng);
+    if (k.a == k.b) continue;
+    if (k.a > k.b) std::swap(k.a, k.b);
+    contacts.push_back(k);
+  }
+  for (int threads : {1, 3}) {
+    def.threadCount = threads;
+    auto tasks = MakeThreadPool(threads);
+    StageRunner run(*tasks, 8);
+    StepContext ctx;
+    ctx.def = &def;
+    ctx.bodies = &bodies;
+    auto fresh = [&](std::vector<Contact>& list) {
+      ConstraintGraph g;
+      ctx.contacts = list;
+      g.Color(run, ctx);
+      return Coloring(g);
+    };
+    ConstraintGraph graph;
+    auto colour = [&](std::vector<Contact>& list) {
+      ctx.contacts = list;
+      graph.Color(run, ctx);
+      return Coloring(graph);
+    };
+    std::vector<Contact> list = contacts;
+    EXPECT_EQ(colour(list), fresh(list));
+    EXPECT_EQ(graph.reused_, 0);
+    EXPECT_EQ(colour(list), fresh(list));  // the same ends: reused
+    EXPECT_EQ(graph.reused_, 1);
+    list[200].b = list[200].b == 60 ? 59 : 60;  // one end changed
+    if (list[200].a == list[200].b) list[200].a = 0;
+    EXPECT_EQ(colour(list), fresh(list));
+    EXPECT_EQ(graph.reused_, 1);
+    const Real mass = bodies.inv[list[10].a].invMass;
+    if (mass > 0) {  // a body becomes fixed: its end is no longer dynamic
+      bodies.inv[list[10].a].invMass = 0;
+      EXPECT_EQ(colour(list), fresh(list));
+      EXPECT_EQ(graph.reused_, 1);
+      bodies.inv[list[10].a].invMass = mass;
+    }
+    list.push_back(list[5]);  // one contact more
+    list.back().b = list.back().a == 1 ? 2 : 1;
+    EXPECT_EQ(colour(list), fresh(list));
+    list.pop_back();
+    EXPECT_EQ(colour(list), fresh(list));  // one fewer
+    const int64_t reused = graph.reused_;
+    EXPECT_EQ(colour(list), fresh(list));
+    EXPECT_EQ(graph.reused_, reused + 1);
+    // No two constraints of one colour share a dynamic body.
+    const auto all = Coloring(graph);
+    for (size_t i = 0; i < all.size(); ++i) {
+      for (size_t j = i + 1; j < all.size() && all[j].first == all[i].first; ++j) {
+        if (all[i].first == ConstraintGraph::kColors) break;
+        const Contact& x = list[all[i].second];
+        const Contact& y = list[all[j].second];
+        for (int u : {x.a, x.b}) {
+          for (int v : {y.a, y.b}) {
+            if (u == v) {
+              EXPECT_EQ(bodies.inv[u].invMass, 0) << "colour " << all[i].first;
+            }
+          }
+        }
+      }
+    }
+  }
+}
 
 // A pair reported twice (never by the broad phase) is still sorted, and the sorter says the
 // keys do not strictly increase, so the world stores a copy instead of keeping the list.
 TEST(ContactSort, ARepeatedPairIsReported) {
   for (int bodyCount : {50, 20000}) {
     for (int parts : {1, 2}) {
-      std::vector<std::vector<Contact>> workerContacts(static_cast<size_t>(parts));
-      for (int a = 0; a < 40; ++a) workerContacts[size_t(a % parts)].push_back(MakeContact(a, a + 1, 1, 0, 0, 0));
-      workerContacts[size_t(parts - 1)].push_back(MakeContact(7, 8, 1, 0, 0, 0));  // (7, 8) again
+      WorkerLists<Contact> workerContacts;
+      workerContacts.Reset(parts);
+      for (int a = 0; a < 40; ++a) workerContacts[a % parts].push_back(MakeContact(a, a + 1, 1, 0, 0, 0));
+      workerContacts[parts - 1].push_back(MakeContact(7, 8, 1, 0, 0, 0));  // (7, 8) again
       auto pool = MakeThreadPool(parts);
       StageRunner run(*pool, 4);
       ContactSorter sorter;
@@ -469,7 +571,7 @@ TEST(ContactSort, ARepeatedPairIsReported) {
       EXPECT_FALSE(sorter.StrictlyIncreasing()) << bodyCount << " bodies, " << parts << " parts";
       ASSERT_EQ(contacts.size(), 41u);
       for (size_t i = 1; i < contacts.size(); ++i) EXPECT_LE(contacts[i - 1].Key(), contacts[i].Key()) << i;
-      workerContacts[size_t(parts - 1)].pop_back();
+      workerContacts[parts - 1].pop_back();
       sorter.Sort(run, bodyCount, workerContacts, contacts);
       EXPECT_TRUE(sorter.StrictlyIncreasing()) << bodyCount << " bodies, " << parts << " parts";
     }
