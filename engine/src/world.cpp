@@ -73,6 +73,7 @@ struct World::Impl {
   std::vector<CandidatePair> pairs;
   std::vector<Contact> contacts;
   ContactSorter sorter;
+  bool contactsIncreasing = true;  // the sorter's check of `contacts` (ContactCache::Keep)
   Profile profile;
   Counters counters;
   std::vector<std::pair<int, int>> countParts;  // CountContacts: per worker, points and touching contacts
@@ -118,7 +119,12 @@ struct World::Impl {
   BodyId IdOf(int i) const { return BodyId{bodies.slot[i], generation[bodies.slot[i]]}; }  // one pass of every stage
   void CountContacts(int candidatePairs);
   void NarrowPhase(Real dt);
-  void SortContacts() { sorter.Sort(*run, bodies.Count(), workerContacts, contacts); }
+  // Sorts the narrow phase's contacts and restores last step's impulses into them (warm starting).
+  void SortContacts() {
+    const bool persist = def.solver != SolverType::kThesis && def.effects.warmStarting;
+    sorter.Sort(*run, bodies.Count(), workerContacts, contacts, persist ? &cache : nullptr);
+    contactsIncreasing = sorter.StrictlyIncreasing();
+  }
 };
 
 World::World(const WorldDef& def) : impl_(std::make_unique<Impl>()) {
@@ -373,7 +379,11 @@ void World::Impl::RunPipeline(Real dt) {
   auto t1 = Clock::now();
   NarrowPhase(dt);
   auto t2 = Clock::now();
-  SortContacts();  // times itself (kPersistence); the narrow phase's contacts are in `contacts` after it
+  const bool persist = def.solver != SolverType::kThesis && def.effects.warmStarting;
+  // Last step's solved contacts become the cache (ContactCache::Keep): nothing is copied at the
+  // end of the step, and `contacts` stays readable (GetContacts) until this step refills it.
+  if (persist) cache.Keep(contacts, contactsIncreasing);
+  SortContacts();  // times itself (kPersistence); the narrow phase's contacts, restored, are in `contacts` after it
   if (sleepOn) {
     // An awake body touches a sleeping island: the island wakes in this step. Its bodies' pairs
     // (among themselves and with the ground) were not searched, so the broad and narrow phases
@@ -385,11 +395,6 @@ void World::Impl::RunPipeline(Real dt) {
       NarrowPhase(dt);
       SortContacts();
     }
-  }
-  const bool persist = def.solver != SolverType::kThesis && def.effects.warmStarting;
-  if (persist) {
-    run->For(Stage::kPersistence, static_cast<int>(contacts.size()), run->MinHeavyItems(),
-             [&](int begin, int end, int) { cache.Restore(std::span<Contact>(contacts).subspan(begin, end - begin)); });
   }
   auto t3 = Clock::now();
 
@@ -412,13 +417,9 @@ void World::Impl::RunPipeline(Real dt) {
     profile.solve += Ms(ts, Clock::now());
   }
 
-  auto t4 = Clock::now();
-  if (persist) cache.Store(contacts, *run);
-  auto t5 = Clock::now();
-
   profile.broadPhase += Ms(t0, t1);
   profile.narrowPhase += Ms(t1, t2);
-  profile.persistence += Ms(t2, t3) + Ms(t4, t5);
+  profile.persistence += Ms(t2, t3);
 
   CountContacts(static_cast<int>(pairs.size()));
 }

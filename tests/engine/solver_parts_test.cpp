@@ -3,6 +3,7 @@
 // (islands.h) and the contact sort (World::Impl::SortContacts, seen through GetContacts).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <random>
 #include <vector>
@@ -10,6 +11,7 @@
 #include "contact_cache.h"
 #include "constraint_graph.h"
 #include "contact_constraints.h"
+#include "contact_sort.h"
 #include "islands.h"
 #include "quadrant/world.h"
 #include "test_helpers.h"
@@ -134,6 +136,141 @@ TEST(ContactCache, ParallelStoreEqualsSerialStore) {
   }
 }
 
+// The store takes one entry per contact for contacts in strictly increasing key order (the
+// world's), an entry of no points for one that carries nothing; any other order takes the
+// filtered store. Both must restore exactly what the filtered store alone did: a contact that
+// carried nothing is as absent, and among repeated keys the first carrying one is found.
+TEST(ContactCache, StrictlyIncreasingAndOtherInputRestoreTheSame) {
+  // Strictly increasing, (0, 2) and (1, 2) carrying nothing.
+  std::vector<Contact> increasing = {MakeContact(0, 1, 2, 7, 8, 1), MakeContact(0, 2, 1, 3, 0, 0),
+                                     MakeContact(1, 2, 1, 4, 0, 0), MakeContact(3, 9, 2, 1, 2, 2)};
+  increasing[1].manifold.points[0].tangentImpulse = 0;
+  increasing[2].manifold.points[0].tangentImpulse = Real(-0.0);  // -0 carries nothing either
+  // The same contacts plus a repeated key: (1, 2) again, carrying this time, and a first (3, 9)
+  // that carries nothing before the one that does.
+  std::vector<Contact> repeated = increasing;
+  repeated.insert(repeated.begin() + 3, MakeContact(1, 2, 1, 4, 0, 6));
+  repeated.insert(repeated.begin() + 4, MakeContact(3, 9, 2, 1, 2, 0));
+  repeated[4].manifold.points[1].normalImpulse = 0;
+  repeated[4].manifold.points[0].tangentImpulse = repeated[4].manifold.points[1].tangentImpulse = 0;
+  auto now = [] {
+    std::vector<Contact> c = {MakeContact(0, 1, 2, 8, 7, 0), MakeContact(0, 2, 1, 3, 0, 0),
+                              MakeContact(1, 2, 1, 4, 0, 0), MakeContact(3, 9, 2, 1, 2, 0)};
+    for (Contact& x : c) {
+      for (ManifoldPoint& p : x.manifold.points) p.normalImpulse = p.tangentImpulse = -7;  // untouched if absent
+    }
+    return c;
+  };
+  for (bool parallel : {false, true}) {
+    ContactCache a, b;
+    auto pool = MakeThreadPool(3);
+    StageRunner run(*pool, 8);
+    if (parallel) {
+      a.Store(increasing, run);
+      b.Store(repeated, run);
+    } else {
+      a.Store(increasing);
+      b.Store(repeated);
+    }
+    std::vector<Contact> fromA = now(), fromB = now();
+    EXPECT_EQ(a.Restore(fromA), 4) << parallel;  // (0, 1) and (3, 9), two features each
+    EXPECT_EQ(fromA[0].manifold.points[0].normalImpulse, 2) << parallel;  // feature 8 was point 1
+    EXPECT_EQ(fromA[0].manifold.points[1].normalImpulse, 1) << parallel;
+    EXPECT_EQ(fromA[1].manifold.points[0].normalImpulse, -7) << parallel;  // carried nothing: absent
+    EXPECT_EQ(fromA[2].manifold.points[0].normalImpulse, -7) << parallel;
+    EXPECT_EQ(fromA[3].manifold.points[0].normalImpulse, 2) << parallel;
+    EXPECT_EQ(b.Restore(fromB), 5) << parallel;
+    EXPECT_EQ(fromB[2].manifold.points[0].normalImpulse, 6) << parallel;  // the carrying (1, 2)
+    EXPECT_EQ(fromB[3].manifold.points[0].normalImpulse, 2) << parallel;  // the carrying (3, 9)
+  }
+}
+
+// Keep takes last step's contacts themselves (strictly increasing keys, as the sorter checked)
+// instead of storing a copy: it restores exactly what Store does, including contacts that
+// carried nothing (absent) and a -0 impulse; without the order's check it stores a copy.
+TEST(ContactCache, KeepRestoresWhatStoreRestores) {
+  std::mt19937 rng(7);
+  std::vector<Contact> last;
+  for (int a = 0; a < 300; ++a) {
+    for (int b = a + 1; b < a + 4; ++b) {
+      if (rng() % 3 == 0) continue;
+      last.push_back(MakeContact(a, b, 1 + int(rng() % 2), rng() % 4, rng() % 4, Real(rng() % 3)));
+      if (rng() % 5 == 0) last.back().manifold.points[0].tangentImpulse = Real(-0.0);
+    }
+  }
+  std::vector<Contact> now;
+  for (int a = 0; a < 300; ++a) {
+    for (int b = a + 1; b < a + 4; ++b) {
+      if (rng() % 4 != 0) now.push_back(MakeContact(a, b, 1 + int(rng() % 2), rng() % 4, rng() % 4, -7));
+    }
+  }
+  ContactCache stored;
+  stored.Store(last);
+  std::vector<Contact> expected = now;
+  const int matched = stored.Restore(expected);
+  EXPECT_GT(matched, 100);
+  for (bool checked : {true, false}) {
+    ContactCache kept;
+    std::vector<Contact> taken = last;
+    kept.Keep(taken, checked);
+    if (!checked) {
+      EXPECT_EQ(taken.size(), last.size());  // stored: the caller's list is left as it was
+    }
+    std::vector<Contact> got = now;
+    EXPECT_EQ(kept.Restore(got), matched) << checked;
+    for (size_t i = 0; i < now.size(); ++i) {
+      for (int k = 0; k < 2; ++k) {
+        ASSERT_EQ(got[i].manifold.points[k].normalImpulse, expected[i].manifold.points[k].normalImpulse) << i;
+        ASSERT_EQ(got[i].manifold.points[k].tangentImpulse, expected[i].manifold.points[k].tangentImpulse) << i;
+      }
+    }
+    // A Store after Keep replaces what was kept; Clear forgets both.
+    kept.Store(std::vector<Contact>{MakeContact(0, 1, 1, 99, 0, 4)});
+    std::vector<Contact> one = {MakeContact(0, 1, 1, 99, 0, -7), MakeContact(0, 2, 1, 0, 0, -7)};
+    EXPECT_EQ(kept.Restore(one), 1);
+    EXPECT_EQ(one[0].manifold.points[0].normalImpulse, 4);
+    kept.Clear();
+    EXPECT_EQ(kept.Restore(one), 0);
+  }
+}
+
+// Restoring a list chunk by chunk with one cursor (as the contact sort does) gives what one
+// call gives, also when a chunk goes back in key order.
+TEST(ContactCache, ChunkedRestoreWithACursorEqualsOneCall) {
+  std::mt19937 rng(11);
+  std::vector<Contact> last;
+  for (int a = 0; a < 400; ++a) {
+    for (int b = a + 1; b < a + 4; ++b) {
+      if (rng() % 3 != 0) last.push_back(MakeContact(a, b, 1 + int(rng() % 2), rng() % 4, rng() % 4, Real(rng() % 3)));
+    }
+  }
+  ContactCache cache;
+  cache.Store(last);
+  std::vector<Contact> now;
+  for (int a = 0; a < 400; ++a) {
+    for (int b = a + 1; b < a + 4; ++b) {
+      if (rng() % 4 != 0) now.push_back(MakeContact(a, b, 1 + int(rng() % 2), rng() % 4, rng() % 4, -7));
+    }
+  }
+  std::swap(now[100], now[500]);  // out of order twice
+  std::vector<Contact> whole = now, chunked = now;
+  const int matched = cache.Restore(whole);
+  EXPECT_GT(matched, 200);
+  ContactCache::Cursor cursor;
+  int chunkedMatched = 0;
+  for (size_t begin = 0; begin < chunked.size(); begin += 37) {
+    const size_t n = std::min<size_t>(37, chunked.size() - begin);
+    chunkedMatched += cache.Restore(std::span<Contact>(chunked).subspan(begin, n), cursor);
+  }
+  EXPECT_EQ(chunkedMatched, matched);
+  for (size_t i = 0; i < now.size(); ++i) {
+    for (int k = 0; k < 2; ++k) {
+      ASSERT_EQ(whole[i].manifold.points[k].normalImpulse, chunked[i].manifold.points[k].normalImpulse) << i;
+      ASSERT_EQ(whole[i].manifold.points[k].tangentImpulse, chunked[i].manifold.points[k].tangentImpulse) << i;
+    }
+  }
+}
+
 // ---- Islands ------------------------------------------------------------------------------
 
 // Bodies as the world keeps them, for `types`, all awake and at rest.
@@ -252,6 +389,71 @@ TEST(ContactSort, ContactsAreInKeyOrderForAnyThreadCount) {
 }
 
 
+// ContactSorter's paths against std::sort and a separate Restore: the counting sort on body a
+// (buckets put in b-order by an insertion pass; with 3000 bodies body 0 touches all the others
+// in shuffled order, which exceeds the insertion's budget of moves, so std::sort finishes),
+// the radix sort above 16384 bodies, one or several parts, parts holding low and high keys
+// (the narrow phase's blocks are runs of a spatial order), parts left empty, and the merge
+// ranges on one or three workers.
+TEST(ContactSort, EveryPathGivesKeyOrderWithImpulsesRestored) {
+  for (int bodyCount : {700, 3000, 20000}) {
+    std::mt19937 rng{uint32_t(bodyCount)};
+    std::vector<Contact> all;
+    const int groundContacts = bodyCount == 3000 ? bodyCount - 1 : 59;
+    for (int b = 1; b <= groundContacts; ++b) all.push_back(MakeContact(0, b, 2, 1, 2, 0));
+    for (int a = 1; a < bodyCount - 1; a += 1 + int(rng() % 40)) {
+      for (int b = a + 1; b < std::min(bodyCount, a + 6); ++b) {
+        if (rng() % 2 == 0) all.push_back(MakeContact(a, b, 1 + int(rng() % 2), rng() % 3, rng() % 3, 0));
+      }
+    }
+    // Last step's impulses for about half of the pairs.
+    std::vector<Contact> last;
+    for (const Contact& c : all) {
+      if (rng() % 2 == 0) last.push_back(MakeContact(c.a, c.b, 2, rng() % 3, rng() % 3, Real(1 + rng() % 5)));
+    }
+    ContactCache cache;
+    cache.Store(last);
+    std::vector<Contact> expected = all;
+    std::sort(expected.begin(), expected.end(), [](const Contact& x, const Contact& y) { return x.Key() < y.Key(); });
+    cache.Restore(expected);
+    for (int parts : {1, 2, 4}) {
+      for (bool bySpace : {false, true}) {
+        WorkerLists<Contact> workerContacts;
+        workerContacts.Reset(parts);
+        std::vector<Contact> shuffled = all;
+        std::shuffle(shuffled.begin(), shuffled.end(), rng);
+        if (bySpace) {  // part p gets the p-th run of keys (the last part nothing when there are 4)
+          std::sort(shuffled.begin(), shuffled.end(), [](const Contact& x, const Contact& y) { return x.Key() < y.Key(); });
+          const int used = parts == 4 ? 3 : parts;
+          for (size_t i = 0; i < shuffled.size(); ++i) workerContacts[int(i * size_t(used) / shuffled.size())].push_back(shuffled[i]);
+          for (int p = 0; p < parts; ++p) std::shuffle(workerContacts[p].begin(), workerContacts[p].end(), rng);
+        } else {
+          for (size_t i = 0; i < shuffled.size(); ++i) workerContacts[int(i % size_t(parts))].push_back(shuffled[i]);
+        }
+        for (int threads : {1, 3}) {
+          auto pool = MakeThreadPool(threads);
+          StageRunner run(*pool, 8);
+          for (bool restore : {false, true}) {
+            ContactSorter sorter;
+            std::vector<Contact> contacts;
+            sorter.Sort(run, bodyCount, workerContacts, contacts, restore ? &cache : nullptr);
+            EXPECT_TRUE(sorter.StrictlyIncreasing());
+            ASSERT_EQ(contacts.size(), expected.size());
+            for (size_t i = 0; i < contacts.size(); ++i) {
+              ASSERT_EQ(contacts[i].Key(), expected[i].Key()) << bodyCount << " bodies, " << parts << " parts, " << i;
+              if (!restore) continue;
+              for (int k = 0; k < 2; ++k) {
+                ASSERT_EQ(contacts[i].manifold.points[k].normalImpulse, expected[i].manifold.points[k].normalImpulse) << i;
+                ASSERT_EQ(contacts[i].manifold.points[k].tangentImpulse, expected[i].manifold.points[k].tangentImpulse) << i;
+              }
+            }
+          }
+        }
+      }
+    }
+  }
+}
+
 // ---- The constraint graph's colouring ------------------------------------------------------------
 
 // The colouring as a list of (colour, contact) in colour order.
@@ -348,6 +550,30 @@ TEST(ConstraintGraph, ReusesTheColoringOnlyWhenTheEndsAreUnchanged) {
           }
         }
       }
+    }
+  }
+}
+
+// A pair reported twice (never by the broad phase) is still sorted, and the sorter says the
+// keys do not strictly increase, so the world stores a copy instead of keeping the list.
+TEST(ContactSort, ARepeatedPairIsReported) {
+  for (int bodyCount : {50, 20000}) {
+    for (int parts : {1, 2}) {
+      WorkerLists<Contact> workerContacts;
+      workerContacts.Reset(parts);
+      for (int a = 0; a < 40; ++a) workerContacts[a % parts].push_back(MakeContact(a, a + 1, 1, 0, 0, 0));
+      workerContacts[parts - 1].push_back(MakeContact(7, 8, 1, 0, 0, 0));  // (7, 8) again
+      auto pool = MakeThreadPool(parts);
+      StageRunner run(*pool, 4);
+      ContactSorter sorter;
+      std::vector<Contact> contacts;
+      sorter.Sort(run, bodyCount, workerContacts, contacts);
+      EXPECT_FALSE(sorter.StrictlyIncreasing()) << bodyCount << " bodies, " << parts << " parts";
+      ASSERT_EQ(contacts.size(), 41u);
+      for (size_t i = 1; i < contacts.size(); ++i) EXPECT_LE(contacts[i - 1].Key(), contacts[i].Key()) << i;
+      workerContacts[parts - 1].pop_back();
+      sorter.Sort(run, bodyCount, workerContacts, contacts);
+      EXPECT_TRUE(sorter.StrictlyIncreasing()) << bodyCount << " bodies, " << parts << " parts";
     }
   }
 }
