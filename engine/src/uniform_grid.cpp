@@ -40,6 +40,25 @@ class UniformGrid final : public BroadPhase {
     for (const auto& part : largePairs_) out.insert(out.end(), part.begin(), part.end());
   }
 
+  // The update runs in Extents, chunk by chunk, just before the chunk's boxes are read: one
+  // region for the whole broad phase instead of a parallel-for and then the region.
+  void UpdateAndFindPairs(std::span<const AABB> aabbs, std::span<const uint8_t> movable,
+                          std::vector<CandidatePair>& out, StageRunner& run, BoxUpdate update) override {
+    if (aabbs.size() < 2) {  // no region to run it in
+      run.Serial(Stage::kBroadPhase, [&] { update(0, static_cast<int>(aabbs.size())); });
+      out.clear();
+      return;
+    }
+    update_ = update;
+    try {
+      FindPairs(aabbs, movable, out, run);
+    } catch (...) {
+      update_ = {};
+      throw;
+    }
+    update_ = {};
+  }
+
   void BuildForQueries(std::span<const AABB> aabbs, StageRunner& run) override {
     // Every body counts as movable, so the region holds them all and no static is left out.
     all_.assign(aabbs.size(), 1);
@@ -224,6 +243,7 @@ class UniformGrid final : public BroadPhase {
   // extent and largest extent.
   void Extents(std::span<const AABB> aabbs, std::span<const uint8_t> movable, int c) {
     const int n = static_cast<int>(aabbs.size());
+    if (update_.fn) update_(c * kChunk, std::min(n, (c + 1) * kChunk));
     Partial p;
     for (int i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i) {
       extent_[i] = Real(Extent(aabbs[i]));
@@ -618,6 +638,7 @@ class UniformGrid final : public BroadPhase {
     }
   }
 
+  BoxUpdate update_;           // UpdateAndFindPairs: the caller's box update, run in Extents
   std::vector<uint8_t> all_;  // BuildForQueries: every body counts as movable
   bool ready_ = false;        // this build has a grid (some movable body, finite boxes)
   bool queryReady_ = false;
