@@ -12,12 +12,30 @@ void ConstraintGraph::Color(StageRunner& run, const StepContext& ctx, bool clear
   bodyColors_.resize(bodies.Count(), 0);  // all zero between steps
   ends_.resize(m);
   colorOf_.resize(m);
-  run.For(Stage::kSolve, m, run.MinHeavyItems(), [&](int begin, int end, int) {
+  // The colouring is a function of the sequence of dynamic ends alone, so where that sequence is
+  // last step's (a pile at rest keeps its contacts, in key order), last step's colouring is this
+  // step's, bit for bit, and the serial pass is skipped. The gather compares as it goes (each
+  // block counts its changed entries; ends_ keeps last step's until overwritten here).
+  const bool comparable = m == lastCount_ && m > 0;
+  changed_.assign(size_t(run.Workers()), 0);
+  run.For(Stage::kSolve, m, run.MinHeavyItems(), [&](int begin, int end, int worker) {
+    int changed = 0;
     for (int c = begin; c < end; ++c) {
       const int a = ctx.contacts[c].a, b = ctx.contacts[c].b;
-      ends_[c] = {bodies.inv[a].invMass > 0 ? a : -1, bodies.inv[b].invMass > 0 ? b : -1};
+      const std::pair<int, int> e{bodies.inv[a].invMass > 0 ? a : -1, bodies.inv[b].invMass > 0 ? b : -1};
+      changed += comparable && e != ends_[c] ? 1 : 0;
+      ends_[c] = e;
     }
+    changed_[size_t(worker)] += changed;
   });
+  lastCount_ = m;
+  bool same = comparable;
+  for (int changed : changed_) same = same && changed == 0;
+  ++colorings_;
+  if (same) {
+    ++reused_;
+    return;  // order_ and colorStart_ are last step's; the body masks were cleared after it
+  }
   run.Serial(Stage::kSolve, [&] {
     int counts[kColors + 1] = {};
     for (int c = 0; c < m; ++c) {

@@ -88,6 +88,12 @@ class ConstraintGraph {
   std::vector<TaskSystem::StagePlan> stagePlan_;  // ForEachColor's region: a stage per colour
   std::vector<int> stageFirst_;                   // the first item of each stage
   std::vector<std::pair<int, int>> ends_;         // per contact: its dynamic bodies, -1 for others
+  std::vector<int> changed_;                      // per worker: ends that differ from last step's
+  int lastCount_ = -1;                            // the contacts coloured last step (-1: none yet)
+
+ public:
+  // How many colourings were asked for and how many reused last step's (for the tests).
+  int64_t colorings_ = 0, reused_ = 0;
 };
 
 }  // namespace quadrant

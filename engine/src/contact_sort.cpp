@@ -12,12 +12,11 @@ namespace quadrant {
 // broad phase reports a pair once), so the order is the same whichever way it is reached:
 // every worker sorts its own contacts (in parallel), then the sorted parts are merged in
 // parallel, each worker producing one range of keys.
-void ContactSorter::Sort(StageRunner& run, int bodyCount, const std::vector<std::vector<Contact>>& workerContacts,
+void ContactSorter::Sort(StageRunner& run, int bodyCount, const WorkerLists<Contact>& workerContacts,
                          std::vector<Contact>& contacts) {
-  const int parts = static_cast<int>(workerContacts.size());
+  const int parts = workerContacts.Count();
   parts_.resize(parts);
-  size_t total = 0;
-  for (const std::vector<Contact>& part : workerContacts) total += part.size();
+  const size_t total = workerContacts.TotalSize();
   // Few contacts: one thread does it all (a parallel-for would cost more than it saves).
   const bool parallel = total >= size_t(run.MinHeavyItems());
   run.For(Stage::kPersistence, parts, parallel ? 1 : parts + 1, [&](int begin, int end, int) {

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "worker_lists.h"
 #include "world_internal.h"
 
 namespace quadrant {
@@ -12,7 +13,7 @@ namespace quadrant {
 class ContactSorter {
  public:
   /// Writes the contacts of all `workerContacts` lists into `contacts` in key order (a, b).
-  void Sort(StageRunner& run, int bodyCount, const std::vector<std::vector<Contact>>& workerContacts,
+  void Sort(StageRunner& run, int bodyCount, const WorkerLists<Contact>& workerContacts,
             std::vector<Contact>& contacts);
 
  private:
@@ -22,7 +23,8 @@ class ContactSorter {
     uint32_t index;
   };
   // One per worker: the radix sort's buffers and the worker's contacts in key order.
-  struct Part {
+  // Alone on its cache lines: the workers sort their parts at once (worker_lists.h says why).
+  struct alignas(kCacheLine) Part {
     std::vector<SortKey> keys, keyScratch;
     std::vector<uint32_t> radixCounts;
     std::vector<Contact> sorted;

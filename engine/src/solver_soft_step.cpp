@@ -304,6 +304,11 @@ class SoftStepSolver final : public Solver {
       {
         for (int gi = begin + gb; gi < begin + ge; ++gi) {
           SoftRowGroup& g = groups_[gi];
+          if constexpr (kLean && kRotation) {
+            const int first = graph_.ColorBegin(k) + (gi - begin) * kGroupRows;
+            FillLeanGroup(ctx, g, first, graph_.ColorBegin(k + 1), soft, staticSoft, massLimit);
+            continue;
+          }
           for (int lane = 0; lane < kGroupRows; ++lane) {
             const int c = graph_.ColorBegin(k) + (gi - begin) * kGroupRows + lane;
             if (c >= graph_.ColorBegin(k + 1)) {
@@ -472,6 +477,140 @@ class SoftStepSolver final : public Solver {
       p.tangentImpulse[lane] = mp.tangentImpulse;
       p.collisionImpulse[lane] = Real(0) * collisionShare_;  // no collisions without restitution
     }
+  }
+
+  // FillLeanLane for a whole group with rotation (the default): the per-lane part (bodies,
+  // masses, softness, the points' separations and impulses) lane by lane, then the points' lever
+  // arms and effective masses for all eight lanes at once (two halves of four with SSE2), with the
+  // same operations per lane in the same order, so the same row bit for bit (rows with a padded
+  // lane or point are padded afterwards, as FillLeanLane pads them). Base-100 pyramid: the lane
+  // fill was 237 instructions a contact, its four divisions a point pair a chain of scalar
+  // dependencies.
+  void FillLeanGroup(const StepContext& ctx, SoftRowGroup& g, int first, int colorEnd, const Softness& soft,
+                     const Softness& staticSoft, Real massLimit) {
+    const Bodies& bodies = *ctx.bodies;
+    const bool skinOn = ctx.def->polygonSkin > 0;
+    // The points and the bodies' centres of each lane; 1 in `limited` for a lane whose masses
+    // softMassRatioLimit scaled (its effective masses are computed from the scaled ones, as
+    // BuildRows does), and the lanes and points to pad afterwards.
+    alignas(32) Real px[2][kGroupRows] = {}, py[2][kGroupRows] = {};
+    alignas(32) Real cax[kGroupRows] = {}, cay[kGroupRows] = {}, cbx[kGroupRows] = {}, cby[kGroupRows] = {};
+    alignas(32) Real limitedLane[kGroupRows] = {};
+    unsigned padLane = 0, padPoint[2] = {0, 0};
+    for (int lane = 0; lane < kGroupRows; ++lane) {
+      const int c = first + lane;
+      if (c >= colorEnd) {
+        padLane |= 1u << lane;
+        continue;
+      }
+      const Contact& contact = contacts_[graph_.ContactOf(c)];
+      const int a = contact.a, b = contact.b;
+      const Vec2 n = contact.manifold.normal;
+      const Real invMassA = inv_[a].invMass, invMassB = inv_[b].invMass;
+      const Real invIA = inv_[a].invInertia, invIB = inv_[b].invInertia;
+      g.a[lane] = a;
+      g.b[lane] = b;
+      g.constraint[lane] = c;
+      g.nx[lane] = n.x;
+      g.ny[lane] = n.y;
+      g.friction[lane] = contact.friction;
+      Real mA = invMassA, iA = invIA, mB = invMassB, iB = invIB;
+      if (massLimit > 0 && invMassA > 0 && invMassB > 0) {  // as FillLeanLane
+        if (invMassA > massLimit * invMassB && supported_[a] == stamp_) {
+          const Real f = massLimit * invMassB / invMassA;
+          mA *= f;
+          iA *= f;
+          limitedLane[lane] = 1;
+        } else if (invMassB > massLimit * invMassA && supported_[b] == stamp_) {
+          const Real f = massLimit * invMassA / invMassB;
+          mB *= f;
+          iB *= f;
+          limitedLane[lane] = 1;
+        }
+      }
+      g.invMassA[lane] = mA;
+      g.invIA[lane] = iA;
+      g.invMassB[lane] = mB;
+      g.invIB[lane] = iB;
+      const Softness& s = (invMassA == 0 || invMassB == 0) ? staticSoft : soft;
+      g.biasRate[lane] = s.biasRate;
+      g.massScale[lane] = s.massScale;
+      g.impulseScale[lane] = s.impulseScale;
+      const Real skin = skinOn ? PolygonSkin(*ctx.def, bodies.shape[a].type == ShapeType::kPolygon,
+                                             bodies.shape[b].type == ShapeType::kPolygon)
+                               : Real(0);
+      const Vec2 ca = bodies.center[a], cb = bodies.center[b];
+      cax[lane] = ca.x;
+      cay[lane] = ca.y;
+      cbx[lane] = cb.x;
+      cby[lane] = cb.y;
+      const int count = contact.manifold.pointCount;
+      for (int pt = 0; pt < 2; ++pt) {
+        SoftPointRows& p = g.p[pt];
+        if (pt >= count) {
+          padPoint[pt] |= 1u << lane;
+          continue;
+        }
+        const ManifoldPoint& mp = contact.manifold.points[pt];
+        px[pt][lane] = mp.point.x;
+        py[pt][lane] = mp.point.y;
+        p.separation[lane] = mp.separation - skin;
+        p.normalImpulse[lane] = mp.normalImpulse;
+        p.tangentImpulse[lane] = mp.tangentImpulse;
+        p.collisionImpulse[lane] = Real(0) * collisionShare_;  // no collisions without restitution
+      }
+    }
+    for (int pt = 0; pt < 2; ++pt) {
+#if QUADRANT_SOFT_SIMD
+      for (int lane = 0; lane < kGroupRows; lane += 4) LeanPointMath<F4>(g, pt, lane, px[pt], py[pt], cax, cay, cbx, cby, limitedLane);
+#else
+      for (int lane = 0; lane < kGroupRows; ++lane) LeanPointMath<Real>(g, pt, lane, px[pt], py[pt], cax, cay, cbx, cby, limitedLane);
+#endif
+    }
+    for (int lane = 0; lane < kGroupRows; ++lane) {
+      if (padLane >> lane & 1u) {
+        PadLane(g, lane);
+        continue;
+      }
+      for (int pt = 0; pt < 2; ++pt) {
+        if (padPoint[pt] >> lane & 1u) PadPoint(g.p[pt], lane);
+      }
+    }
+  }
+
+  // FillLeanGroup's vector part for point `pt` of lanes [lane, lane + width of V): FillLeanLane's
+  // expressions for rA, rB and the two effective masses, with both of its formulas computed and
+  // the lane's one selected (an unlimited lane: (mA + mB) + (iA rnA rnA + iB rnB rnB), as
+  // PrepareContact sums it; a limited one: ((mA + mB) + iA rnA rnA) + iB rnB rnB, as BuildRows does).
+  template <class V>
+  [[gnu::always_inline]] static void LeanPointMath(SoftRowGroup& g, int pt, int lane, const Real* px, const Real* py,
+                                                   const Real* cax, const Real* cay, const Real* cbx, const Real* cby,
+                                                   const Real* limitedLane) {
+    const V z = Splat(Real(0), V{});
+    SoftPointRows& p = g.p[pt];
+    const V x = Load(px, lane, z), y = Load(py, lane, z);
+    const V rAx = x - Load(cax, lane, z), rAy = y - Load(cay, lane, z);
+    const V rBx = x - Load(cbx, lane, z), rBy = y - Load(cby, lane, z);
+    Store(p.rAx, lane, rAx);
+    Store(p.rAy, lane, rAy);
+    Store(p.rBx, lane, rBx);
+    Store(p.rBy, lane, rBy);
+    const V nx = Load(g.nx, lane, z), ny = Load(g.ny, lane, z);
+    const V tx = ny, ty = Neg(nx);  // RightPerp(n)
+    const V rnA = rAx * ny - rAy * nx, rnB = rBx * ny - rBy * nx;
+    const V rtA = rAx * ty - rAy * tx, rtB = rBx * ty - rBy * tx;
+    const V mA = Load(g.invMassA, lane, z), mB = Load(g.invMassB, lane, z);
+    const V iA = Load(g.invIA, lane, z), iB = Load(g.invIB, lane, z);
+    const V m = mA + mB;
+    const V knFree = m + (iA * rnA * rnA + iB * rnB * rnB);
+    const V ktFree = m + (iA * rtA * rtA + iB * rtB * rtB);
+    const V knLimited = m + iA * rnA * rnA + iB * rnB * rnB;
+    const V ktLimited = m + iA * rtA * rtA + iB * rtB * rtB;
+    const auto limited = Greater(Load(limitedLane, lane, z), z);
+    const V kn = Select(limited, knLimited, knFree), kt = Select(limited, ktLimited, ktFree);
+    const V one = Splat(Real(1), z);
+    Store(p.normalMass, lane, Masked(Greater(kn, z), Div(one, kn)));
+    Store(p.tangentMass, lane, Masked(Greater(kt, z), Div(one, kt)));
   }
 
   // Constraint c's bodies and inverse masses, read from its contact and the bodies (the prepared

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "contact_cache.h"
+#include "constraint_graph.h"
 #include "contact_constraints.h"
 #include "islands.h"
 #include "quadrant/world.h"
@@ -246,6 +247,107 @@ TEST(ContactSort, ContactsAreInKeyOrderForAnyThreadCount) {
       ASSERT_EQ(many[i].bodyA, one[i].bodyA) << threads << " threads, contact " << i;
       ASSERT_EQ(many[i].bodyB, one[i].bodyB) << threads << " threads, contact " << i;
       ASSERT_EQ(many[i].normalImpulses[0], one[i].normalImpulses[0]) << threads << " threads, contact " << i;
+    }
+  }
+}
+
+
+// ---- The constraint graph's colouring ------------------------------------------------------------
+
+// The colouring as a list of (colour, contact) in colour order.
+std::vector<std::pair<int, int>> Coloring(const ConstraintGraph& g) {
+  std::vector<std::pair<int, int>> out;
+  for (int k = 0; k <= ConstraintGraph::kColors; ++k) {
+    for (int i = g.ColorBegin(k); i < g.ColorBegin(k + 1); ++i) out.push_back({k, g.ContactOf(i)});
+  }
+  return out;
+}
+
+// A step whose contacts have last step's dynamic ends, in the same order, reuses last step's
+// colouring; any change (another body, a body turned static, one contact more) colours afresh,
+// and either way the colouring is the one a new graph computes, for 1 and 3 threads.
+TEST(ConstraintGraph, ReusesTheColoringOnlyWhenTheEndsAreUnchanged) {
+  WorldDef def;
+  Bodies bodies;
+  BodyDef ground;
+  ground.shape = ShapeDef::Box(50, Real(0.5));
+  AppendBody(bodies, ground, def, 0);
+  for (int i = 0; i < 60; ++i) {
+    BodyDef box;
+    box.type = BodyType::kDynamic;
+    box.position = {Real(i % 10), Real(1 + i / 10)};
+    box.shape = ShapeDef::Box(Real(0.5), Real(0.5));
+    AppendBody(bodies, box, def, uint32_t(i + 1));
+  }
+  std::mt19937 rng(3);
+  std::uniform_int_distribution<int> pick(0, 60);
+  std::vector<Contact> contacts;
+  for (int c = 0; c < 400; ++c) {
+    Contact k;
+    k.a = pick(rng);
+    k.b = pick(rng);
+    if (k.a == k.b) continue;
+    if (k.a > k.b) std::swap(k.a, k.b);
+    contacts.push_back(k);
+  }
+  for (int threads : {1, 3}) {
+    def.threadCount = threads;
+    auto tasks = MakeThreadPool(threads);
+    StageRunner run(*tasks, 8);
+    StepContext ctx;
+    ctx.def = &def;
+    ctx.bodies = &bodies;
+    auto fresh = [&](std::vector<Contact>& list) {
+      ConstraintGraph g;
+      ctx.contacts = list;
+      g.Color(run, ctx);
+      return Coloring(g);
+    };
+    ConstraintGraph graph;
+    auto colour = [&](std::vector<Contact>& list) {
+      ctx.contacts = list;
+      graph.Color(run, ctx);
+      return Coloring(graph);
+    };
+    std::vector<Contact> list = contacts;
+    EXPECT_EQ(colour(list), fresh(list));
+    EXPECT_EQ(graph.reused_, 0);
+    EXPECT_EQ(colour(list), fresh(list));  // the same ends: reused
+    EXPECT_EQ(graph.reused_, 1);
+    list[200].b = list[200].b == 60 ? 59 : 60;  // one end changed
+    if (list[200].a == list[200].b) list[200].a = 0;
+    EXPECT_EQ(colour(list), fresh(list));
+    EXPECT_EQ(graph.reused_, 1);
+    const Real mass = bodies.inv[list[10].a].invMass;
+    if (mass > 0) {  // a body becomes fixed: its end is no longer dynamic
+      bodies.inv[list[10].a].invMass = 0;
+      EXPECT_EQ(colour(list), fresh(list));
+      EXPECT_EQ(graph.reused_, 1);
+      bodies.inv[list[10].a].invMass = mass;
+    }
+    list.push_back(list[5]);  // one contact more
+    list.back().b = list.back().a == 1 ? 2 : 1;
+    EXPECT_EQ(colour(list), fresh(list));
+    list.pop_back();
+    EXPECT_EQ(colour(list), fresh(list));  // one fewer
+    const int64_t reused = graph.reused_;
+    EXPECT_EQ(colour(list), fresh(list));
+    EXPECT_EQ(graph.reused_, reused + 1);
+    // No two constraints of one colour share a dynamic body.
+    const auto all = Coloring(graph);
+    for (size_t i = 0; i < all.size(); ++i) {
+      for (size_t j = i + 1; j < all.size() && all[j].first == all[i].first; ++j) {
+        if (all[i].first == ConstraintGraph::kColors) break;
+        const Contact& x = list[all[i].second];
+        const Contact& y = list[all[j].second];
+        for (int u : {x.a, x.b}) {
+          for (int v : {y.a, y.b}) {
+            if (u == v) {
+              EXPECT_EQ(bodies.inv[u].invMass, 0) << "colour " << all[i].first;
+            }
+          }
+        }
+      }
     }
   }
 }
