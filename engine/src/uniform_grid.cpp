@@ -41,7 +41,10 @@ class UniformGrid final : public BroadPhase {
   }
 
   // The update runs in Extents, chunk by chunk, just before the chunk's boxes are read: one
-  // region for the whole broad phase instead of a parallel-for and then the region.
+  // region for the whole broad phase instead of a parallel-for and then the region. Circle
+  // stress 16000 at 2 threads (pool forced parallel, SCHED_FIFO, 11 rounds alternated with the
+  // range sort alone, medians of the rounds' ratios): the broad phase -2.7 %, the step -1.1 %,
+  // near the noise here; 1 thread +0.33 % instructions on circle stress 1000 (icount).
   void UpdateAndFindPairs(std::span<const AABB> aabbs, std::span<const uint8_t> movable,
                           std::vector<CandidatePair>& out, StageRunner& run, BoxUpdate update) override {
     if (aabbs.size() < 2) {  // no region to run it in
