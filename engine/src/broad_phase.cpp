@@ -10,6 +10,13 @@ void MergePairs(const WorkerLists<CandidatePair>& perWorker, std::vector<Candida
   for (int w = 0; w < perWorker.Count(); ++w) out.insert(out.end(), perWorker[w].begin(), perWorker[w].end());
 }
 
+void BroadPhase::UpdateAndFindPairs(std::span<const AABB> aabbs, std::span<const uint8_t> movable,
+                                    std::vector<CandidatePair>& out, StageRunner& run, BoxUpdate update) {
+  const int n = static_cast<int>(aabbs.size());
+  run.For(Stage::kBroadPhase, n, run.MinItems(), [&](int begin, int end, int) { update(begin, end); });
+  FindPairs(aabbs, movable, out, run);
+}
+
 bool SegmentTouchesBox(Vec2 p1, Vec2 p2, const AABB& box) {
   double t0 = 0, t1 = 1;
   const double p[2] = {p1.x, p1.y}, d[2] = {double(p2.x) - p1.x, double(p2.y) - p1.y};

@@ -32,6 +32,18 @@ class BroadPhase {
   /// (parallel sections write per-worker buffers that are concatenated in worker order).
   virtual void FindPairs(std::span<const AABB> aabbs, std::span<const uint8_t> movable,
                          std::vector<CandidatePair>& out, StageRunner& run) = 0;
+  /// The caller's update of the boxes, by reference: update(begin, end) brings aabbs[begin, end)
+  /// up to date (no other element).
+  struct BoxUpdate {
+    void (*fn)(const void* ctx, int begin, int end) = nullptr;
+    const void* ctx = nullptr;
+    void operator()(int begin, int end) const { fn(ctx, begin, end); }
+  };
+  /// FindPairs after update(begin, end) over every index (each once, before the broad phase
+  /// reads those boxes). This default runs the update as a parallel-for of its own; the grid
+  /// does it in its first stage, which saves the step a hand-over to the workers and a join.
+  virtual void UpdateAndFindPairs(std::span<const AABB> aabbs, std::span<const uint8_t> movable,
+                                  std::vector<CandidatePair>& out, StageRunner& run, BoxUpdate update);
   virtual const char* Name() const = 0;
 
   // Queries (World::QueryAABB, RayCastClosest, RayCastAll). A separate instance of the same

@@ -113,7 +113,7 @@ struct World::Impl {
   }
 
   void RunPipeline(Real dt);
-  void FindPairs();
+  void FindPairs(const BroadPhase::BoxUpdate* update = nullptr);
   void UpdateContactEvents();
   void PrepareQueries();
   BodyId IdOf(int i) const { return BodyId{bodies.slot[i], generation[bodies.slot[i]]}; }  // one pass of every stage
@@ -263,8 +263,12 @@ void World::StepRepeated(Real dt, int pipelineRepeats) {
   }
 }
 
-void World::Impl::FindPairs() {
-  broadPhase->FindPairs(bodies.aabb, bodies.dynamic, pairs, *run);
+void World::Impl::FindPairs(const BroadPhase::BoxUpdate* update) {
+  if (update) {
+    broadPhase->UpdateAndFindPairs(bodies.aabb, bodies.dynamic, pairs, *run, *update);
+  } else {
+    broadPhase->FindPairs(bodies.aabb, bodies.dynamic, pairs, *run);
+  }
   if (customFilters == 0) return;  // every body collides with everything: nothing to drop
   // Box2D's rule (world.h, Filter). Compacting in place keeps the pairs' deterministic order.
   run->Serial(Stage::kBroadPhase, [&] {
@@ -354,28 +358,36 @@ void World::Impl::RunPipeline(Real dt) {
   const int n = bodies.Count();
   auto t0 = Clock::now();
   const bool sleepOn = def.effects.sleep;
-  if (sleepOn) {
-    // Sleeping bodies keep the box they fell asleep with (awake is 0 for them and for statics).
-    run->For(Stage::kBroadPhase, n, run->MinItems(), [&](int begin, int end, int) {
-      for (int i = begin; i < end; ++i) {
-        if (bodies.awake[i]) UpdateAABB(i, dt);
+  // The boxes of [begin, end): sleeping bodies keep the box they fell asleep with (awake is 0
+  // for them and for statics).
+  struct Update {
+    Impl* w;
+    Real dt;
+    static void Run(const void* ctx, int begin, int end) {
+      const Update& u = *static_cast<const Update*>(ctx);
+      Bodies& bodies = u.w->bodies;
+      if (u.w->def.effects.sleep) {
+        for (int i = begin; i < end; ++i) {
+          if (bodies.awake[i]) u.w->UpdateAABB(i, u.dt);
+        }
+      } else {
+        for (int i = begin; i < end; ++i) {
+          if (bodies.type[i] != BodyType::kStatic) u.w->UpdateAABB(i, u.dt);
+        }
       }
-    });
-  } else {
-    run->For(Stage::kBroadPhase, n, run->MinItems(), [&](int begin, int end, int) {
-      for (int i = begin; i < end; ++i) {
-        if (bodies.type[i] != BodyType::kStatic) UpdateAABB(i, dt);
-      }
-    });
-  }
+    }
+  };
+  const Update update{this, dt};
+  const BroadPhase::BoxUpdate boxUpdate{&Update::Run, &update};
   if (quadrants) {
+    run->For(Stage::kBroadPhase, n, run->MinItems(), [&](int begin, int end, int) { boxUpdate(begin, end); });
     int pairCount = 0;
     profile.broadPhase += Ms(t0, Clock::now());  // the AABB update; the scheme times the rest
     quadrants->Step(dt, def, bodies, *run, cache, contacts, pairCount, profile);
     CountContacts(pairCount);
     return;
   }
-  FindPairs();
+  FindPairs(&boxUpdate);  // the boxes are updated inside (UpdateAndFindPairs)
   auto t1 = Clock::now();
   NarrowPhase(dt);
   auto t2 = Clock::now();

@@ -278,6 +278,47 @@ TEST_P(BroadPhaseTest, CrowdedCellsMatchBruteForceOnAnyThreadCount) {
   }
 }
 
+TEST_P(BroadPhaseTest, UpdateAndFindPairsUpdatesEveryBoxOnceBeforeReadingIt) {
+  // The caller's box update runs inside the broad phase (the grid: in its first stage, chunk by
+  // chunk, on any thread): every box is updated exactly once, and the pairs are those of the
+  // updated boxes, in FindPairs' order, on one thread and on three. Also for 1 and 0 bodies.
+  for (const int count : {0, 1, 700}) {
+    const Input target = RandomInput(11, count, Real(25));  // (it may add a huge box)
+    const int n = static_cast<int>(target.aabbs.size());
+    for (const int threads : {1, 3}) {
+      std::vector<CandidatePair> want;
+      FindAll(*GetParam().make(), target, &want, threads);
+      Input in = target;
+      for (AABB& b : in.aabbs) b = {{Real(-1e3), Real(-1e3)}, {Real(1e3), Real(1e3)}};  // stale: meets everything
+      struct Ctx {
+        const Input* target;
+        Input* in;
+        std::vector<int>* calls;
+      };
+      std::vector<int> calls(size_t(n), 0);
+      const Ctx ctx{&target, &in, &calls};
+      const BroadPhase::BoxUpdate update{[](const void* c, int begin, int end) {
+                                           const Ctx& x = *static_cast<const Ctx*>(c);
+                                           for (int i = begin; i < end; ++i) {
+                                             x.in->aabbs[i] = x.target->aabbs[i];
+                                             ++(*x.calls)[i];  // each index in one chunk only
+                                           }
+                                         },
+                                         &ctx};
+      std::unique_ptr<TaskSystem> tasks = MakeThreadPool(threads);
+      StageRunner run(*tasks, 1);
+      std::vector<CandidatePair> got = {{7, 3}};
+      auto bp = GetParam().make();
+      bp->UpdateAndFindPairs(in.aabbs, in.movable, got, run, update);
+      for (int i = 0; i < n; ++i) ASSERT_EQ(calls[i], 1) << GetParam().name << " body " << i << " of " << n;
+      ASSERT_EQ(got.size(), want.size()) << GetParam().name << " n " << n << " threads " << threads;
+      for (size_t k = 0; k < got.size(); ++k) {
+        ASSERT_TRUE(got[k].a == want[k].a && got[k].b == want[k].b) << GetParam().name << " pair " << k;
+      }
+    }
+  }
+}
+
 INSTANTIATE_TEST_SUITE_P(Both, BroadPhaseTest,
                          ::testing::Values(Factory{"QuadTree", &MakeQt}, Factory{"UniformGrid", &MakeGrid}),
                          [](const ::testing::TestParamInfo<Factory>& info) { return std::string(info.param.name); });
