@@ -462,7 +462,7 @@ class UniformGrid final : public BroadPhase {
   // reads every key once per range; one thread keeps the serial sort).
   void Split() {
     large_.clear();  // blocks are in index order, so the oversized bodies are too
-    for (const std::vector<int>& part : largePart_) large_.insert(large_.end(), part.begin(), part.end());
+    for (int b = 0; b < largePart_.Count(); ++b) large_.insert(large_.end(), largePart_[b].begin(), largePart_[b].end());
     const int digits = 1 << keyBits_;
     rangeKey_.assign(ranges_ + 1, std::numeric_limits<int>::max());
     rangeBegin_.assign(ranges_ + 1, 0);
