@@ -414,36 +414,8 @@ class SoftStepSolver final : public Solver {
     const Vec2 n = contact.manifold.normal;
     const Real invMassA = inv_[a].invMass, invMassB = inv_[b].invMass;
     const Real invIA = kRotation ? inv_[a].invInertia : Real(0), invIB = kRotation ? inv_[b].invInertia : Real(0);
-    g.a[lane] = a;
-    g.b[lane] = b;
-    g.constraint[lane] = c;
-    g.nx[lane] = n.x;
-    g.ny[lane] = n.y;
-    g.friction[lane] = contact.friction;
-    Real mA = invMassA, iA = invIA, mB = invMassB, iB = invIB;
-    // WorldDef::softMassRatioLimit, as BuildRows says.
-    bool limited = false;
-    if (massLimit > 0 && invMassA > 0 && invMassB > 0) {
-      if (invMassA > massLimit * invMassB && supported_[a] == stamp_) {
-        const Real f = massLimit * invMassB / invMassA;
-        mA *= f;
-        iA *= f;
-        limited = true;
-      } else if (invMassB > massLimit * invMassA && supported_[b] == stamp_) {
-        const Real f = massLimit * invMassA / invMassB;
-        mB *= f;
-        iB *= f;
-        limited = true;
-      }
-    }
-    g.invMassA[lane] = mA;
-    g.invIA[lane] = iA;
-    g.invMassB[lane] = mB;
-    g.invIB[lane] = iB;
-    const Softness& s = (invMassA == 0 || invMassB == 0) ? staticSoft : soft;
-    g.biasRate[lane] = s.biasRate;
-    g.massScale[lane] = s.massScale;
-    g.impulseScale[lane] = s.impulseScale;
+    const bool limited = FillLaneEnds<kRotation>(g, lane, c, contact, soft, staticSoft, massLimit);
+    const Real mA = g.invMassA[lane], iA = g.invIA[lane], mB = g.invMassB[lane], iB = g.invIB[lane];
     const Real skin = ctx.def->polygonSkin > 0 ? PolygonSkin(*ctx.def, bodies.shape[a].type == ShapeType::kPolygon,
                                                              bodies.shape[b].type == ShapeType::kPolygon)
                                                : Real(0);
@@ -487,6 +459,48 @@ class SoftStepSolver final : public Solver {
     }
   }
 
+  // The part of a lean row's lane that does not depend on its points: bodies, normal, friction,
+  // inverse masses (with WorldDef::softMassRatioLimit, as BuildRows says) and softness. Returns
+  // whether the limit scaled the lane's masses.
+  template <bool kRotation>
+  [[gnu::always_inline]] bool FillLaneEnds(SoftRowGroup& g, int lane, int c, const Contact& contact, const Softness& soft,
+                                           const Softness& staticSoft, Real massLimit) {
+    const int a = contact.a, b = contact.b;
+    const Vec2 n = contact.manifold.normal;
+    const Real invMassA = inv_[a].invMass, invMassB = inv_[b].invMass;
+    const Real invIA = kRotation ? inv_[a].invInertia : Real(0), invIB = kRotation ? inv_[b].invInertia : Real(0);
+    g.a[lane] = a;
+    g.b[lane] = b;
+    g.constraint[lane] = c;
+    g.nx[lane] = n.x;
+    g.ny[lane] = n.y;
+    g.friction[lane] = contact.friction;
+    Real mA = invMassA, iA = invIA, mB = invMassB, iB = invIB;
+    bool limited = false;
+    if (massLimit > 0 && invMassA > 0 && invMassB > 0) {
+      if (invMassA > massLimit * invMassB && supported_[a] == stamp_) {
+        const Real f = massLimit * invMassB / invMassA;
+        mA *= f;
+        iA *= f;
+        limited = true;
+      } else if (invMassB > massLimit * invMassA && supported_[b] == stamp_) {
+        const Real f = massLimit * invMassA / invMassB;
+        mB *= f;
+        iB *= f;
+        limited = true;
+      }
+    }
+    g.invMassA[lane] = mA;
+    g.invIA[lane] = iA;
+    g.invMassB[lane] = mB;
+    g.invIB[lane] = iB;
+    const Softness& s = (invMassA == 0 || invMassB == 0) ? staticSoft : soft;
+    g.biasRate[lane] = s.biasRate;
+    g.massScale[lane] = s.massScale;
+    g.impulseScale[lane] = s.impulseScale;
+    return limited;
+  }
+
   // FillLeanLane for a whole group with rotation (the default): the per-lane part (bodies,
   // masses, softness, the points' separations and impulses) lane by lane, then the points' lever
   // arms and effective masses for all eight lanes at once (two halves of four with SSE2), with the
@@ -513,37 +527,7 @@ class SoftStepSolver final : public Solver {
       }
       const Contact& contact = contacts_[graph_.ContactOf(c)];
       const int a = contact.a, b = contact.b;
-      const Vec2 n = contact.manifold.normal;
-      const Real invMassA = inv_[a].invMass, invMassB = inv_[b].invMass;
-      const Real invIA = inv_[a].invInertia, invIB = inv_[b].invInertia;
-      g.a[lane] = a;
-      g.b[lane] = b;
-      g.constraint[lane] = c;
-      g.nx[lane] = n.x;
-      g.ny[lane] = n.y;
-      g.friction[lane] = contact.friction;
-      Real mA = invMassA, iA = invIA, mB = invMassB, iB = invIB;
-      if (massLimit > 0 && invMassA > 0 && invMassB > 0) {  // as FillLeanLane
-        if (invMassA > massLimit * invMassB && supported_[a] == stamp_) {
-          const Real f = massLimit * invMassB / invMassA;
-          mA *= f;
-          iA *= f;
-          limitedLane[lane] = 1;
-        } else if (invMassB > massLimit * invMassA && supported_[b] == stamp_) {
-          const Real f = massLimit * invMassA / invMassB;
-          mB *= f;
-          iB *= f;
-          limitedLane[lane] = 1;
-        }
-      }
-      g.invMassA[lane] = mA;
-      g.invIA[lane] = iA;
-      g.invMassB[lane] = mB;
-      g.invIB[lane] = iB;
-      const Softness& s = (invMassA == 0 || invMassB == 0) ? staticSoft : soft;
-      g.biasRate[lane] = s.biasRate;
-      g.massScale[lane] = s.massScale;
-      g.impulseScale[lane] = s.impulseScale;
+      if (FillLaneEnds<true>(g, lane, c, contact, soft, staticSoft, massLimit)) limitedLane[lane] = 1;
       const Real skin = skinOn ? PolygonSkin(*ctx.def, bodies.shape[a].type == ShapeType::kPolygon,
                                              bodies.shape[b].type == ShapeType::kPolygon)
                                : Real(0);
