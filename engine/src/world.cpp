@@ -13,6 +13,7 @@
 #include "integrate.h"
 #include "islands.h"
 #include "narrow_phase.h"
+#include "pair_cache.h"
 #include "queries.h"
 #include "quadrant/task_system.h"
 #include "quadrants_scheme.h"
@@ -65,6 +66,7 @@ struct World::Impl {
   std::unique_ptr<TaskSystem> tasks;
   std::unique_ptr<StageRunner> run;
   std::unique_ptr<BroadPhase> broadPhase;
+  PairCache pairCache;  // the broad phase's pairs reused while the bodies rest (WorldDef::reusePairs)
   std::unique_ptr<Solver> solver;
   std::unique_ptr<QuadrantsScheme> quadrants;  // only for ParallelScheme::kQuadrants
   WorkerLists<Contact> workerContacts;  // the narrow phase's output, per worker
@@ -264,7 +266,9 @@ void World::StepRepeated(Real dt, int pipelineRepeats) {
 }
 
 void World::Impl::FindPairs(const BroadPhase::BoxUpdate* update) {
-  if (update) {
+  if (update && def.reusePairs && !def.effects.sleep) {
+    pairCache.UpdateAndFindPairs(*broadPhase, bodies.aabb, bodies.dynamic, pairs, *run, *update);
+  } else if (update) {
     broadPhase->UpdateAndFindPairs(bodies.aabb, bodies.dynamic, pairs, *run, *update);
   } else {
     broadPhase->FindPairs(bodies.aabb, bodies.dynamic, pairs, *run);

@@ -271,6 +271,11 @@ struct WorldDef {
   /// only to exercise threading on small scenes (the tests do). >= 1.
   int minParallelItems = 2048;
   int quadTreeMaxDepth = 8;             ///< quad-tree levels below the root, 1..12
+  /// Reuse the broad phase's pairs while every body stays within 0.1 m of where they were found
+  /// (engine/src/pair_cache.h): the same pairs, so the same results bit for bit, at a fraction of
+  /// the broad phase's cost on a resting pile. Off: the broad phase runs every step (for tests
+  /// and measurement). Not used with sleep on or the quadrants scheme.
+  bool reusePairs = true;
   // Sleep settings (used only when effects.sleep is on), Box2D 2.4's defaults. A body is slow
   // while its speed is at most linearSleepTolerance and its angular speed at most
   // angularSleepTolerance; an island sleeps once all its bodies have been slow for timeToSleep.
