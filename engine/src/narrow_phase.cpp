@@ -379,12 +379,14 @@ template <int kA, int kB>
 // the four-lane searches one after the other (590 in SSE2's encoding); 439 with the eight-lane
 // search and ArgMaxFour; 413 with the relative transforms below (the transforms by reference);
 // 403 with ClipToTwo; 394 with ClipPolygons taking the transforms by reference.
-// Into `m`, which must hold no point (a default Manifold; left so when the boxes are apart):
-// the pair loop passes its output list's entry, so the manifold is written where it stays
-// (narrow_pair_loop.inc says why).
+// Into the manifold dest() gives (one that holds no point yet), asked for only once the
+// separating-axis tests have passed: the pair loop's dest() appends its output list's entry, so
+// the manifold is written where it stays (narrow_pair_loop.inc says why) and a pair of boxes
+// that are apart (most pairs of a sparse scene) costs the list nothing.
+template <class Dest>
 [[gnu::target("avx"), gnu::always_inline]] inline void CollideBoxesVexInto(const Polygon& a, const Transform& xfA,
                                                                         const Polygon& b, const Transform& xfB,
-                                                                        Real speculative, Manifold& m) {
+                                                                        Real speculative, Dest&& dest) {
   // InvMulTransforms(xfA, xfB) in lanes 0-1 and InvMulTransforms(xfB, xfA) in lanes 2-3, the
   // same products and sums (a - b is a + (-b) exactly, so the sign flips are exact): bInA and
   // aInB from one load of each transform ([p.x, p.y, q.c, q.s]) instead of unpacking two
@@ -439,14 +441,14 @@ template <int kA, int kB>
   _mm256_store_ps(&verts[0].x, _mm256_permute2f128_ps(lo, hi, 0x20));
   _mm256_store_ps(&verts[4].x, _mm256_permute2f128_ps(lo, hi, 0x31));
   ClipPolygons<4, 4>(a, xfA, b, xfB, speculative, sepA, edgeA, sepB, edgeB, verts + 4, verts, Rot{q[0], q[1]},
-                     Rot{q[2], q[3]}, m);
+                     Rot{q[2], q[3]}, dest());
 }
 
 [[gnu::target("avx"), gnu::always_inline]] inline Manifold CollideBoxesVexInline(const Polygon& a, const Transform& xfA,
                                                                               const Polygon& b, const Transform& xfB,
                                                                               Real speculative) {
   Manifold m;
-  CollideBoxesVexInto(a, xfA, b, xfB, speculative, m);
+  CollideBoxesVexInto(a, xfA, b, xfB, speculative, [&]() -> Manifold& { return m; });
   return m;
 }
 
@@ -516,10 +518,16 @@ Manifold Collide(const ShapeDef& a, Transform xfA, const ShapeDef& b, Transform 
 // (the box collider inlined) and for the rest (the SSE2 box collider called).
 namespace {
 
+// The pair loop's box collider: appends the pair's entry to `out` with its manifold and returns
+// it, or returns nullptr (and appends nothing) when the collider finds no point.
 struct CallBoxes {
-  void operator()(const Polygon& a, const Transform& xfA, const Polygon& b, const Transform& xfB, Real spec,
-                  Manifold& m) const {
-    m = CollideBoxes(a, xfA, b, xfB, spec);
+  Contact* operator()(const Polygon& a, const Transform& xfA, const Polygon& b, const Transform& xfB, Real spec,
+                      std::vector<Contact>& out) const {
+    const Manifold m = CollideBoxes(a, xfA, b, xfB, spec);
+    if (m.pointCount == 0) return nullptr;
+    Contact& c = out.emplace_back();
+    c.manifold = m;
+    return &c;
   }
 };
 
@@ -529,9 +537,16 @@ namespace pairs_default {
 
 #if QUADRANT_NARROW_SIMD && defined(__x86_64__) && defined(__GNUC__)
 struct VexBoxes {
-  [[gnu::target("avx"), gnu::always_inline]] void operator()(const Polygon& a, const Transform& xfA, const Polygon& b,
-                                                               const Transform& xfB, Real spec, Manifold& m) const {
-    CollideBoxesVexInto(a, xfA, b, xfB, spec, m);
+  // CallBoxes' contract; the entry is appended before the clip, which may still find no point.
+  [[gnu::target("avx"), gnu::always_inline]] Contact* operator()(const Polygon& a, const Transform& xfA,
+                                                                   const Polygon& b, const Transform& xfB, Real spec,
+                                                                   std::vector<Contact>& out) const {
+    Contact* c = nullptr;
+    CollideBoxesVexInto(a, xfA, b, xfB, spec, [&]() -> Manifold& {
+      c = &out.emplace_back();
+      return c->manifold;
+    });
+    return c;
   }
 };
 
