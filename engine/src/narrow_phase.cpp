@@ -259,9 +259,10 @@ inline Real MaxSeparationFour(const Polygon& a, Four b, int* edgeOut) {
 // other's frame and the best face of each (edge, separation), picks the reference face, finds the
 // incident edge and clips it. Shared by the general search below and the boxes' eight-lane one.
 template <int kA, int kB>
-[[gnu::always_inline]] inline void ClipPolygons(const Polygon& a, const Transform& xfA, const Polygon& b, const Transform& xfB,
-                                                Real speculative, Real sepA, int edgeA, Real sepB, int edgeB,
-                                                const Vec2* aVerts, const Vec2* bVerts, Rot bInAq, Rot aInBq, Manifold& m) {
+[[gnu::always_inline]] inline Manifold ClipPolygons(const Polygon& a, const Transform& xfA, const Polygon& b, const Transform& xfB,
+                                                    Real speculative, Real sepA, int edgeA, Real sepB, int edgeB,
+                                                    const Vec2* aVerts, const Vec2* bVerts, Rot bInAq, Rot aInBq) {
+  Manifold m;
   const bool flip = sepB > sepA + kAxisPreference;
   const Polygon& ref = flip ? b : a;
   const Polygon& inc = flip ? a : b;
@@ -307,11 +308,11 @@ template <int kA, int kB>
   if constexpr (kA == 4 && kB == 4) {
     // Boxes: the two-point clip on values (the general path keeps ClipSegment, so the box paths'
     // comparison with it in NarrowPhaseBoxes checks this one too).
-    if (!ClipToTwo(clip1[0], clip1[1], incident[0], incident[1], -tangent, -Dot(tangent, r1), 0)) return;
-    if (!ClipToTwo(clip2[0], clip2[1], clip1[0], clip1[1], tangent, Dot(tangent, r2), 1)) return;
+    if (!ClipToTwo(clip1[0], clip1[1], incident[0], incident[1], -tangent, -Dot(tangent, r1), 0)) return m;
+    if (!ClipToTwo(clip2[0], clip2[1], clip1[0], clip1[1], tangent, Dot(tangent, r2), 1)) return m;
   } else {
-    if (ClipSegment(clip1, incident, -tangent, -Dot(tangent, r1), 0) < 2) return;
-    if (ClipSegment(clip2, clip1, tangent, Dot(tangent, r2), 1) < 2) return;
+    if (ClipSegment(clip1, incident, -tangent, -Dot(tangent, r1), 0) < 2) return m;
+    if (ClipSegment(clip2, clip1, tangent, Dot(tangent, r2), 1) < 2) return m;
   }
 
   m.normal = Rotate(refXf.q, flip ? -refNormal : refNormal);
@@ -329,6 +330,7 @@ template <int kA, int kB>
     mp.id = idBase | ((cv.feature & 0xFFu) << 8);
   }
   m.pointCount = count;
+  return m;
 }
 
 template <int kA, int kB>
@@ -362,9 +364,7 @@ template <int kA, int kB>
     sepB = MaxSeparation<kB, kA>(b, aVerts, aCount, &edgeB);
     if (sepB > speculative) return Manifold{};
   }
-  Manifold m;
-  ClipPolygons<kA, kB>(a, xfA, b, xfB, speculative, sepA, edgeA, sepB, edgeB, aVerts, bVerts, bInA.q, aInB.q, m);
-  return m;
+  return ClipPolygons<kA, kB>(a, xfA, b, xfB, speculative, sepA, edgeA, sepB, edgeB, aVerts, bVerts, bInA.q, aInB.q);
 }
 
 #if QUADRANT_NARROW_SIMD && defined(__x86_64__) && defined(__GNUC__)
@@ -379,14 +379,9 @@ template <int kA, int kB>
 // the four-lane searches one after the other (590 in SSE2's encoding); 439 with the eight-lane
 // search and ArgMaxFour; 413 with the relative transforms below (the transforms by reference);
 // 403 with ClipToTwo; 394 with ClipPolygons taking the transforms by reference.
-// Into the manifold dest() gives (one that holds no point yet), asked for only once the
-// separating-axis tests have passed: the pair loop's dest() appends its output list's entry, so
-// the manifold is written where it stays (narrow_pair_loop.inc says why) and a pair of boxes
-// that are apart (most pairs of a sparse scene) costs the list nothing.
-template <class Dest>
-[[gnu::target("avx"), gnu::always_inline]] inline void CollideBoxesVexInto(const Polygon& a, const Transform& xfA,
-                                                                        const Polygon& b, const Transform& xfB,
-                                                                        Real speculative, Dest&& dest) {
+[[gnu::target("avx"), gnu::always_inline]] inline Manifold CollideBoxesVexInline(const Polygon& a, const Transform& xfA,
+                                                                              const Polygon& b, const Transform& xfB,
+                                                                              Real speculative) {
   // InvMulTransforms(xfA, xfB) in lanes 0-1 and InvMulTransforms(xfB, xfA) in lanes 2-3, the
   // same products and sums (a - b is a + (-b) exactly, so the sign flips are exact): bInA and
   // aInB from one load of each transform ([p.x, p.y, q.c, q.s]) instead of unpacking two
@@ -432,24 +427,16 @@ template <class Dest>
 #undef QUADRANT_BOX_VERTEX
   Real sepA, sepB;
   const int edgeA = ArgMaxFour(_mm256_castps256_ps128(minDot), &sepA);
-  if (sepA > speculative) return;
+  if (sepA > speculative) return Manifold{};
   const int edgeB = ArgMaxFour(_mm256_extractf128_ps(minDot, 1), &sepB);
-  if (sepB > speculative) return;
+  if (sepB > speculative) return Manifold{};
   // StoreFour in each half: b's vertices (in a's frame) and a's (in b's) as Vec2 arrays.
   alignas(32) Vec2 verts[8];
   const __m256 lo = _mm256_unpacklo_ps(tx, ty), hi = _mm256_unpackhi_ps(tx, ty);
   _mm256_store_ps(&verts[0].x, _mm256_permute2f128_ps(lo, hi, 0x20));
   _mm256_store_ps(&verts[4].x, _mm256_permute2f128_ps(lo, hi, 0x31));
-  ClipPolygons<4, 4>(a, xfA, b, xfB, speculative, sepA, edgeA, sepB, edgeB, verts + 4, verts, Rot{q[0], q[1]},
-                     Rot{q[2], q[3]}, dest());
-}
-
-[[gnu::target("avx"), gnu::always_inline]] inline Manifold CollideBoxesVexInline(const Polygon& a, const Transform& xfA,
-                                                                              const Polygon& b, const Transform& xfB,
-                                                                              Real speculative) {
-  Manifold m;
-  CollideBoxesVexInto(a, xfA, b, xfB, speculative, [&]() -> Manifold& { return m; });
-  return m;
+  return ClipPolygons<4, 4>(a, xfA, b, xfB, speculative, sepA, edgeA, sepB, edgeB, verts + 4, verts, Rot{q[0], q[1]},
+                            Rot{q[2], q[3]});
 }
 
 [[gnu::target("avx"), gnu::noinline]] Manifold CollideBoxesVex(const Polygon& a, const Transform& xfA, const Polygon& b,
@@ -518,16 +505,9 @@ Manifold Collide(const ShapeDef& a, Transform xfA, const ShapeDef& b, Transform 
 // (the box collider inlined) and for the rest (the SSE2 box collider called).
 namespace {
 
-// The pair loop's box collider: appends the pair's entry to `out` with its manifold and returns
-// it, or returns nullptr (and appends nothing) when the collider finds no point.
 struct CallBoxes {
-  Contact* operator()(const Polygon& a, const Transform& xfA, const Polygon& b, const Transform& xfB, Real spec,
-                      std::vector<Contact>& out) const {
-    const Manifold m = CollideBoxes(a, xfA, b, xfB, spec);
-    if (m.pointCount == 0) return nullptr;
-    Contact& c = out.emplace_back();
-    c.manifold = m;
-    return &c;
+  Manifold operator()(const Polygon& a, const Transform& xfA, const Polygon& b, const Transform& xfB, Real spec) const {
+    return CollideBoxes(a, xfA, b, xfB, spec);
   }
 };
 
@@ -537,16 +517,9 @@ namespace pairs_default {
 
 #if QUADRANT_NARROW_SIMD && defined(__x86_64__) && defined(__GNUC__)
 struct VexBoxes {
-  // CallBoxes' contract; the entry is appended before the clip, which may still find no point.
-  [[gnu::target("avx"), gnu::always_inline]] Contact* operator()(const Polygon& a, const Transform& xfA,
-                                                                   const Polygon& b, const Transform& xfB, Real spec,
-                                                                   std::vector<Contact>& out) const {
-    Contact* c = nullptr;
-    CollideBoxesVexInto(a, xfA, b, xfB, spec, [&]() -> Manifold& {
-      c = &out.emplace_back();
-      return c->manifold;
-    });
-    return c;
+  [[gnu::target("avx"), gnu::always_inline]] Manifold operator()(const Polygon& a, const Transform& xfA, const Polygon& b,
+                                                                   const Transform& xfB, Real spec) const {
+    return CollideBoxesVexInline(a, xfA, b, xfB, spec);
   }
 };
 
