@@ -90,8 +90,9 @@ class StageRunner {
   /// Runs the stages of `plan` in order as one region (TaskSystem::ParallelStages): fn(stage,
   /// begin, end) over each stage's items, which must be independent of each other within a
   /// stage. A region of fewer than minParallel items in all runs inline on the caller. The
-  /// load-balance bound counts per stage the larger of its largest chunk and its work shared
-  /// evenly (chunks are claimed dynamically, so no thread's share is fixed in advance). A pool
+  /// load-balance bound counts per stage the larger of its largest chunk (or run of chunks that
+  /// one thread claimed together, timed as one) and its work shared evenly (chunks are claimed
+  /// dynamically, so no thread's share is fixed in advance). A pool
   /// that runs a region on the caller alone (a busy machine) still calls it chunk by chunk.
   template <class Fn>
   void Stages(Stage stage, const std::vector<TaskSystem::StagePlan>& plan, int minParallel, Fn&& fn) {

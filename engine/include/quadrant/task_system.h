@@ -16,7 +16,9 @@
 // - ParallelStages(stages, plan, fn) runs stage 0, then stage 1, ... in order (every call of a
 //   stage returns before any call of the next begins), each stage's [0, plan[s].count) cut into
 //   StageChunks(plan[s].count, plan[s].grain, WorkerCount()) contiguous chunks, fn(stage, begin,
-//   end, chunk) once per chunk. It is for stages whose items are independent of each other
+//   end, chunk) once per run of consecutive chunks (a run may be one chunk or several; `chunk`
+//   is its first, [begin, end) all of its items), every chunk in exactly one run. It is for
+//   stages whose items are independent of each other
 //   (a solver colour's constraints, a body range): which thread runs a chunk is never fixed, and
 //   a pool may run a whole region on the caller alone, so fn's results must not depend on who
 //   runs it. One region costs one hand-over to the workers, however many stages it has.
