@@ -265,7 +265,7 @@ class SoftStepSolver final : public Solver {
     } else {
       rows();
       ti = Clock::now();
-      run.For(Stage::kIntegrate, count, run.MinItems(), [&](int b, int e, int) { MoveFreeBodies(bodies, def, ctx.dt, b, e); });
+      run.Dynamic(Stage::kIntegrate, count, run.MinItems(), kBodyGrain, [&](int b, int e) { MoveFreeBodies(bodies, def, ctx.dt, b, e); });
       integrateMs += Ms(ti, Clock::now());
     }
     // After the free bodies' pass, not in the rows' part: MoveFour reads the transforms of all
@@ -901,7 +901,7 @@ class SoftStepSolver final : public Solver {
     const int count = bodies.Count();
     states_.resize(count);
     inRows_.resize(count + kFlagPad);  // padded: the scans below read several flags at a time
-    run.For(Stage::kIntegrate, count, run.MinItems(), [&](int b, int e, int) {
+    run.Dynamic(Stage::kIntegrate, count, run.MinItems(), kBodyGrain, [&](int b, int e) {
       graph_.ClearColors(b, e);
       // Raw pointers: with the vectors' own, every store reloaded their data pointers.
       const BodyInverseMass* inv = bodies.inv.data();
@@ -958,7 +958,7 @@ class SoftStepSolver final : public Solver {
     // need no snapshot (MoveFree).
     center0_.resize(count);
     rot0_.resize(count);
-    run.For(Stage::kIntegrate, ActiveCount(), run.MinItems(), [&](int b, int e, int) {
+    run.Dynamic(Stage::kIntegrate, ActiveCount(), run.MinItems(), kBodyGrain, [&](int b, int e) {
       for (int k = b; k < e; ++k) {
         const int i = active_[k];
         if (bodies.inv[i].invMass != 0) states_[i] = SolverBody{bodies.vel[i].v, bodies.vel[i].w, 0, Vec2{}, Rot{}};
@@ -1165,7 +1165,7 @@ class SoftStepSolver final : public Solver {
     // Split from MinHeavyItems bodies on: the rows' bodies are scattered over the arrays, so each
     // costs cache misses more than arithmetic (circle stress N = 16000, 1 thread: 1.5 % of the
     // step's cycles for about 1000 bodies, perf).
-    run.For(Stage::kIntegrate, ActiveCount(), run.MinHeavyItems(), [&](int b, int e, int) {
+    run.Dynamic(Stage::kIntegrate, ActiveCount(), run.MinHeavyItems(), kBodyGrain / 4, [&](int b, int e) {
       for (int k = b; k < e; ++k) {
         const int i = active_[k];
         if (!Moves(bodies, i, sleep)) continue;
