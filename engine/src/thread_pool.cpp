@@ -71,7 +71,8 @@
 //   148 -> 112; ms a step 1.377, 1.508, 1.347, 1.263, 1.521, 1.329, 1.316, 1.408 against 1.245,
 //   1.236, 1.229, 1.272, 1.631 (a noisy run), 1.279, 1.225, 1.265. A run's items are independent
 //   like a chunk's (task_system.h), so the results are the same bits. A ParallelFor's blocks
-//   stay one a claim: their index picks a per-block output.
+//   stay one a claim: their index picks a per-block output; so do the chunks of a region with a
+//   stage whose plan says runs = false (StageRunner::Beside's, whose first chunk is its lone part).
 // - The caller runs jobs alone while the machine is busy. A preempted worker that holds a chunk
 //   stalls the stage until the scheduler runs it again, a time slice later; with one busy loop
 //   on two cores that happens every few milliseconds, and no chunk size avoids it (a claimed
@@ -715,7 +716,11 @@ class ThreadPool final : public TaskSystem {
     failed_.store(false, std::memory_order_relaxed);
     done_.store(0, std::memory_order_relaxed);
     tag_ = (tag_ + 1) & (kRunsTag - 1);
-    if (!rangeFn_) tag_ |= kRunsTag;  // a region: its stages are claimed in runs of chunks
+    if (!rangeFn_) {  // a region: its stages are claimed in runs of chunks, unless one says not
+      bool runs = true;
+      for (int s = 0; s < stages; ++s) runs = runs && plan_[s].runs;
+      if (runs) tag_ |= kRunsTag;
+    }
     claim_.store(Pack(tag_, first, 0, chunks_[first]), std::memory_order_seq_cst);
     jobWord_.fetch_add(1, std::memory_order_seq_cst);
     if (jobSleepers_.load(std::memory_order_seq_cst) > 0) WakeAll(jobWord_);

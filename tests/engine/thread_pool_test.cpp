@@ -336,6 +336,31 @@ TEST(ThreadPoolTest, StagesRunInOrderAndCoverEveryItemOnce) {
   }
 }
 
+// A region with a stage whose plan says runs = false: there every call is one chunk (or the whole
+// stage, when the region runs on the caller alone), never a run of several.
+TEST(ThreadPoolTest, AStageWithoutRunsIsCalledChunkByChunk) {
+  const std::vector<TaskSystem::StagePlan> plan = {{1000, 16}, {300, 1, false}};
+  for (int threads : {1, 2, 4}) {
+    auto tasks = MakeThreadPool(threads);
+    for (int round = 0; round < 50; ++round) {
+      SCOPED_TRACE(testing::Message() << threads << " threads, round " << round);
+      std::atomic<int> items{0};
+      std::atomic<bool> badChunk{false};
+      tasks->ParallelStages(2, plan.data(), [&](int s, int begin, int end, int chunk) {
+        items.fetch_add(end - begin);
+        if (s != 1) return;
+        const int chunks = StageChunks(300, 1, threads);
+        const bool whole = begin == 0 && end == 300;
+        const bool one = chunk >= 0 && chunk < chunks && begin == BlockBegin(300, chunks, chunk) &&
+                         end == BlockBegin(300, chunks, chunk + 1);
+        if (!whole && !one) badChunk.store(true);
+      });
+      EXPECT_EQ(items.load(), 1300);
+      EXPECT_FALSE(badChunk.load());
+    }
+  }
+}
+
 TEST(ThreadPoolTest, AnExceptionInAStageReachesTheCallerSkipsLaterStagesAndThePoolStaysUsable) {
   for (int threads : {1, 2, 4}) {
     SCOPED_TRACE(testing::Message() << threads << " threads");
