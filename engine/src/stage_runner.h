@@ -93,8 +93,8 @@ class StageRunner {
   /// stage. A region of fewer than minParallel items in all runs inline on the caller. The
   /// load-balance bound counts per stage the larger of its largest chunk (or run of chunks that
   /// one thread claimed together, timed as one) and its work shared evenly (chunks are claimed
-  /// dynamically, so no thread's share is fixed in advance). A pool
-  /// that runs a region on the caller alone (a busy machine) still calls it chunk by chunk.
+  /// dynamically, so no thread's share is fixed in advance). A pool that runs a region on the
+  /// caller alone (a busy machine) still calls it chunk by chunk.
   template <class Fn>
   void Stages(Stage stage, std::span<const TaskSystem::StagePlan> plan, int minParallel, Fn&& fn) {
     if (nested_) {

@@ -18,8 +18,7 @@
 //   StageChunks(plan[s].count, plan[s].grain, WorkerCount()) contiguous chunks, fn(stage, begin,
 //   end, chunk) once per run of consecutive chunks (a run may be one chunk or several; `chunk`
 //   is its first, [begin, end) all of its items; one chunk where StagePlan::runs is false),
-//   every chunk in exactly one run. It is for
-//   stages whose items are independent of each other
+//   every chunk in exactly one run. It is for stages whose items are independent of each other
 //   (a solver colour's constraints, a body range): which thread runs a chunk is never fixed, and
 //   a pool may run a whole region on the caller alone, so fn's results must not depend on who
 //   runs it. One region costs one hand-over to the workers, however many stages it has.
