@@ -163,7 +163,8 @@ class SoftStepSolver final : public Solver {
       // (a few float ulps of the anchors and the motion, about 1e-6 m), so with no deep point it
       // moves nothing, and skipping it gives the same bits. Base-100 pyramid: its one pass over
       // the rows found nothing to move every step (0.98M instructions a step).
-      std::atomic<bool> deep{false};
+      std::atomic<bool>& deep = deep_.flag;
+      deep.store(false, std::memory_order_relaxed);
       const bool maySkipPositions = !def.effects.restitution;
       constexpr Real kDeepMargin = Real(1e-4);
       SoftSolveParams lastPrm = prm;
@@ -197,15 +198,27 @@ class SoftStepSolver final : public Solver {
         //
         // With two or more relax passes the first stores each point's speculative bias and the later
         // ones load it (soft_rows.h, RelaxBias, says why).
+        //
+        // Lean (no restitution), the step's last relax pass also stores each row's impulses into
+        // its contact as it solves the row (StoreLaneImpulses): nothing changes them after that
+        // pass. A pass of their own read every group again after the position pass, at two
+        // threads half of them from the other core's cache (a static split of all groups against
+        // the passes' dynamic one per colour), and cost the base-100 pyramid 26-28 us a step at 1
+        // thread and 28-32 at 2; the sub-step regions moved by -2 to +9 us a step, within the
+        // runs' noise (2 alternated runs each, timed inside the runs with rdtsc). Same bits.
         const int relax = def.softRelaxIterations;
         const SoftSolveParams& firstPrm = sub == n - 1 ? lastPrm : prm;  // the first pass looks for deep points
+        const bool storeLast = lean && sub == n - 1;
         for (int it = 0; it < relax; ++it) {
           if (relax == 1) {
-            RelaxPass<kRotation, kFriction, RelaxBias::kCompute>(run, simd, firstPrm);
+            storeLast ? RelaxPass<kRotation, kFriction, RelaxBias::kCompute, true>(run, simd, firstPrm)
+                      : RelaxPass<kRotation, kFriction, RelaxBias::kCompute>(run, simd, firstPrm);
           } else if (it == 0) {
             def.softFrictionEveryRelaxPass
                 ? RelaxPass<kRotation, kFriction, RelaxBias::kComputeAndStore>(run, simd, firstPrm)
                 : RelaxPass<kRotation, false, RelaxBias::kComputeAndStore>(run, simd, firstPrm);
+          } else if (it == relax - 1 && storeLast) {
+            RelaxPass<kRotation, kFriction, RelaxBias::kLoad, true>(run, simd, prm);
           } else if (it == relax - 1 || def.softFrictionEveryRelaxPass) {
             RelaxPass<kRotation, kFriction, RelaxBias::kLoad>(run, simd, prm);
           } else {
@@ -225,7 +238,7 @@ class SoftStepSolver final : public Solver {
         CorrectStatePositions<kRotation>(run, def, simd);
       }
       if (lean) {
-        StoreRowImpulses<true>(run);
+        if (n == 0 || def.softRelaxIterations <= 0) StoreRowImpulses<true>(run);  // else the last relax pass did
       } else {
         StoreRowImpulses<false>(run);
         run.For(Stage::kSolve, m, run.MinHeavyItems(), [&](int b, int e, int) { constraints_.StoreImpulses(ctx.contacts, b, e); });
@@ -252,7 +265,7 @@ class SoftStepSolver final : public Solver {
     } else {
       rows();
       ti = Clock::now();
-      run.For(Stage::kIntegrate, count, run.MinItems(), [&](int b, int e, int) { MoveFreeBodies(bodies, def, ctx.dt, b, e); });
+      run.Dynamic(Stage::kIntegrate, count, run.MinItems(), kBodyGrain, [&](int b, int e) { MoveFreeBodies(bodies, def, ctx.dt, b, e); });
       integrateMs += Ms(ti, Clock::now());
     }
     // After the free bodies' pass, not in the rows' part: MoveFour reads the transforms of all
@@ -267,12 +280,28 @@ class SoftStepSolver final : public Solver {
   }
 
   // One relax pass over the rows (Run says which), queued in the sub-step's region.
-  template <bool kRotation, bool kFriction, RelaxBias kRelax>
+  // kStore: then the rows' impulses into their contacts (lean only: Run says when).
+  template <bool kRotation, bool kFriction, RelaxBias kRelax, bool kStore = false>
   void RelaxPass(StageRunner& run, bool simd, const SoftSolveParams& prm) {
     ForEachGroup(run, simd, [this, prm](auto lanes, SoftRowGroup& g, int lane) {
       RelaxBiasRows* cache = kRelax == RelaxBias::kCompute ? nullptr : &relaxBias_[&g - groups_.data()];
       SolveRows<decltype(lanes), kRotation, kFriction, false, kRelax>(states_.data(), g, lane, prm, cache);
+      if constexpr (kStore) StoreLaneImpulses(g, lane, lane + kLaneWidth<decltype(lanes)>);
     });
+  }
+
+  // Lanes [begin, end) of group g: their accumulated impulses straight into their contacts'
+  // manifolds (padding lanes have none), for the next step's warm start; StoreRowImpulses<true>'s
+  // work for one group.
+  void StoreLaneImpulses(const SoftRowGroup& g, int begin, int end) {
+    for (int lane = begin; lane < end; ++lane) {
+      if (g.constraint[lane] < 0) continue;
+      Manifold& mf = contacts_[graph_.ContactOf(g.constraint[lane])].manifold;
+      for (int pt = 0; pt < mf.pointCount; ++pt) {
+        mf.points[pt].normalImpulse = g.p[pt].normalImpulse[lane];
+        mf.points[pt].tangentImpulse = g.p[pt].tangentImpulse[lane];
+      }
+    }
   }
 
   // The rows in groups of eight, colour by colour (a colour's last group padded), from the
@@ -297,20 +326,20 @@ class SoftStepSolver final : public Solver {
     groups_.resize(groupStart_[ConstraintGraph::kColors + 1]);
     relaxBias_.resize(groups_.size());
     PlanPassStages();
-    // One region, a stage per colour (the groups are independent; a stage tells its groups their
-    // colour): one hand-over instead of one per colour (ForEachColor).
-    stagePlan_.clear();
-    stageFirst_.clear();  // here: each stage's colour
-    for (int k = 0; k <= ConstraintGraph::kColors; ++k) {
-      const int count = groupStart_[k + 1] - groupStart_[k];
-      if (count == 0) continue;
-      stagePlan_.push_back({count, ConstraintGraph::kColorGrain / kGroupRows});
-      stageFirst_.push_back(k);
-    }
-    run.Stages(Stage::kSolve, stagePlan_, std::max(1, run.MinHeavyItems() / kGroupRows), [&](int stage, int gb, int ge) {
-      const int k = stageFirst_[stage], begin = groupStart_[k];
+    // One stage over every colour's groups: a group is built from its own constraints alone, so
+    // no group waits for another colour's, and each chunk finds its groups' colours in
+    // groupStart_. A stage per colour cost the base-100 pyramid five or six barriers a step, two
+    // of them around colours of one chunk with the other thread idle. Traced at 2 threads (rdtsc
+    // around the region, 5 alternated runs, medians over the steps): 77.9, 97.3, 77.1, 81.7, 164
+    // -> 75.8, 75.6, 75.7, 106, 81.2 us; about 2 us where both runs of a pair were quiet.
+    stagePlan_.assign(1, {groupStart_[ConstraintGraph::kColors + 1], ConstraintGraph::kColorGrain / kGroupRows});
+    run.Stages(Stage::kSolve, stagePlan_, std::max(1, run.MinHeavyItems() / kGroupRows), [&](int, int gb, int ge) {
+      int k = 0;  // the colour of group gb, then of each group in turn
+      while (groupStart_[k + 1] <= gb) ++k;
       {
-        for (int gi = begin + gb; gi < begin + ge; ++gi) {
+        for (int gi = gb; gi < ge; ++gi) {
+          while (groupStart_[k + 1] <= gi) ++k;
+          const int begin = groupStart_[k];
           SoftRowGroup& g = groups_[gi];
           if constexpr (kLean && kRotation) {
             const int first = graph_.ColorBegin(k) + (gi - begin) * kGroupRows;
@@ -810,8 +839,9 @@ class SoftStepSolver final : public Solver {
   void CorrectStatePositions(StageRunner& run, const WorldDef& def, bool simd) {
     const SoftPositionParams prm{def.contactPushMaxDepth, def.baumgarte, def.maxLinearCorrection};
     SolverBody* states = states_.data();
+    std::atomic<bool>& anyMoved = moved_.flag;
     for (int it = 0; it < def.positionIterations; ++it) {
-      std::atomic<bool> anyMoved{false};
+      anyMoved.store(false, std::memory_order_relaxed);
       ForEachGroup(run, simd, [&](auto lanes, SoftRowGroup& g, int lane) {
         bool moved = false;
         if constexpr (std::is_same_v<decltype(lanes), Real>) {
@@ -821,7 +851,7 @@ class SoftStepSolver final : public Solver {
             SolvePositionRows<Real, kRotation>(states, g, l, prm, moved);
           }
         }
-        if (moved) anyMoved.store(true, std::memory_order_relaxed);
+        if (moved && !anyMoved.load(std::memory_order_relaxed)) anyMoved.store(true, std::memory_order_relaxed);
       });
       if (!anyMoved.load(std::memory_order_relaxed)) break;  // read after the last colour's join
     }
@@ -871,7 +901,7 @@ class SoftStepSolver final : public Solver {
     const int count = bodies.Count();
     states_.resize(count);
     inRows_.resize(count + kFlagPad);  // padded: the scans below read several flags at a time
-    run.For(Stage::kIntegrate, count, run.MinItems(), [&](int b, int e, int) {
+    run.Dynamic(Stage::kIntegrate, count, run.MinItems(), kBodyGrain, [&](int b, int e) {
       graph_.ClearColors(b, e);
       // Raw pointers: with the vectors' own, every store reloaded their data pointers.
       const BodyInverseMass* inv = bodies.inv.data();
@@ -928,7 +958,7 @@ class SoftStepSolver final : public Solver {
     // need no snapshot (MoveFree).
     center0_.resize(count);
     rot0_.resize(count);
-    run.For(Stage::kIntegrate, ActiveCount(), run.MinItems(), [&](int b, int e, int) {
+    run.Dynamic(Stage::kIntegrate, ActiveCount(), run.MinItems(), kBodyGrain, [&](int b, int e) {
       for (int k = b; k < e; ++k) {
         const int i = active_[k];
         if (bodies.inv[i].invMass != 0) states_[i] = SolverBody{bodies.vel[i].v, bodies.vel[i].w, 0, Vec2{}, Rot{}};
@@ -1135,7 +1165,7 @@ class SoftStepSolver final : public Solver {
     // Split from MinHeavyItems bodies on: the rows' bodies are scattered over the arrays, so each
     // costs cache misses more than arithmetic (circle stress N = 16000, 1 thread: 1.5 % of the
     // step's cycles for about 1000 bodies, perf).
-    run.For(Stage::kIntegrate, ActiveCount(), run.MinHeavyItems(), [&](int b, int e, int) {
+    run.Dynamic(Stage::kIntegrate, ActiveCount(), run.MinHeavyItems(), kBodyGrain / 4, [&](int b, int e) {
       for (int k = b; k < e; ++k) {
         const int i = active_[k];
         if (!Moves(bodies, i, sleep)) continue;
@@ -1419,6 +1449,18 @@ class SoftStepSolver final : public Solver {
   }
 
   int ActiveCount() const { return static_cast<int>(active_.size()); }
+
+  // Flags that any thread may set during a pass (the relax pass's deep points, the position
+  // pass's moved rows), each alone in its cache line and stored only while still false. They were
+  // locals of the caller's frame, stored by every group that set them: each such store took the
+  // line (which also held the caller's other locals) from the other core. Base-100 pyramid, 2
+  // threads, 3 alternated runs on a quiet machine, the position pass's regions (about 3 a step):
+  // 173, 195, 176 -> 150, 153, 153 us a step (timed inside the runs with rdtsc, the pool already
+  // claiming runs of chunks); same bits.
+  struct alignas(64) SharedFlag {
+    std::atomic<bool> flag{false};
+  };
+  SharedFlag deep_, moved_;
 
   static constexpr int kFlagPad = 8;
   std::vector<uint8_t> inRows_;  // per body (+ kFlagPad of padding): integrated by the sub-steps

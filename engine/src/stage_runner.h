@@ -26,6 +26,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <span>
 #include <thread>
 #include <vector>
 
@@ -90,11 +91,12 @@ class StageRunner {
   /// Runs the stages of `plan` in order as one region (TaskSystem::ParallelStages): fn(stage,
   /// begin, end) over each stage's items, which must be independent of each other within a
   /// stage. A region of fewer than minParallel items in all runs inline on the caller. The
-  /// load-balance bound counts per stage the larger of its largest chunk and its work shared
-  /// evenly (chunks are claimed dynamically, so no thread's share is fixed in advance). A pool
-  /// that runs a region on the caller alone (a busy machine) still calls it chunk by chunk.
+  /// load-balance bound counts per stage the larger of its largest chunk (or run of chunks that
+  /// one thread claimed together, timed as one) and its work shared evenly (chunks are claimed
+  /// dynamically, so no thread's share is fixed in advance). A pool that runs a region on the
+  /// caller alone (a busy machine) still calls it chunk by chunk.
   template <class Fn>
-  void Stages(Stage stage, const std::vector<TaskSystem::StagePlan>& plan, int minParallel, Fn&& fn) {
+  void Stages(Stage stage, std::span<const TaskSystem::StagePlan> plan, int minParallel, Fn&& fn) {
     if (nested_) {
       for (int s = 0; s < static_cast<int>(plan.size()); ++s) {
         if (plan[s].count > 0) fn(s, 0, plan[s].count);
@@ -150,6 +152,19 @@ class StageRunner {
     Add(stage, work, critical);
   }
 
+  /// fn(begin, end) over [0, count) as one stage of Stages: chunks of at least `grain` items that
+  /// the threads claim as they go, for a pass whose items write nothing another item reads and
+  /// that needs no per-block output. Why: For's static blocks (one a worker) finish apart by
+  /// whatever their items, or their cores, differ in speed, and on these shared VMs one core often
+  /// runs slower for a while. The soft step's per-body passes (base-100 pyramid, 2 threads, traced
+  /// with rdtsc, 4 alternated runs; with BuildRows' region, the same in both): 153, 146, 134, 107
+  /// -> 122, 108, 129, 110 us a step: the gain where a core ran slow, the quietest pair equal.
+  template <class Fn>
+  void Dynamic(Stage stage, int count, int minParallel, int grain, Fn&& fn) {
+    const TaskSystem::StagePlan plan[1] = {{count, grain}};
+    Stages(stage, plan, minParallel, [&](int, int begin, int end) { fn(begin, end); });
+  }
+
   /// Runs `alone()` once, on one thread, beside fn(begin, end) over [0, count) in blocks that
   /// the other threads (and that one, once it is done) take: one region of one stage, so the
   /// two parts cost one hand-over and one join together. alone() may call this runner again
@@ -172,7 +187,10 @@ class StageRunner {
     // The caller claims from the front (thread_pool.cpp), so it takes alone() unless a worker
     // is there first.
     const int items = 4 * Workers(), blocks = items - 1;
-    const TaskSystem::StagePlan plan{items, 1};  // one stage: no list to allocate every step
+    // One item a claim (runs = false): in a run of two the thread that took alone() would also
+    // hold a block the others could have run meanwhile (circle stress 16000, 2 threads: the solve
+    // stage 0.138 -> 0.155 ms a step with runs, 11 interleaved rounds).
+    const TaskSystem::StagePlan plan{items, 1, false};  // one stage: no list to allocate every step
     chunkMs_.assign(items, 0.0);
     tasks_.ParallelStages(1, &plan, [&](int, int b, int e, int) {
       for (int item = b; item < e; ++item) {

@@ -301,9 +301,9 @@ TEST(ThreadPoolTest, AFreshPoolWithWorkersDoesNotRunAlone) {
   EXPECT_FALSE(MakeThreadPool(1)->RunsAlone());  // one thread is no pool: the engine's own path
 }
 
-// ParallelStages: every item of every stage once, in chunks of the StageChunks partition (or a
-// whole stage in one call, when the pool runs the region on the caller alone), and no call of a
-// stage before every call of the previous stages has returned.
+// ParallelStages: every item of every stage once, in runs of consecutive chunks of the
+// StageChunks partition (or a whole stage in one call, when the pool runs the region on the
+// caller alone), and no call of a stage before every call of the previous stages has returned.
 TEST(ThreadPoolTest, StagesRunInOrderAndCoverEveryItemOnce) {
   const int hardware = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   const std::vector<TaskSystem::StagePlan> plan = {{1000, 16}, {0, 1}, {1, 1}, {7, 1}, {4099, 64}, {64, 1000}, {300, 1}};
@@ -321,8 +321,10 @@ TEST(ThreadPoolTest, StagesRunInOrderAndCoverEveryItemOnce) {
         const int count = plan[size_t(s)].count;
         const int chunks = StageChunks(count, plan[size_t(s)].grain, threads);
         const bool whole = begin == 0 && end == count;
-        const bool partition = chunk >= 0 && chunk < chunks && begin == BlockBegin(count, chunks, chunk) &&
-                               end == BlockBegin(count, chunks, chunk + 1);
+        bool partition = chunk >= 0 && chunk < chunks && begin == BlockBegin(count, chunks, chunk);
+        int last = chunk + 1;  // the run ends at a chunk boundary
+        while (partition && last < chunks && BlockBegin(count, chunks, last) < end) ++last;
+        partition = partition && end == BlockBegin(count, chunks, last);
         if (!whole && !partition) badChunk.store(true);
         for (int i = begin; i < end; ++i) hits[size_t(first[size_t(s)] + i)].fetch_add(1);
         finished.fetch_add(end - begin);
@@ -330,6 +332,31 @@ TEST(ThreadPoolTest, StagesRunInOrderAndCoverEveryItemOnce) {
       EXPECT_FALSE(outOfOrder.load());
       EXPECT_FALSE(badChunk.load());
       EXPECT_TRUE(std::all_of(hits.begin(), hits.end(), [](const std::atomic<int>& h) { return h.load() == 1; }));
+    }
+  }
+}
+
+// A region with a stage whose plan says runs = false: there every call is one chunk (or the whole
+// stage, when the region runs on the caller alone), never a run of several.
+TEST(ThreadPoolTest, AStageWithoutRunsIsCalledChunkByChunk) {
+  const std::vector<TaskSystem::StagePlan> plan = {{1000, 16}, {300, 1, false}};
+  for (int threads : {1, 2, 4}) {
+    auto tasks = MakeThreadPool(threads);
+    for (int round = 0; round < 50; ++round) {
+      SCOPED_TRACE(testing::Message() << threads << " threads, round " << round);
+      std::atomic<int> items{0};
+      std::atomic<bool> badChunk{false};
+      tasks->ParallelStages(2, plan.data(), [&](int s, int begin, int end, int chunk) {
+        items.fetch_add(end - begin);
+        if (s != 1) return;
+        const int chunks = StageChunks(300, 1, threads);
+        const bool whole = begin == 0 && end == 300;
+        const bool one = chunk >= 0 && chunk < chunks && begin == BlockBegin(300, chunks, chunk) &&
+                         end == BlockBegin(300, chunks, chunk + 1);
+        if (!whole && !one) badChunk.store(true);
+      });
+      EXPECT_EQ(items.load(), 1300);
+      EXPECT_FALSE(badChunk.load());
     }
   }
 }

@@ -16,7 +16,9 @@
 // - ParallelStages(stages, plan, fn) runs stage 0, then stage 1, ... in order (every call of a
 //   stage returns before any call of the next begins), each stage's [0, plan[s].count) cut into
 //   StageChunks(plan[s].count, plan[s].grain, WorkerCount()) contiguous chunks, fn(stage, begin,
-//   end, chunk) once per chunk. It is for stages whose items are independent of each other
+//   end, chunk) once per run of consecutive chunks (a run may be one chunk or several; `chunk`
+//   is its first, [begin, end) all of its items; one chunk where StagePlan::runs is false),
+//   every chunk in exactly one run. It is for stages whose items are independent of each other
 //   (a solver colour's constraints, a body range): which thread runs a chunk is never fixed, and
 //   a pool may run a whole region on the caller alone, so fn's results must not depend on who
 //   runs it. One region costs one hand-over to the workers, however many stages it has.
@@ -43,6 +45,10 @@ class TaskSystem {
   struct StagePlan {
     int count = 0;
     int grain = 1;
+    /// Whether a thread may take several of the stage's chunks in one claim (one call over their
+    /// items; a pool may ignore it). False where the chunks' costs differ by design and each must
+    /// go to whichever thread is free (StageRunner::Beside: one chunk is the lone part).
+    bool runs = true;
   };
   using StageFn = std::function<void(int stage, int begin, int end, int chunk)>;
   /// Runs `stages` stages in order (see the contract above). The default runs one ParallelFor
