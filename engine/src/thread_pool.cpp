@@ -83,7 +83,10 @@
 //   kQueueShare of the window or of kQueueFloorMillis, whichever is longer, read from
 //   /proc/thread-self/schedstat every kFirstJudgeMillis: more runnable threads than cores, the
 //   direct sign). Any of them makes the pool serial for
-//   kContendedMillis. At the end of a serial period the pool looks at the machine instead of
+//   kContendedMillis. A pool born while more threads run than the cores it leaves free
+//   (/proc/stat's procs_running) starts serial for that period too: a short run (1000-8000
+//   circles, 70 steps of 0.08-0.6 ms) ended before any window was judged, and beside one busy
+//   loop its 2 threads ran 1.0-2.0x slower than 1. At the end of a serial period the pool looks at the machine instead of
 //   probing: if other processes used more of the cores over the period than the pool's threads
 //   could spare (/proc/stat's busy ticks less this process's CPU time, OthersHoldCores), it
 //   stays serial for another period without running a parallel job; otherwise it probes, and
@@ -418,6 +421,25 @@ class ThreadPool final : public TaskSystem {
       if (std::fscanf(f, "%d", &on) == 1 && on != 0) countNiced_ = true;
       std::fclose(f);
     }
+    // Born beside other running processes (more of them than the cores the pool leaves free),
+    // the pool starts serial for a period and then judges the machine as at the end of any
+    // serial period (StayOrProbe). Judging by windows of parallel jobs alone takes 10-20 ms of
+    // them (Judge), longer than a short run: beside one busy loop a benchmark run of 1000-8000
+    // circles (70 steps of 0.08-0.6 ms, a new World and pool each) ended before any verdict, and
+    // 2 threads ran 1.0-2.0x slower than 1 (issue #14, this pool before the check).
+    // /proc/stat's procs_running counts the threads on a core right now, this one included
+    // (seen on these VMs: 1 when quiet, 3-4 beside one shell busy loop).
+    if (!splitSerialSteps_ && running > 1 && machineCores_ > 0) {
+      const int others = RunningThreadsNow() - 1;
+      if (others > 0 && double(others) > double(machineCores_ - running) + kOthersMargin) {
+        const Clock::time_point now = Clock::now();
+        serialUntil_ = now + std::chrono::milliseconds(kContendedMillis);
+        windowOpen_ = false;
+        probing_ = true;
+        machine_ = SampleMachine(now);
+        statBornSerial_ = 1;
+      }
+    }
 #endif
     threads_.reserve(running - 1);
     // Odd workers claim from the back of each stage, the caller and even workers from the front.
@@ -441,11 +463,11 @@ class ThreadPool final : public TaskSystem {
       std::fprintf(stderr,
                    "pool %d: life %.1f ms, steps %lld (alone %lld), jobs %lld, serial %lld, caller alone %lld, parallel-job time %.3f ms, wait %.3f ms, "
                    "waits>1ms %lld, first job at %.1f ms, marks %d (first at %.1f ms), probes %d, failed probes %d; caller cpu %.1f ms runq %.1f ms "
-                   "slices %lld; marks by stall %d idle %d queue %d, first queue share %.2f, max %.2f, extended %d, others %.2f cores",
+                   "slices %lld; marks by stall %d idle %d queue %d, first queue share %.2f, max %.2f, extended %d, others %.2f cores, born serial %d",
                    workers_, std::chrono::duration<double, std::milli>(Clock::now() - born_).count(), statSteps_, statAloneSteps_, statJobs_, statSerial_,
                    statAlone_, statJobNs_ * 1e-6, statWaitNs_ * 1e-6, statLong_, statFirstJobMs_, statMarks_, statFirstMarkMs_, statProbes_,
                    statFailedProbes_, callerSched_[0] * 1e-6, callerSched_[1] * 1e-6, callerSched_[2], statMarkStall_, statMarkIdle_,
-                   statMarkQueued_, statFirstQueue_, statMaxQueue_, statExtended_, statOthers_);
+                   statMarkQueued_, statFirstQueue_, statMaxQueue_, statExtended_, statOthers_, statBornSerial_);
       for (size_t w = 1; w < workerSched_.size(); ++w) {
         std::fprintf(stderr, "; worker %zu cpu %.1f ms runq %.1f ms slices %lld", w, workerSched_[w][0] * 1e-6,
                      workerSched_[w][1] * 1e-6, workerSched_[w][2]);
@@ -638,6 +660,24 @@ class ThreadPool final : public TaskSystem {
     const double others = ((after.busySeconds - before.busySeconds) - (after.ownSeconds - before.ownSeconds)) / wall;
     statOthers_ = others;
     return others > double(machineCores_ - ThreadCount()) + kOthersMargin;
+  }
+
+  // /proc/stat's procs_running: the threads of the whole machine on a core at this moment; -1
+  // where unavailable (then the check at birth does nothing).
+  static int RunningThreadsNow() {
+#if defined(__linux__)
+    FILE* f = std::fopen("/proc/stat", "r");
+    if (f == nullptr) return -1;
+    char line[256];
+    int running = -1;
+    while (std::fgets(line, sizeof line, f) != nullptr) {
+      if (std::sscanf(line, "procs_running %d", &running) == 1) break;
+    }
+    std::fclose(f);
+    return running;
+#else
+    return -1;
+#endif
   }
 
   struct MachineSample {
@@ -909,6 +949,7 @@ class ThreadPool final : public TaskSystem {
   double statFirstMarkMs_ = -1, statFirstJobMs_ = -1;
   bool stats_ = false;
   bool splitSerialSteps_ = false;  // QUADRANT_POOL_ALONE=0: RunsAlone is always false
+  int statBornSerial_ = 0;         // 1: the pool started serial (the check at birth)
   Clock::time_point born_;
   std::array<long long, 3> callerSched_{};
   std::vector<std::array<long long, 3>> workerSched_;

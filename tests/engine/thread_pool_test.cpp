@@ -4,6 +4,8 @@
 // Nothing here is timed.
 #include <gtest/gtest.h>
 
+#include <chrono>
+
 #if defined(__linux__)
 #include <sched.h>
 #endif
@@ -290,13 +292,36 @@ TEST(ThreadPoolTest, APoolWithoutWorkersRunsAloneAndStepsGiveTheOneThreadHash) {
 }
 #endif
 
+#if defined(__linux__)
+TEST(ThreadPoolTest, APoolBornBesideBusyCoresRunsAloneFromItsFirstStep) {
+  // Every core busy when the pool is made: it starts serial (issue #14: a short run would end
+  // before a window of parallel jobs could show the contention), and the steps still give the
+  // one-thread hash.
+  const int hardware = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  if (hardware < 2) GTEST_SKIP() << "one core: the pool starts no worker";
+  const uint64_t serial = HashAfterSteps(1, 30, SolverType::kSoftStep);
+  uint64_t alone = 0;
+  {
+    PoolMayRunAlone may;
+    BusyCores busy(hardware);
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));  // the spinners are running
+    std::unique_ptr<TaskSystem> pool = MakeThreadPool(2);
+    if (pool->ThreadCount() < 2) GTEST_SKIP() << "the affinity mask allows one core";
+    EXPECT_TRUE(pool->RunsAlone());
+    alone = HashAfterSteps(2, 30, SolverType::kSoftStep);
+  }
+  EXPECT_EQ(alone, serial);
+}
+#endif
+
 TEST(ThreadPoolTest, AFreshPoolWithWorkersDoesNotRunAlone) {
   // Before it has run anything the pool has seen no contention: its first step is parallel.
   if (std::thread::hardware_concurrency() < 2) GTEST_SKIP() << "one core: the pool starts no worker";
   std::unique_ptr<TaskSystem> pool = MakeThreadPool(2);
   if (pool->ThreadCount() < 2) GTEST_SKIP() << "the affinity mask allows one core";
-  // (QUADRANT_POOL_ALONE=0, set by test_helpers.h, makes this false too; the pool's own rule
-  // gives false on its first call either way.)
+  // (QUADRANT_POOL_ALONE=0, set by test_helpers.h, makes this false too; without it the pool
+  // gives false on its first call unless it was born beside other running threads, the test
+  // below.)
   EXPECT_FALSE(pool->RunsAlone());
   EXPECT_FALSE(MakeThreadPool(1)->RunsAlone());  // one thread is no pool: the engine's own path
 }
