@@ -597,7 +597,10 @@ def plot_footer(results, engines, scene=None):
     if any(plot_style.canonical(e) == "box2d" for e in engines):
         notes.append("Box2D 2.4.1 single-threaded")
     reps = sorted({st["reps"] for st in results.stats.values()})
-    return (f"Median steps per second over {'/'.join(map(str, reps)) or '?'} repetitions per point, band: min-max; "
+    busy = busy_count(results)
+    busy_note = (f"BUSY MACHINE: {busy} busy loop{'s' if busy != 1 else ''} of the run's own beside every benchmark. "
+                 if busy else "")
+    return (busy_note + f"Median steps per second over {'/'.join(map(str, reps)) or '?'} repetitions per point, band: min-max; "
             f"engines: {', '.join(engines)}. "
             f"Machine {ctx(results, 'machine', ctx(results, 'host_name'))} ({ctx(results, 'cpu_model')}, "
             f"{results.cores or '?'} cores); commit {ctx(results, 'commit')}; {ctx(results, 'steps')} steps "
@@ -651,7 +654,11 @@ def plot_scene(results, scene, path):
     noun = SCENE_NOUNS.get(scene, "bodies")
     title = f"Steps per second vs number of {noun}"
     fig_ref = THESIS_FIGURES.get(scene)
-    ax.set_title(title + (f" ({scene}; cf. thesis {fig_ref})" if fig_ref else f" ({scene})"))
+    busy = busy_count(results)
+    title += f" ({scene}; cf. thesis {fig_ref})" if fig_ref else f" ({scene})"
+    if busy:
+        title += f"\nbusy machine: {busy} busy process{'es' if busy != 1 else ''} beside the run"
+    ax.set_title(title)
     ax.set_xlabel(f"number of {noun} (N)")
     ax.set_ylabel("steps per second (median over repetitions, band: min-max)")
     ax.grid(True, which="major", linestyle="-", alpha=0.4)
