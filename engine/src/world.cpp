@@ -104,7 +104,7 @@ struct World::Impl {
   }
 
   // The broad-phase box (world_internal.h, BroadPhaseBox: shared with the distributed world).
-  [[gnu::always_inline]] void UpdateAABB(int i, Real dt) { bodies.aabb[i] = BroadPhaseBox(bodies, i, def, dt); }
+  void UpdateAABB(int i, Real dt) { bodies.aabb[i] = BroadPhaseBox(bodies, i, def, dt); }
 
   // Sleep (effects.sleep on only): wakes the islands of sleeping bodies that body i's box
   // overlaps, and body i's own island.
@@ -179,7 +179,6 @@ int AppendBody(Bodies& b, const BodyDef& def, const WorldDef& worldDef, uint32_t
   b.linearDamping[i] = def.linearDamping;
   b.angularDamping[i] = def.angularDamping;
   b.shape[i] = shape;
-  b.circle[i] = ExtentOf(shape);
   b.boundRadius[i] = boundRadius;
   b.aabb[i] = {};
   b.dynamic[i] = dynamic ? 1 : 0;

@@ -26,20 +26,6 @@ struct BodyInverseMass {
 };
 
 /// Dense body arrays. Index i is a body's dense index; ids map to it through the world's slots.
-// What the step's box update needs of a circle's shape: 16 bytes a body instead of the 168 of
-// its ShapeDef. Circle stress 16000, one thread: the box update was 15 % of perf's samples, bound
-// by reading every ShapeDef (2.7 MB a step, past the 1 MB L2), for three of its floats.
-struct CircleExtent {
-  Vec2 center;             ///< the circle's centre in body coordinates
-  Real radius = 0;
-  uint32_t isCircle = 0;   ///< 0: a polygon (BroadPhaseBox reads the ShapeDef)
-};
-
-inline CircleExtent ExtentOf(const ShapeDef& s) {
-  if (s.type != ShapeType::kCircle) return {};
-  return {s.circle.center, s.circle.radius, 1};
-}
-
 struct Bodies {
   std::vector<BodyType> type;
   std::vector<Transform> xf;           ///< body origin and rotation
@@ -52,7 +38,6 @@ struct Bodies {
   std::vector<Real> linearDamping;
   std::vector<Real> angularDamping;
   std::vector<ShapeDef> shape;
-  std::vector<CircleExtent> circle;    ///< ExtentOf(shape): set wherever shape is
   std::vector<Real> boundRadius;       ///< farthest shape point from the centre of mass
   std::vector<AABB> aabb;
   std::vector<uint8_t> dynamic;        ///< 1 for dynamic bodies: pairs need at least one
@@ -75,7 +60,7 @@ struct Bodies {
   template <class Fn>
   void ForEachArray(Fn&& fn) {
     fn(type), fn(xf), fn(center), fn(localCenter), fn(vel), fn(inv), fn(mass), fn(inertia);
-    fn(linearDamping), fn(angularDamping), fn(shape), fn(circle), fn(boundRadius), fn(aabb), fn(dynamic);
+    fn(linearDamping), fn(angularDamping), fn(shape), fn(boundRadius), fn(aabb), fn(dynamic);
     fn(slot), fn(awake), fn(sleepTime), fn(islandOf), fn(filter), fn(userData);
   }
 };
@@ -109,7 +94,7 @@ int AppendBody(Bodies& bodies, const BodyDef& def, const WorldDef& worldDef, uin
 // callee spills as two 8-byte stores and reloads as one 16-byte load, which cannot be forwarded
 // from the stores and stalls. perf put 44 % of ComputeAABB's samples on that load, and
 // ComputeAABB at 18 % of all cycles of circle stress 16000 at 1 thread (main ef96acf).
-[[gnu::always_inline]] inline AABB ShapeBox(const ShapeDef& s, const Transform& xf) {
+inline AABB ShapeBox(const ShapeDef& s, const Transform& xf) {
   if (s.type == ShapeType::kCircle) {
     const Vec2 p = TransformPoint(xf, s.circle.center);
     const Vec2 r{s.circle.radius, s.circle.radius};
@@ -126,8 +111,9 @@ int AppendBody(Bodies& bodies, const BodyDef& def, const WorldDef& worldDef, uin
   return {lower, upper};
 }
 
-// A shape's box grown by the speculative margin and swept by the step's motion (SweptBox).
-[[gnu::always_inline]] inline AABB GrowBox(AABB box, const BodyVelocity& bv, Real boundRadius, const WorldDef& def, Real dt) {
+inline AABB SweptBox(const ShapeDef& s, const Transform& xf, const BodyVelocity& bv, Real boundRadius,
+                     const WorldDef& def, Real dt) {
+  AABB box = ShapeBox(s, xf);
   // Without continuous collision the box is not swept (dt 0 below): only the base margin.
   const Real sweep = def.effects.continuous ? dt : Real(0);
   const Real margin = Real(0.5) * def.speculativeDistance + sweep * std::abs(bv.w) * boundRadius;
@@ -137,20 +123,8 @@ int AppendBody(Bodies& bodies, const BodyDef& def, const WorldDef& worldDef, uin
   return box;
 }
 
-[[gnu::always_inline]] inline AABB SweptBox(const ShapeDef& s, const Transform& xf, const BodyVelocity& bv, Real boundRadius,
-                     const WorldDef& def, Real dt) {
-  return GrowBox(ShapeBox(s, xf), bv, boundRadius, def, dt);
-}
-
 /// The same for body i of `bodies`.
-// A circle's box from its CircleExtent, with ShapeBox's arithmetic (the same box bit for bit).
-[[gnu::always_inline]] inline AABB BroadPhaseBox(const Bodies& bodies, int i, const WorldDef& def, Real dt) {
-  const CircleExtent& c = bodies.circle[i];
-  if (c.isCircle) {
-    const Vec2 p = TransformPoint(bodies.xf[i], c.center);
-    const Vec2 r{c.radius, c.radius};
-    return GrowBox({p - r, p + r}, bodies.vel[i], bodies.boundRadius[i], def, dt);
-  }
+inline AABB BroadPhaseBox(const Bodies& bodies, int i, const WorldDef& def, Real dt) {
   return SweptBox(bodies.shape[i], bodies.xf[i], bodies.vel[i], bodies.boundRadius[i], def, dt);
 }
 
