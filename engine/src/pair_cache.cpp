@@ -5,7 +5,7 @@
 
 namespace quadrant {
 
-void PairCache::UpdateAndFindPairs(BroadPhase& broadPhase, std::span<const AABB> aabbs,
+bool PairCache::UpdateAndFindPairs(BroadPhase& broadPhase, std::span<const AABB> aabbs,
                                    std::span<const uint8_t> movable, std::vector<CandidatePair>& out,
                                    StageRunner& run, BroadPhase::BoxUpdate update) {
   const int n = static_cast<int>(aabbs.size());
@@ -13,7 +13,7 @@ void PairCache::UpdateAndFindPairs(BroadPhase& broadPhase, std::span<const AABB>
     --standAside_;
     valid_ = false;
     broadPhase.UpdateAndFindPairs(aabbs, movable, out, run, update);
-    return;
+    return false;
   }
   // The boxes brought up to date and checked against the fat boxes in one pass.
   const bool check = valid_ && static_cast<int>(fat_.size()) == n;
@@ -34,7 +34,7 @@ void PairCache::UpdateAndFindPairs(BroadPhase& broadPhase, std::span<const AABB>
     ++servedSinceRebuild_;
     ++reused_;
     Filter(aabbs, movable, out, run);
-    return;
+    return true;
   }
   if (valid_) {
     // The last rebuild served too few steps: the scene moves too much for fat boxes to pay.
@@ -44,12 +44,13 @@ void PairCache::UpdateAndFindPairs(BroadPhase& broadPhase, std::span<const AABB>
       standAside_ = (1 << backoff_) - 1;  // this step rebuilds; then the plain broad phase
       valid_ = false;
       broadPhase.FindPairs(aabbs, movable, out, run);
-      return;
+      return false;
     }
     backoff_ = 0;
   }
   Rebuild(broadPhase, aabbs, movable, run);
   Filter(aabbs, movable, out, run);
+  return false;
 }
 
 void PairCache::Rebuild(BroadPhase& broadPhase, std::span<const AABB> aabbs, std::span<const uint8_t> movable,

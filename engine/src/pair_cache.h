@@ -39,7 +39,8 @@ class PairCache {
  public:
   /// The broad phase's UpdateAndFindPairs, served from the cache where it can be: `out` gets the
   /// same set of pairs as `broadPhase.UpdateAndFindPairs(aabbs, movable, out, run, update)`.
-  void UpdateAndFindPairs(BroadPhase& broadPhase, std::span<const AABB> aabbs, std::span<const uint8_t> movable,
+  /// True when the kept pairs served (no broad phase ran).
+  bool UpdateAndFindPairs(BroadPhase& broadPhase, std::span<const AABB> aabbs, std::span<const uint8_t> movable,
                           std::vector<CandidatePair>& out, StageRunner& run, BroadPhase::BoxUpdate update);
   /// Forget the fat boxes (the next call rebuilds or stands aside).
   void Invalidate() { valid_ = false; }

@@ -237,10 +237,10 @@ class SoftStepSolver final : public Solver {
       if (m > 0 && (!maySkipPositions || deep.load(std::memory_order_relaxed))) {
         CorrectStatePositions<kRotation>(run, def, simd);
       }
-      if (lean) {
-        if (n == 0 || def.softRelaxIterations <= 0) StoreRowImpulses<true>(run);  // else the last relax pass did
-      } else {
-        StoreRowImpulses<false>(run);
+      // Lean, the last relax pass stored the impulses (storeLast above; WorldDef validation keeps
+      // softSubSteps and softRelaxIterations >= 1, so that pass always runs).
+      if (!lean) {
+        StoreRowImpulses(run);
         run.For(Stage::kSolve, m, run.MinHeavyItems(), [&](int b, int e, int) { constraints_.StoreImpulses(ctx.contacts, b, e); });
       }
     };
@@ -291,8 +291,7 @@ class SoftStepSolver final : public Solver {
   }
 
   // Lanes [begin, end) of group g: their accumulated impulses straight into their contacts'
-  // manifolds (padding lanes have none), for the next step's warm start; StoreRowImpulses<true>'s
-  // work for one group.
+  // manifolds (padding lanes have none), for the next step's warm start.
   void StoreLaneImpulses(const SoftRowGroup& g, int begin, int end) {
     for (int lane = begin; lane < end; ++lane) {
       if (g.constraint[lane] < 0) continue;
@@ -858,9 +857,8 @@ class SoftStepSolver final : public Solver {
   }
 
   // The accumulated impulses back into the constraints (StoreImpulses keeps them for the next
-  // step's warm start).
-  // kLean: straight into the contacts' manifolds (no constraint list: Run says when).
-  template <bool kLean>
+  // step's warm start). With restitution only: lean, the last relax pass stores them into the
+  // contacts (StoreLaneImpulses).
   void StoreRowImpulses(StageRunner& run) {
     const int count = static_cast<int>(groups_.size());
     run.For(Stage::kSolve, count, std::max(1, run.MinHeavyItems() / kGroupRows), [&](int gb, int ge, int) {
@@ -868,14 +866,6 @@ class SoftStepSolver final : public Solver {
         const SoftRowGroup& g = groups_[gi];
         for (int lane = 0; lane < kGroupRows; ++lane) {
           if (g.constraint[lane] < 0) continue;
-          if constexpr (kLean) {
-            Manifold& mf = contacts_[graph_.ContactOf(g.constraint[lane])].manifold;
-            for (int pt = 0; pt < mf.pointCount; ++pt) {
-              mf.points[pt].normalImpulse = g.p[pt].normalImpulse[lane];
-              mf.points[pt].tangentImpulse = g.p[pt].tangentImpulse[lane];
-            }
-            continue;
-          }
           ContactConstraint& cc = constraints_[g.constraint[lane]];
           for (int pt = 0; pt < cc.pointCount; ++pt) {
             cc.points[pt].normalImpulse = g.p[pt].normalImpulse[lane];

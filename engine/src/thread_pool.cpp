@@ -86,8 +86,8 @@
 //   kContendedMillis. A pool born while more threads run than the cores it leaves free
 //   (/proc/stat's procs_running) starts serial for that period too: a short run (1000-8000
 //   circles, 70 steps of 0.08-0.6 ms) ended before any window was judged, and beside one busy
-//   loop its 2 threads ran 1.0-2.0x slower than 1. At the end of a serial period the pool looks at the machine instead of
-//   probing: if other processes used more of the cores over the period than the pool's threads
+//   loop its 2 threads ran 1.0-2.1x slower than 1. At the end of a serial period the pool looks
+//   at the machine instead of probing: if other processes used more of the cores over the period than the pool's threads
 //   could spare (/proc/stat's busy ticks less this process's CPU time, OthersHoldCores), it
 //   stays serial for another period without running a parallel job; otherwise it probes, and
 //   a probe that fails doubles the next period (up to kMaxContendedMillis). A serial job runs on
@@ -426,7 +426,7 @@ class ThreadPool final : public TaskSystem {
     // serial period (StayOrProbe). Judging by windows of parallel jobs alone takes 10-20 ms of
     // them (Judge), longer than a short run: beside one busy loop a benchmark run of 1000-8000
     // circles (70 steps of 0.08-0.6 ms, a new World and pool each) ended before any verdict, and
-    // 2 threads ran 1.0-2.0x slower than 1 (issue #14, this pool before the check).
+    // 2 threads ran 1.0-2.1x slower than 1 (issue #14, this pool before the check; 3 runs each).
     // /proc/stat's procs_running counts the threads on a core right now, this one included
     // (seen on these VMs: 1 when quiet, 3-4 beside one shell busy loop).
     if (!splitSerialSteps_ && running > 1 && machineCores_ > 0) {

@@ -331,6 +331,7 @@ struct Counters {
   int contacts = 0;          ///< manifolds with at least one point (touching or speculative)
   int touchingContacts = 0;  ///< manifolds with a point at separation <= 0 (with sleep on, sleeping islands' too)
   int contactPoints = 0;
+  bool pairsReused = false;  ///< this step's pairs came from the pair cache (WorldDef::reusePairs)
 };
 
 /// A contact as read back for validation and drawing.
