@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "box_batch.h"
 #include "broad_phase.h"
 #include "world_internal.h"
 
@@ -506,9 +507,11 @@ Manifold Collide(const ShapeDef& a, Transform xfA, const ShapeDef& b, Transform 
 namespace {
 
 struct CallBoxes {
+  static constexpr bool kBatch = false;  // one pair at a time
   Manifold operator()(const Polygon& a, const Transform& xfA, const Polygon& b, const Transform& xfB, Real spec) const {
     return CollideBoxes(a, xfA, b, xfB, spec);
   }
+  void Batch(const BoxPair* pairs, int count, Manifold* out) const { CollideBoxBatch(pairs, count, out); }
 };
 
 namespace pairs_default {
@@ -516,7 +519,10 @@ namespace pairs_default {
 }  // namespace pairs_default
 
 #if QUADRANT_NARROW_SIMD && defined(__x86_64__) && defined(__GNUC__)
+// Box pairs eight at a time (box_batch.h). Base-100 pyramid: see the commit that added it.
 struct VexBoxes {
+  static constexpr bool kBatch = true;
+  void Batch(const BoxPair* pairs, int count, Manifold* out) const { CollideBoxBatch(pairs, count, out); }
   [[gnu::target("avx"), gnu::always_inline]] Manifold operator()(const Polygon& a, const Transform& xfA, const Polygon& b,
                                                                    const Transform& xfB, Real spec) const {
     return CollideBoxesVexInline(a, xfA, b, xfB, spec);

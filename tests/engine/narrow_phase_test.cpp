@@ -4,7 +4,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <vector>
 
+#include "box_batch.h"
 #include "narrow_phase.h"
 #include "quadrant/shapes.h"
 #include "test_helpers.h"
@@ -33,34 +35,68 @@ Real MinSeparation(const Manifold& m) {
   return s;
 }
 
+
+// The same bits: point count, and normal and points where there are points.
+void ExpectSameManifold(const Manifold& fast, const Manifold& general, int pair) {
+  ASSERT_EQ(fast.pointCount, general.pointCount) << "pair " << pair;
+  if (fast.pointCount == 0) return;
+  EXPECT_EQ(std::memcmp(&fast.normal, &general.normal, sizeof(Vec2)), 0) << "pair " << pair;
+  for (int k = 0; k < fast.pointCount; ++k) {
+    EXPECT_EQ(std::memcmp(&fast.points[k], &general.points[k], sizeof(ManifoldPoint)), 0) << "pair " << pair << " point " << k;
+  }
+}
+
+// Box pairs through CollideBoxBatch (eight lanes on a CPU with AVX2), in batches of `batch`
+// (the last one shorter), each manifold against the general path's.
+struct BoxCase {
+  Polygon a, b;
+  Transform xfA, xfB;
+  Real speculative;
+};
+void ExpectBatchMatchesGeneral(const std::vector<BoxCase>& cases, int batch) {
+  std::vector<BoxPair> pairs;
+  for (const BoxCase& c : cases) pairs.push_back({&c.a, &c.xfA, &c.b, &c.xfB, c.speculative});
+  for (size_t first = 0; first < pairs.size(); first += size_t(batch)) {
+    const int count = int(std::min(pairs.size() - first, size_t(batch)));
+    Manifold out[kBoxBatch];
+    CollideBoxBatch(&pairs[first], count, out);
+    for (int k = 0; k < count; ++k) {
+      const BoxCase& c = cases[first + size_t(k)];
+      ExpectSameManifold(out[k], CollidePolygonsGeneral(c.a, c.xfA, c.b, c.xfB, c.speculative), int(first) + k);
+    }
+  }
+}
+
 // ---------------------------------------------------------------- box pairs: SIMD paths
 
-// Box pairs take a four-lane path (SSE2, or AVX's encoding on a CPU with AVX); it must give the
-// general path's manifold bit for bit (the state hashes rest on it). Boxes of several sizes and
+// Box pairs take a four-lane path (SSE2, or AVX's encoding on a CPU with AVX), and in the pair
+// loop the eight-pair batch (box_batch.h, on a CPU with AVX2); each must give the general path's
+// manifold bit for bit (the state hashes rest on it). Boxes of several sizes and
 // aspect ratios, turned, shifted and overlapping by various amounts, both orders.
-TEST(NarrowPhaseBoxes, FourLanePathMatchesTheGeneralPathBitForBit) {
+TEST(NarrowPhaseBoxes, LanePathsMatchTheGeneralPathBitForBit) {
   int touching = 0;
   uint32_t seed = 12345;
   auto next = [&seed] {
     seed = seed * 1664525u + 1013904223u;
     return Real(seed >> 8) / Real(1u << 24);  // [0, 1)
   };
+  std::vector<BoxCase> cases;
   for (int i = 0; i < 4000; ++i) {
     const Polygon a = MakeBox(Real(0.1) + next(), Real(0.1) + next(), {next() - Real(0.5), 0}, next() * 3);
     const Polygon b = MakeBox(Real(0.1) + next(), Real(0.1) + next(), {0, next() - Real(0.5)}, next() * 3);
     const Transform xfA = Xf(next() * 4 - 2, next() * 4 - 2, next() * 7);
     const Transform xfB = Xf(next() * 4 - 2, next() * 4 - 2, i % 5 == 0 ? 0 : next() * 7);
-    const Manifold fast = CollidePolygons(a, xfA, b, xfB, kSpec);
-    const Manifold general = CollidePolygonsGeneral(a, xfA, b, xfB, kSpec);
-    ASSERT_EQ(fast.pointCount, general.pointCount) << "pair " << i;
+    // Speculative distances vary per pair in a batch (continuous collision widens them).
+    const Real spec = i % 3 == 0 ? kSpec : kSpec + next() * Real(0.3);
+    const Manifold fast = CollidePolygons(a, xfA, b, xfB, spec);
+    const Manifold general = CollidePolygonsGeneral(a, xfA, b, xfB, spec);
+    ExpectSameManifold(fast, general, i);
     touching += fast.pointCount > 0;
-    if (fast.pointCount == 0) continue;
-    EXPECT_EQ(std::memcmp(&fast.normal, &general.normal, sizeof(Vec2)), 0) << "pair " << i;
-    for (int k = 0; k < fast.pointCount; ++k) {
-      EXPECT_EQ(std::memcmp(&fast.points[k], &general.points[k], sizeof(ManifoldPoint)), 0) << "pair " << i << " point " << k;
-    }
+    cases.push_back({a, b, xfA, xfB, spec});
   }
   EXPECT_GT(touching, 400);  // the comparison saw manifolds, not only misses
+  ExpectBatchMatchesGeneral(cases, kBoxBatch);
+  ExpectBatchMatchesGeneral(cases, 3);  // partly filled batches
 }
 
 // The same comparison where stacks and pyramids live: unturned or quarter-turned boxes placed on
@@ -68,13 +104,14 @@ TEST(NarrowPhaseBoxes, FourLanePathMatchesTheGeneralPathBitForBit) {
 // between faces of one box, and clipped ends land exactly on the side planes. These are the
 // cases where the box paths' first-lane arg-max/min and two-point clip must pick what the
 // general path's scalar loops pick.
-TEST(NarrowPhaseBoxes, FourLanePathMatchesTheGeneralPathOnAlignedStacks) {
+TEST(NarrowPhaseBoxes, LanePathsMatchTheGeneralPathOnAlignedStacks) {
   const Real offsets[] = {-1, Real(-0.75), Real(-0.5), Real(-0.25), 0, Real(0.25), Real(0.5), Real(0.75), 1};
   const Real gaps[] = {Real(-0.01), 0, Real(0.005), Real(0.02), Real(0.03)};
   const Real angles[] = {0, Real(1e-7), Real(-1e-7), Real(test::kPi / 2), Real(test::kPi)};
   const Polygon unit = MakeBox(Real(0.5), Real(0.5));
   const Polygon wide = MakeBox(2, Real(0.5));
   int touching = 0, cases = 0;
+  std::vector<BoxCase> batchCases;
   for (const Polygon* lower : {&unit, &wide}) {
     for (Real dx : offsets) {
       for (Real gap : gaps) {
@@ -92,14 +129,9 @@ TEST(NarrowPhaseBoxes, FourLanePathMatchesTheGeneralPathOnAlignedStacks) {
               const Manifold fast = CollidePolygons(a, xa, b, xb, kSpec);
               const Manifold general = CollidePolygonsGeneral(a, xa, b, xb, kSpec);
               ++cases;
-              ASSERT_EQ(fast.pointCount, general.pointCount) << "case " << cases;
+              ExpectSameManifold(fast, general, cases);
               touching += fast.pointCount > 0;
-              if (fast.pointCount == 0) continue;
-              EXPECT_EQ(std::memcmp(&fast.normal, &general.normal, sizeof(Vec2)), 0) << "case " << cases;
-              for (int k = 0; k < fast.pointCount; ++k) {
-                EXPECT_EQ(std::memcmp(&fast.points[k], &general.points[k], sizeof(ManifoldPoint)), 0)
-                    << "case " << cases << " point " << k;
-              }
+              batchCases.push_back({a, b, xa, xb, kSpec});
             }
           }
         }
@@ -107,6 +139,7 @@ TEST(NarrowPhaseBoxes, FourLanePathMatchesTheGeneralPathOnAlignedStacks) {
     }
   }
   EXPECT_GT(touching, cases / 3);  // most placements touch or are within the speculative distance
+  ExpectBatchMatchesGeneral(batchCases, kBoxBatch);
 }
 
 // ---------------------------------------------------------------- circle vs circle
