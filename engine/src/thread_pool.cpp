@@ -330,6 +330,8 @@ constexpr int kQueueFloorMillis = 20;
 // Other processes using more than cores - threads + this many cores over a serial period keep
 // the pool serial without a probe (OthersHoldCores).
 constexpr double kOthersMargin = 0.5;
+// Reads of procs_running that must all show other running threads (OthersPersist).
+constexpr int kBirthSamples = 3;
 constexpr int kContendedMillis = 200;
 constexpr int kMaxContendedMillis = 1600;
 
@@ -429,9 +431,14 @@ class ThreadPool final : public TaskSystem {
     // 2 threads ran 1.0-2.1x slower than 1 (issue #14, this pool before the check; 3 runs each).
     // /proc/stat's procs_running counts the threads on a core right now, this one included
     // (seen on these VMs: 1 when quiet, 3-4 beside one shell busy loop).
+    //
+    // The reading must hold over kBirthSamples reads 1 ms apart: on a quiet machine a single read
+    // saw another thread on a core at 1 of 6 births (a kernel thread's or another process's
+    // burst), and the run's 2 threads then ran serially for its whole life (base-100 pyramid,
+    // 70 steps: 2.1-2.4 ms a step against 1.4-1.5 in parallel). A busy loop is on a core at
+    // every read.
     if (!splitSerialSteps_ && running > 1 && machineCores_ > 0) {
-      const int others = RunningThreadsNow() - 1;
-      if (others > 0 && double(others) > double(machineCores_ - running) + kOthersMargin) {
+      if (OthersPersist(/*ownRunning=*/1, machineCores_ - running, kBirthSamples, std::chrono::milliseconds(1))) {
         const Clock::time_point now = Clock::now();
         serialUntil_ = now + std::chrono::milliseconds(kContendedMillis);
         windowOpen_ = false;
@@ -463,11 +470,11 @@ class ThreadPool final : public TaskSystem {
       std::fprintf(stderr,
                    "pool %d: life %.1f ms, steps %lld (alone %lld), jobs %lld, serial %lld, caller alone %lld, parallel-job time %.3f ms, wait %.3f ms, "
                    "waits>1ms %lld, first job at %.1f ms, marks %d (first at %.1f ms), probes %d, failed probes %d; caller cpu %.1f ms runq %.1f ms "
-                   "slices %lld; marks by stall %d idle %d queue %d, first queue share %.2f, max %.2f, extended %d, others %.2f cores, born serial %d",
+                   "slices %lld; marks by stall %d idle %d queue %d, first queue share %.2f, max %.2f, extended %d, others %.2f cores, born serial %d, queue unconfirmed %d",
                    workers_, std::chrono::duration<double, std::milli>(Clock::now() - born_).count(), statSteps_, statAloneSteps_, statJobs_, statSerial_,
                    statAlone_, statJobNs_ * 1e-6, statWaitNs_ * 1e-6, statLong_, statFirstJobMs_, statMarks_, statFirstMarkMs_, statProbes_,
                    statFailedProbes_, callerSched_[0] * 1e-6, callerSched_[1] * 1e-6, callerSched_[2], statMarkStall_, statMarkIdle_,
-                   statMarkQueued_, statFirstQueue_, statMaxQueue_, statExtended_, statOthers_, statBornSerial_);
+                   statMarkQueued_, statFirstQueue_, statMaxQueue_, statExtended_, statOthers_, statBornSerial_, statQueueUnconfirmed_);
       for (size_t w = 1; w < workerSched_.size(); ++w) {
         std::fprintf(stderr, "; worker %zu cpu %.1f ms runq %.1f ms slices %lld", w, workerSched_[w][0] * 1e-6,
                      workerSched_[w][1] * 1e-6, workerSched_[w][2]);
@@ -621,7 +628,14 @@ class ThreadPool final : public TaskSystem {
         const double queue = double(runq - runqStart_) * 1e-9 / std::chrono::duration<double>(over).count();
         if (statFirstQueue_ < 0) statFirstQueue_ = queue;
         statMaxQueue_ = std::max(statMaxQueue_, queue);
-        queued = queue > kQueueShare;
+        // Confirmed by the machine's run queue right now (OthersPersist, reads back to back):
+        // on a quiet machine another thread's burst of a few milliseconds reached a share of
+        // 0.38 in the first window (2 of 14 runs of the base-100 pyramid at 2 threads), and the
+        // run then went serial; a busy loop is still on a core when the pool looks.
+        queued = queue > kQueueShare &&
+                 OthersPersist(ThreadCount() - jobSleepers_.load(std::memory_order_relaxed), machineCores_ - ThreadCount(),
+                               kBirthSamples, std::chrono::microseconds(0));
+        statQueueUnconfirmed_ += queue > kQueueShare && !queued;
       }
     }
     if (share <= kStallShare && !idle && !queued) {
@@ -660,6 +674,21 @@ class ThreadPool final : public TaskSystem {
     const double others = ((after.busySeconds - before.busySeconds) - (after.ownSeconds - before.ownSeconds)) / wall;
     statOthers_ = others;
     return others > double(machineCores_ - ThreadCount()) + kOthersMargin;
+  }
+
+  // Whether other threads than the pool's `ownRunning` ones are on the machine's cores, more
+  // of them than `freeCores` + kOthersMargin, at each of `samples` reads of procs_running, `gap`
+  // apart. False where procs_running cannot be read or this process may not run on every core.
+  bool OthersPersist(int ownRunning, int freeCores, int samples, std::chrono::microseconds gap) const {
+    if (machineCores_ <= 0) return false;
+    for (int k = 0; k < samples; ++k) {
+      if (k > 0 && gap.count() > 0) std::this_thread::sleep_for(gap);
+      const int running = RunningThreadsNow();
+      if (running < 0) return false;
+      const int others = running - ownRunning;
+      if (!(others > 0 && double(others) > double(freeCores) + kOthersMargin)) return false;
+    }
+    return true;
   }
 
   // /proc/stat's procs_running: the threads of the whole machine on a core at this moment; -1
@@ -949,6 +978,7 @@ class ThreadPool final : public TaskSystem {
   double statFirstMarkMs_ = -1, statFirstJobMs_ = -1;
   bool stats_ = false;
   bool splitSerialSteps_ = false;  // QUADRANT_POOL_ALONE=0: RunsAlone is always false
+  int statQueueUnconfirmed_ = 0;   // queue shares above kQueueShare that procs_running did not confirm
   int statBornSerial_ = 0;         // 1: the pool started serial (the check at birth)
   Clock::time_point born_;
   std::array<long long, 3> callerSched_{};
