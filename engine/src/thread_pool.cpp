@@ -82,11 +82,12 @@
 //   the jobs (a full window), and how long the pool's threads waited on run queues (more than
 //   kQueueShare of the window or of kQueueFloorMillis, whichever is longer, read from
 //   /proc/thread-self/schedstat every kFirstJudgeMillis: more runnable threads than cores, the
-//   direct sign). Any of them makes the pool serial for
+//   direct sign; confirmed by procs_running, below). Any of them makes the pool serial for
 //   kContendedMillis. A pool born while more threads run than the cores it leaves free
-//   (/proc/stat's procs_running) starts serial for that period too: a short run (1000-8000
-//   circles, 70 steps of 0.08-0.6 ms) ended before any window was judged, and beside one busy
-//   loop its 2 threads ran 1.0-2.1x slower than 1. At the end of a serial period the pool looks
+//   (/proc/stat's procs_running, at each of kBirthSamples reads 1 ms apart: one read caught a
+//   passing thread on a quiet machine) starts serial for that period too: a short run
+//   (1000-8000 circles, 70 steps of 0.08-0.6 ms) ended before any window was judged, and beside
+//   one busy loop its 2 threads ran 1.0-2.1x slower than 1. At the end of a serial period the pool looks
 //   at the machine instead of probing: if other processes used more of the cores over the period than the pool's threads
 //   could spare (/proc/stat's busy ticks less this process's CPU time, OthersHoldCores), it
 //   stays serial for another period without running a parallel job; otherwise it probes, and
