@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <vector>
 
 #include "box_batch.h"
@@ -104,6 +105,26 @@ TEST(NarrowPhaseBoxes, LanePathsMatchTheGeneralPathBitForBit) {
 // between faces of one box, and clipped ends land exactly on the side planes. These are the
 // cases where the box paths' first-lane arg-max/min and two-point clip must pick what the
 // general path's scalar loops pick.
+// A body whose motion blew up (NaN or infinite position or rotation) shares a batch with pairs
+// that touch: its lane gives what the general path gives (no points: every comparison with a NaN
+// fails the way the scalar code's does), and the other lanes are not disturbed.
+TEST(NarrowPhaseBoxes, NonFiniteTransformsInABatchMatchTheGeneralPath) {
+  const Real inf = std::numeric_limits<Real>::infinity(), nan = std::numeric_limits<Real>::quiet_NaN();
+  const Polygon box = MakeBox(Real(0.5), Real(0.5));
+  const Transform below = Xf(0, 0);
+  const Transform bad[] = {{{nan, 1}, MakeRot(0)}, {{0, inf}, MakeRot(0)}, {{0, Real(0.99)}, {nan, 0}},
+                           {{-inf, inf}, {1, 0}}, {{0, Real(0.99)}, {inf, inf}}};
+  std::vector<BoxCase> cases;
+  for (int i = 0; i < 16; ++i) {
+    const Transform xf = i % 2 == 0 ? bad[(i / 2) % 5] : Xf(Real(0.1) * Real(i % 5), Real(0.99), Real(0.01) * Real(i));
+    cases.push_back(i % 4 < 2 ? BoxCase{box, box, below, xf, kSpec} : BoxCase{box, box, xf, below, kSpec});
+  }
+  int touching = 0;
+  for (const BoxCase& c : cases) touching += CollidePolygonsGeneral(c.a, c.xfA, c.b, c.xfB, c.speculative).pointCount > 0;
+  EXPECT_EQ(touching, 8);  // every finite pair touches; no non-finite one does
+  ExpectBatchMatchesGeneral(cases, kBoxBatch);
+}
+
 TEST(NarrowPhaseBoxes, LanePathsMatchTheGeneralPathOnAlignedStacks) {
   const Real offsets[] = {-1, Real(-0.75), Real(-0.5), Real(-0.25), 0, Real(0.25), Real(0.5), Real(0.75), 1};
   const Real gaps[] = {Real(-0.01), 0, Real(0.005), Real(0.02), Real(0.03)};
