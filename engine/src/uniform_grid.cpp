@@ -178,7 +178,8 @@ class UniformGrid final : public BroadPhase {
     // stress scenes of 1000-2000 bodies ran the grid serially at 2 threads. Against d8d1065
     // (9 interleaved rounds, results/amd-epyc-2c/vs_d8d1065_grid/): 2 threads, ms a step,
     // tumbler 2025 0.722 -> 0.659, circles 2000 0.116 -> 0.098, polygons 2000 0.211 -> 0.183,
-    // circles 1024 0.061 -> 0.059; 1 thread and the pyramids (the pair cache serves) within 1 %.
+    // circles 1024 0.061 -> 0.059; 1 thread within 1.6 %; the pyramids, whose pairs the pair
+    // cache serves, -0.8 to +7.6 % at 2 threads, none of it significant (p 0.04-0.49).
     const bool parallel = n >= std::max(2, run.MinItems() / 4) && run.Workers() > 1;
     // Blocks of the sort and the scans: four per worker, so a thread that starts late leaves
     // little to wait on. The sorted order and the pairs do not depend on the block count.
