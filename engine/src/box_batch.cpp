@@ -9,8 +9,11 @@
 #include <cfloat>
 #include <cstdint>
 
-#if QUADRANT_BOX_BATCH
+#if defined(__SSE2__) && !defined(QUADRANT_DOUBLE) && defined(__x86_64__) && defined(__GNUC__)
+#define QUADRANT_BOX_BATCH 1
 #include <immintrin.h>
+#else
+#define QUADRANT_BOX_BATCH 0
 #endif
 
 namespace quadrant {
@@ -157,7 +160,8 @@ inline void ClipToTwo(Clip& out0, Clip& out1, const Clip& in0, const Clip& in1, 
 
 }  // namespace
 
-void CollideBoxBatchVex(const BoxPair* pairs, int count, Manifold* out) {
+// CollideBoxBatch's eight-lane path (called only where BoxBatchInLanes()).
+static void CollideBoxBatchVex(const BoxPair* pairs, int count, Manifold* out) {
   // Lanes past `count` repeat pair 0; their results are not written.
   const float* aVertRows[8];
   const float* aNormRows[8];

@@ -34,12 +34,4 @@ bool BoxBatchInLanes();
 /// pairs[k].speculative) for k < count, 1 <= count <= kBoxBatch, bit for bit.
 void CollideBoxBatch(const BoxPair* pairs, int count, Manifold* out);
 
-#if defined(__SSE2__) && !defined(QUADRANT_DOUBLE) && defined(__x86_64__) && defined(__GNUC__)
-#define QUADRANT_BOX_BATCH 1
-/// CollideBoxBatch's eight-lane path (call only where BoxBatchInLanes()).
-[[gnu::target("avx2")]] void CollideBoxBatchVex(const BoxPair* pairs, int count, Manifold* out);
-#else
-#define QUADRANT_BOX_BATCH 0
-#endif
-
 }  // namespace quadrant

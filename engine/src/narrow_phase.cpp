@@ -511,7 +511,6 @@ struct CallBoxes {
   Manifold operator()(const Polygon& a, const Transform& xfA, const Polygon& b, const Transform& xfB, Real spec) const {
     return CollideBoxes(a, xfA, b, xfB, spec);
   }
-  void Batch(const BoxPair* pairs, int count, Manifold* out) const { CollideBoxBatch(pairs, count, out); }
 };
 
 namespace pairs_default {
@@ -521,8 +520,7 @@ namespace pairs_default {
 #if QUADRANT_NARROW_SIMD && defined(__x86_64__) && defined(__GNUC__)
 // Box pairs eight at a time (box_batch.h). Base-100 pyramid: see the commit that added it.
 struct VexBoxes {
-  static constexpr bool kBatch = true;
-  void Batch(const BoxPair* pairs, int count, Manifold* out) const { CollideBoxBatch(pairs, count, out); }
+  static constexpr bool kBatch = true;  // eight at a time (CollideBoxBatch)
   [[gnu::target("avx"), gnu::always_inline]] Manifold operator()(const Polygon& a, const Transform& xfA, const Polygon& b,
                                                                    const Transform& xfB, Real spec) const {
     return CollideBoxesVexInline(a, xfA, b, xfB, spec);

@@ -84,7 +84,7 @@
 //   /proc/thread-self/schedstat every kFirstJudgeMillis: more runnable threads than cores, the
 //   direct sign; confirmed by procs_running, below). Any of them makes the pool serial for
 //   kContendedMillis. A pool born while more threads run than the cores it leaves free
-//   (/proc/stat's procs_running, at each of kBirthSamples reads 1 ms apart: one read caught a
+//   (/proc/stat's procs_running, at each of kPersistReads reads 1 ms apart: one read caught a
 //   passing thread on a quiet machine) starts serial for that period too: a short run
 //   (1000-8000 circles, 70 steps of 0.08-0.6 ms) ended before any window was judged, and beside
 //   one busy loop its 2 threads ran 1.0-2.1x slower than 1. At the end of a serial period the pool looks
@@ -332,7 +332,7 @@ constexpr int kQueueFloorMillis = 20;
 // the pool serial without a probe (OthersHoldCores).
 constexpr double kOthersMargin = 0.5;
 // Reads of procs_running that must all show other running threads (OthersPersist).
-constexpr int kBirthSamples = 3;
+constexpr int kPersistReads = 3;
 constexpr int kContendedMillis = 200;
 constexpr int kMaxContendedMillis = 1600;
 
@@ -433,13 +433,13 @@ class ThreadPool final : public TaskSystem {
     // /proc/stat's procs_running counts the threads on a core right now, this one included
     // (seen on these VMs: 1 when quiet, 3-4 beside one shell busy loop).
     //
-    // The reading must hold over kBirthSamples reads 1 ms apart: on a quiet machine a single read
+    // The reading must hold over kPersistReads reads 1 ms apart: on a quiet machine a single read
     // saw another thread on a core at 1 of 6 births (a kernel thread's or another process's
     // burst), and the run's 2 threads then ran serially for its whole life (base-100 pyramid,
     // 70 steps: 2.1-2.4 ms a step against 1.4-1.5 in parallel). A busy loop is on a core at
     // every read.
     if (!splitSerialSteps_ && running > 1 && machineCores_ > 0) {
-      if (OthersPersist(/*ownRunning=*/1, machineCores_ - running, kBirthSamples, std::chrono::milliseconds(1))) {
+      if (OthersPersist(/*ownRunning=*/1, machineCores_ - running, kPersistReads, std::chrono::milliseconds(1))) {
         const Clock::time_point now = Clock::now();
         serialUntil_ = now + std::chrono::milliseconds(kContendedMillis);
         windowOpen_ = false;
@@ -635,7 +635,7 @@ class ThreadPool final : public TaskSystem {
         // run then went serial; a busy loop is still on a core when the pool looks.
         queued = queue > kQueueShare &&
                  OthersPersist(ThreadCount() - jobSleepers_.load(std::memory_order_relaxed), machineCores_ - ThreadCount(),
-                               kBirthSamples, std::chrono::microseconds(0));
+                               kPersistReads, std::chrono::microseconds(0));
         statQueueUnconfirmed_ += queue > kQueueShare && !queued;
       }
     }
