@@ -1,4 +1,4 @@
-// Tests for the broad phases (engine/src/broad_phase.h): quad tree and uniform grid must both
+// Tests for the broad phases (engine/src/collision/broad_phase.h): quad tree and uniform grid must both
 // report exactly the brute-force set of overlapping pairs.
 #include <gtest/gtest.h>
 
@@ -11,9 +11,9 @@
 #include <utility>
 #include <vector>
 
-#include "broad_phase.h"
+#include "collision/broad_phase.h"
 #include "quadrant/task_system.h"
-#include "stage_runner.h"
+#include "parallel/stage_runner.h"
 #include "test_helpers.h"
 
 namespace quadrant {

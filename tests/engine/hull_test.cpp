@@ -1,4 +1,4 @@
-// Tests for MakePolygon / MakeBox (engine/src/hull.cpp): convex hull, ordering, validation.
+// Tests for MakePolygon / MakeBox (engine/src/collision/hull.cpp): convex hull, ordering, validation.
 #include <gtest/gtest.h>
 
 #include <algorithm>

@@ -1,4 +1,4 @@
-// Tests for ComputeMass / ComputeArea (engine/src/mass.cpp) against closed forms.
+// Tests for ComputeMass / ComputeArea (engine/src/collision/mass.cpp) against closed forms.
 #include <gtest/gtest.h>
 
 #include <array>

@@ -1,4 +1,4 @@
-// Tests for the narrow phase (engine/src/narrow_phase.h): contact manifolds per shape pair.
+// Tests for the narrow phase (engine/src/collision/narrow_phase.h): contact manifolds per shape pair.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -7,8 +7,8 @@
 #include <limits>
 #include <vector>
 
-#include "box_batch.h"
-#include "narrow_phase.h"
+#include "collision/box_batch.h"
+#include "collision/narrow_phase.h"
 #include "quadrant/shapes.h"
 #include "test_helpers.h"
 

@@ -1,4 +1,4 @@
-// Tests for the pair cache (engine/src/pair_cache.h): while it serves pairs from its fat boxes it
+// Tests for the pair cache (engine/src/collision/pair_cache.h): while it serves pairs from its fat boxes it
 // must give exactly the broad phase's set, whatever the boxes, flags, body count and thread count
 // do between calls; it must actually serve a resting scene and stand aside for a moving one; and a
 // world stepped with it gives the same state, bit for bit, as one stepped without it.
@@ -11,11 +11,11 @@
 #include <utility>
 #include <vector>
 
-#include "broad_phase.h"
-#include "pair_cache.h"
+#include "collision/broad_phase.h"
+#include "collision/pair_cache.h"
 #include "quadrant/task_system.h"
 #include "quadrant/world.h"
-#include "stage_runner.h"
+#include "parallel/stage_runner.h"
 #include "test_helpers.h"
 
 namespace quadrant {

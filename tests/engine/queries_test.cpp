@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "queries.h"
+#include "collision/queries.h"
 #include "quadrant/world.h"
 #include "test_helpers.h"
 

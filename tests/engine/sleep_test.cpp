@@ -1,4 +1,4 @@
-// Sleeping (engine/src/islands.cpp): a settled pile falls asleep and stops, a touch or a write
+// Sleeping (engine/src/dynamics/islands.cpp): a settled pile falls asleep and stops, a touch or a write
 // wakes it, a world without sleep is unchanged bit for bit, sleep is thread-count invariant in
 // the deterministic scheme, and bad sleep settings are refused.
 #include <gtest/gtest.h>

@@ -11,7 +11,7 @@
 #include <limits>
 
 #include "quadrant/world.h"
-#include "soft_rows.h"
+#include "dynamics/soft_rows.h"
 
 namespace quadrant {
 namespace {

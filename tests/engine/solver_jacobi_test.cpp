@@ -1,4 +1,4 @@
-// The Jacobi solver (SolverType::kJacobi, engine/src/jacobi_solve.h) in the single-process World:
+// The Jacobi solver (SolverType::kJacobi, engine/src/dynamics/jacobi_solve.h) in the single-process World:
 // the solver of the distributed world, whose result must not depend on how work is split.
 #include <gtest/gtest.h>
 

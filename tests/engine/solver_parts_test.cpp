@@ -8,14 +8,14 @@
 #include <random>
 #include <vector>
 
-#include "contact_cache.h"
-#include "constraint_graph.h"
-#include "contact_constraints.h"
-#include "contact_sort.h"
-#include "islands.h"
+#include "collision/contact_cache.h"
+#include "dynamics/constraint_graph.h"
+#include "dynamics/contact_constraints.h"
+#include "collision/contact_sort.h"
+#include "dynamics/islands.h"
 #include "quadrant/world.h"
 #include "test_helpers.h"
-#include "world_internal.h"
+#include "world/world_internal.h"
 
 namespace quadrant {
 namespace {

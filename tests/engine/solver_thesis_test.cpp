@@ -1,4 +1,4 @@
-// Tests for the thesis solver (engine/src/solver_thesis.cpp): it may be crude, but it stays
+// Tests for the thesis solver (engine/src/dynamics/solver_thesis.cpp): it may be crude, but it stays
 // bounded. At c70fd1b a dense closed box under gravity exploded: after 2000 steps most of the
 // 2000 circles were outside the box, falling at about 300 m/s.
 #include <gtest/gtest.h>

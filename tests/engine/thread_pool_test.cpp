@@ -1,4 +1,4 @@
-// Tests for the task system (engine/src/thread_pool.cpp, include/quadrant/task_system.h): the
+// Tests for the task system (engine/src/parallel/thread_pool.cpp, include/quadrant/task_system.h): the
 // block partition, that every index runs exactly once whichever thread claims it, nesting,
 // empty ranges, exceptions, and a world stepped on more threads than there are free cores.
 // Nothing here is timed.

@@ -1,4 +1,4 @@
-// Tests for the World (engine/src/world.cpp and the stages it drives): collisions, resting
+// Tests for the World (engine/src/world/world.cpp and the stages it drives): collisions, resting
 // contact, determinism, ids, read-outs and effects.
 #include <gtest/gtest.h>
 

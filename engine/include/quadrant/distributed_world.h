@@ -15,7 +15,7 @@
 //      tile that its broad-phase box reaches when widened by the largest such box's reach (so a
 //      rank sees every body that can touch one of its own);
 //   3. each rank finds the contacts of its own bodies and runs the Jacobi solve
-//      (engine/src/jacobi_solve.h, SolverType::kJacobi): one exchange of its boundary bodies'
+//      (engine/src/dynamics/jacobi_solve.h, SolverType::kJacobi): one exchange of its boundary bodies'
 //      velocities and contact counts after warm starting, one after every velocity iteration but
 //      the last;
 //   4. every step the global body count and an id checksum are compared with the loaded scene's

@@ -1,0 +1,351 @@
+// Quadrant's value types: body ids, the definitions a world and its bodies are made from
+// (WorldDef, BodyDef, ShapeDef, Filter, Effects, with every default documented here), and what
+// a step reports (Profile, Counters, ContactInfo, RayHit, ContactEvent). No behaviour: the
+// engine's stages include this header, not world.h; users include world.h, which includes it.
+#pragma once
+
+#include <array>
+#include <cstdint>
+
+#include "quadrant/error.h"
+#include "quadrant/math.h"
+#include "quadrant/shapes.h"
+
+namespace quadrant {
+
+
+/// A body handle. A value type: index into the world's slots plus a generation that is
+/// bumped when the slot is freed, so a stale id is detected instead of aliasing a new body.
+/// The default (generation 0) is the null id; live ids have generation >= 1.
+struct BodyId {
+  uint32_t index = 0;
+  uint32_t generation = 0;
+  constexpr bool IsNull() const { return generation == 0; }
+  friend constexpr bool operator==(BodyId a, BodyId b) = default;
+};
+
+enum class BodyType : uint8_t {
+  kStatic,     ///< never moves, infinite mass
+  kKinematic,  ///< moves by its velocity, infinite mass, not pushed by contacts
+  kDynamic,    ///< moved by gravity and contacts
+};
+
+enum class ShapeType : uint8_t { kCircle, kPolygon };
+
+/// The single shape of a body. Quadrant bodies carry exactly one shape: every scene of the
+/// suite needs no more, and it keeps the hot loops free of a shape list per body.
+struct ShapeDef {
+  ShapeType type = ShapeType::kCircle;
+  Circle circle;
+  Polygon polygon;
+  Real density = 1;       ///< kg/m^2, > 0 for dynamic bodies
+  Real friction = Real(0.6);   ///< Coulomb coefficient, >= 0; mixed as sqrt(fa*fb) like Box2D
+  Real restitution = 0;   ///< 0..1 (values above 1 are refused); mixed as max(ea, eb) like Box2D
+
+  static ShapeDef MakeCircle(Real radius, Vec2 center = {});
+  static ShapeDef Box(Real hx, Real hy, Vec2 center = {}, Real angle = 0);
+  static ShapeDef FromPolygon(const Polygon& polygon);
+};
+
+/// Every category bit: the default mask of bodies and queries.
+inline constexpr uint32_t kAllCategories = 0xFFFFFFFFu;
+
+/// Collision filtering with Box2D's rule: bodies a and b collide only if
+/// (a.maskBits & b.categoryBits) != 0 and (b.maskBits & a.categoryBits) != 0. A pair that fails
+/// it gets no contact at all (it is dropped after the broad phase). The default (category 1,
+/// every mask bit) collides with everything; while every body has it, the step does no
+/// filtering work at all. Needs ParallelScheme::kDeterministic (World refuses a non-default
+/// filter under kQuadrants, whose threads find pairs on their own).
+struct Filter {
+  uint32_t categoryBits = 1;              ///< what the body is (usually one bit)
+  uint32_t maskBits = kAllCategories;     ///< the categories it collides with
+  friend constexpr bool operator==(Filter a, Filter b) = default;
+};
+
+struct BodyDef {
+  BodyType type = BodyType::kStatic;
+  Vec2 position;            ///< world position of the body origin (m)
+  Real angle = 0;           ///< radians
+  Vec2 linearVelocity;      ///< m/s, of the centre of mass
+  Real angularVelocity = 0; ///< rad/s
+  Real linearDamping = 0;   ///< 1/s, >= 0 (applied only when the world enables damping)
+  Real angularDamping = 0;  ///< 1/s, >= 0
+  ShapeDef shape;
+  Filter filter;            ///< collision filtering (Filter), default: collides with everything
+  /// Yours: the engine stores it and never reads it (World::GetUserData). A game keeps an entity
+  /// index or a pointer here (reinterpret_cast<uintptr_t>).
+  uint64_t userData = 0;
+};
+
+/// Throws quadrant::Error, with the message CreateBody would give, for a definition that
+/// World::CreateBody refuses whatever the world (bad numbers, shapes, densities, a mass that
+/// overflows). What depends on the world is not checked (a non-default filter under
+/// ParallelScheme::kQuadrants). For tools that check a description before they have a World:
+/// the scene API's ValidateScene runs every scene body through it.
+void CheckBodyDef(const BodyDef& def);
+
+enum class SolverType : uint8_t {
+  kThesis,  ///< the 2013 thesis: mass-ratio separation + one impulse per contact, no iterations
+  kPgs,     ///< sequential impulses, warm starting, velocity iterations, position pass (Box2D 2.4)
+  kSoftStep,  ///< sub-steps with soft contacts and a relax pass (Box2D 3)
+  /// Jacobi velocity iterations with mass splitting (engine/src/dynamics/jacobi_solve.h): every contact
+  /// solved from the velocities at the start of the iteration, each body's changes summed in
+  /// contact-key order, penetration removed by a Baumgarte velocity bias (no position pass),
+  /// restitution as a velocity bias (kBox2d's, also for speculative points closing within the
+  /// step). velocityIterations applies; positionIterations and restitutionIterations do not.
+  /// Its result does not depend on how bodies are split
+  /// among processes: it is the solver of quadrant::DistributedWorld, whose state equals a
+  /// World's with this solver. Softer than pgs on stacks (README "More than one machine").
+  kJacobi,
+};
+
+enum class BroadPhaseType : uint8_t {
+  kQuadTree,     ///< the thesis's region quad-tree (body in the smallest node holding its AABB)
+  kUniformGrid,  ///< a uniform grid rebuilt each step, cells sized by the bodies (see uniform_grid.cpp)
+};
+
+/// Effects a world simulates. A disabled effect's work is not done at all: the step picks a
+/// specialised path, it does not multiply by zero.
+struct Effects {
+  bool gravity = true;
+  bool friction = true;
+  bool restitution = true;
+  bool rotation = true;       ///< false: angular velocity stays 0 and no angular terms are solved
+  bool warmStarting = true;   ///< pgs only: start from last step's impulses
+  bool damping = false;       ///< apply per-body linear/angular damping
+  /// Continuous collision: a body's broad-phase box is swept by its motion over the step and a
+  /// contact is created wherever the gap can close within the step, so nothing tunnels. Off:
+  /// contacts are created only within speculativeDistance (a fast body can pass through a
+  /// thin one).
+  bool continuous = true;
+  /// Sleeping (islands.cpp): a group of dynamic bodies connected by contacts that has been slow
+  /// for WorldDef::timeToSleep stops being simulated (no integration, no AABB update, no pairs
+  /// among sleeping or with static bodies) until something touches or moves it. Off: no island
+  /// bookkeeping at all, every body is simulated every step.
+  bool sleep = false;
+};
+
+/// How the pgs and soft_step solvers apply restitution (WorldDef::restitution).
+enum class RestitutionPolicy : uint8_t {
+  /// Pairwise collisions before the velocity iterations or sub-steps (contact_constraints.h, ApplyCollisions): each
+  /// approaching contact gets the impulse of a collision of its two bodies alone, sequentially, so
+  /// a row of touching balls passes the impulse on as Newton's cradle does. The default.
+  kCollisions,
+  /// Box2D 2.4.1's way, to reproduce its responses: each point's normal approach speed vn is
+  /// captured before the solve (after gravity, before warm starting); where vn < -threshold the
+  /// normal row's target becomes -e vn (a velocity bias) inside the velocity iterations, solved
+  /// simultaneously with friction and the other rows. soft_step: vn is captured before the step's
+  /// sub-steps (before their gravity), and rigid rows with that target and friction act after the
+  /// first sub-step's relax pass, the bodies moving as if they had from its start
+  /// (solver_soft_step.cpp). pgs and soft_step (World refuses it with thesis). README "validation"
+  /// gives what it changes against Box2D and the analytic answer.
+  kBox2d,
+};
+
+/// How a world with threadCount > 1 splits its work.
+enum class ParallelScheme : uint8_t {
+  /// Every stage parallel over static blocks, per-thread buffers merged in block order, and the
+  /// solver parallel over constraint-graph colours: the state is bit-identical for any thread
+  /// count (the state hash is a test).
+  kDeterministic,
+  /// The thesis's data partition: the quad-tree's top nodes are the threads' regions; each
+  /// thread detects, resolves and integrates the bodies it owns; bodies straddling a region
+  /// boundary belong to the master. Results depend on the thread count.
+  kQuadrants,
+};
+
+struct WorldDef {
+  Vec2 gravity{0, Real(-10)};           ///< m/s^2
+  /// The default is soft_step with two relax passes and a mass-ratio limit of 10 (below), chosen
+  /// by measurement (issue #13; README "solver"): it holds all 16 hard cases at the default budget,
+  /// pgs 13, and the base-100 pyramid costs it 43.2M instructions a step against pgs's 58.4M.
+  SolverType solver = SolverType::kSoftStep;
+  BroadPhaseType broadPhase = BroadPhaseType::kUniformGrid;
+  int velocityIterations = 8;           ///< pgs, >= 1 (Box2D 2.4 default 8)
+  int positionIterations = 3;           ///< pgs position pass, >= 0 (Box2D 2.4 default 3)
+  /// Restitution passes, >= 1. pgs: most passes of pairwise collisions before the velocity
+  /// iterations (they stop early once no contact collides; a row of k touching bodies needs
+  /// about k / 2). soft_step: the same, before its sub-steps.
+  int restitutionIterations = 4;
+  int softSubSteps = 4;                 ///< soft_step sub-steps per step, >= 1 (Box2D 3 default 4)
+  Real contactHertz = 30;               ///< soft_step contact stiffness (Hz), > 0 (Box2D 3: 30)
+  /// soft_step contact damping ratio, >= 0 (Box2D 3: 10). 5 pushes overlap out twice as fast
+  /// (bias rate 17.5/s instead of 9.1/s at 4 sub-steps): with two relax passes and 10 the confined
+  /// circles were still spreading at 1 s and gained 2.05 J (3 %) when they reached the walls; with 5
+  /// they are done by then (rise 0.008 J of 247 J) and the tall stack still holds (top 0.035 m).
+  /// The stack and the confined circles are both near their limits around it (docs/soft_step.md).
+  Real contactDampingRatio = 5;
+  Real contactPushMaxVelocity = 3;      ///< soft_step fastest push-out of penetration (m/s), > 0
+  /// soft_step: the deepest penetration at which its contacts are soft (m), > 0; deeper points are
+  /// rigid rows pushing out at the rate they have at this depth, and the rest of the overlap is
+  /// moved out by a position pass (positionIterations) that adds no velocity.
+  Real contactPushMaxDepth = Real(0.01);
+  /// soft_step: solve four contact rows at a time (SSE2, in float builds on x86-64) instead of one.
+  /// The state is the same bit for bit either way (a test checks it); false exists for that test
+  /// and to measure what the four-wide path gains.
+  bool softSimd = true;
+  /// soft_step: with softSimd, solve eight contact rows at a time with AVX when the CPU has it
+  /// (checked at run time): the same operations per row, fewer instructions, the same state bit
+  /// for bit (a test checks it); false keeps the four-wide SSE2 kernels (for that test and to
+  /// measure).
+  bool softVex = true;
+  /// soft_step: relax passes per sub-step, >= 1 (Box2D 3: 1). The second one holds the 30-box tall
+  /// stack at 4 sub-steps (top 0.035 m; with one 0.083 m, 0.05 allowed; docs/soft_step.md), at the
+  /// cost of one pass over the rows per sub-step (friction is solved in the last one only; base-100
+  /// pyramid: +4.3M instructions a step).
+  int softRelaxIterations = 2;
+  /// soft_step: solve friction in every relax pass, not only the last. Where a lever arm couples
+  /// friction and the normal row (an oblique corner hit), the passes then converge both as Box2D
+  /// 2.4.1's iterations do; part of soft_step's Box2D-compatible setting (README "validation").
+  bool softFrictionEveryRelaxPass = false;
+  /// soft_step: 0 (off) or the largest mass ratio a contact between two dynamic bodies sees, >= 1.
+  /// Where two bodies' masses differ by more, the lighter one takes part in their contact as if it
+  /// were only this many times lighter (inverse mass and inertia scaled alike): a heavy body then
+  /// rests on a light one (a 1000 kg box on a 1 kg slab holds at 4 sub-steps with 10) at the price
+  /// of momentum in those contacts (a light body striking a heavy one pushes it harder than it
+  /// should; bounces, solved apart, are not affected). 10 by default: it holds issue #13's heavy
+  /// boxes on supports and on a slab at the default budget, which nothing else measured does.
+  Real softMassRatioLimit = 10;
+  Real linearSlop = Real(0.005);        ///< allowed penetration (m), as Box2D
+  Real baumgarte = Real(0.2);           ///< fraction of penetration removed per position iteration
+  Real maxLinearCorrection = Real(0.2); ///< most a position iteration moves a contact (m)
+  Real speculativeDistance = Real(0.02);///< contacts are created this far before touching (m)
+  Real restitutionThreshold = Real(1);  ///< approach speed (m/s) below which no bounce is added
+  RestitutionPolicy restitution = RestitutionPolicy::kCollisions;  ///< pgs's and soft_step's restitution model
+  /// Skin (m) around every polygon as the solvers see contacts, 0..speculativeDistance/2:
+  /// a point is solved as if its separation were smaller by the skins of the pair's polygons, so
+  /// points within them are touching rows and bodies rest that far apart. 0 (the default): shapes
+  /// are exactly their vertices. Box2D 2.4.1's b2_polygonRadius is 0.01; with it and
+  /// RestitutionPolicy::kBox2d Quadrant reproduces Box2D's responses (README "validation").
+  /// Deterministic scheme only (World refuses it with kQuadrants).
+  Real polygonSkin = 0;
+  /// thesis solver: solve its one impulse per contact with the normal and friction parts coupled
+  /// (the 2x2 effective mass and the Coulomb cone) instead of by two separate formulas. Off (the
+  /// default): the thesis's method. README "validation" gives what it changes.
+  bool thesisCoupledImpulse = false;
+  /// thesis solver: one impulse at each touching point of a contact, in turn, instead of the
+  /// thesis's one impulse at their centroid. Off (the default): the thesis's method. README
+  /// "validation" gives what it changes.
+  bool thesisPointImpulses = false;
+  /// thesis solver: passes over the contacts per step, >= 1. 1 (the default): the thesis's one
+  /// pass; more let the impulses of a contact's two points, or of neighbouring contacts, settle
+  /// as an iterative solver's do. README "validation" gives what it changes.
+  int thesisPasses = 1;
+  /// thesis solver: each point's impulse is a total accumulated over the step's passes and
+  /// clamped as a total (normal >= 0, friction within mu times it), as Box2D 2.4.1's iterations
+  /// do, instead of a fresh impulse per pass that only pushes. Only matters with thesisPasses > 1.
+  /// Off (the default): the thesis's method. README "validation" gives what it changes.
+  bool thesisAccumulatedImpulse = false;
+  /// thesis solver: remove penetration after the positions are integrated, by positionIterations
+  /// passes of non-linear Gauss-Seidel at the touching points (Box2D 2.4.1's and pgs's position
+  /// pass, which turns the bodies too), instead of the thesis's translation push before the
+  /// impulses. Off (the default): the thesis's method. README "validation" gives what it changes.
+  bool thesisPositionPass = false;
+  Real maxLinearSpeed = Real(400);      ///< m/s; a numerical guard, as Box2D 3's default
+  /// Most a body turns in one step (rad), as Box2D 3's 0.25 pi: a numerical guard. Speculative
+  /// contacts see where a corner is, not where a fast spin takes it within the step; without
+  /// the limit, triangles of the elastic polygon stress scene spun up to 160 rad/s and left
+  /// the box. At 60 Hz it allows 47 rad/s.
+  Real maxRotation = Real(0.25 * 3.14159265358979);
+  int threadCount = 1;                  ///< worker threads, 1..64 (1 = no threading at all)
+  ParallelScheme scheme = ParallelScheme::kDeterministic;
+  /// Sections with fewer items (bodies, pairs; an eighth as many constraints) run on the calling
+  /// thread. A parallel-for costs about 3.4 us at 2 threads (benchmarks/task_overhead.cpp) and a
+  /// body or pair about 10-20 ns, so below a few thousand items splitting does not pay. Lower it
+  /// only to exercise threading on small scenes (the tests do). >= 1.
+  int minParallelItems = 2048;
+  int quadTreeMaxDepth = 8;             ///< quad-tree levels below the root, 1..12
+  /// Reuse the broad phase's pairs while every body stays within 0.1 m of where they were found
+  /// (engine/src/collision/pair_cache.h): the same pairs, so the same results bit for bit, at a fraction of
+  /// the broad phase's cost on a resting pile. Off: the broad phase runs every step (for tests
+  /// and measurement). Not used with sleep on or the quadrants scheme.
+  bool reusePairs = true;
+  // Sleep settings (used only when effects.sleep is on), Box2D 2.4's defaults. A body is slow
+  // while its speed is at most linearSleepTolerance and its angular speed at most
+  // angularSleepTolerance; an island sleeps once all its bodies have been slow for timeToSleep.
+  Real linearSleepTolerance = Real(0.01);                       ///< m/s, finite, >= 0
+  Real angularSleepTolerance = Real(2.0 / 180.0 * 3.14159265358979);  ///< rad/s (2 deg/s), finite, >= 0
+  Real timeToSleep = Real(0.5);                                 ///< s, finite, > 0
+  Effects effects;
+  /// Record begin/end touch events at each Step (World::GetContactBeginEvents). Off: no event
+  /// work at all, and reading the events throws quadrant::Error.
+  bool contactEvents = false;
+};
+
+/// The stages of a step, as timed in Profile and StageBalance.
+enum class Stage : uint8_t { kBroadPhase, kNarrowPhase, kPersistence, kSolve, kIntegrate };
+inline constexpr size_t kStageCount = 5;
+inline constexpr const char* kStageNames[kStageCount] = {"broad_phase", "narrow_phase", "persistence", "solve",
+                                                         "integrate"};
+
+/// Load balance of one stage: thread CPU milliseconds of all workers (work) and of the largest
+/// worker share of each parallel section plus every serial section (critical). work/critical
+/// bounds the stage's speed-up at the world's thread count.
+struct StageBalance {
+  double workMs = 0;
+  double criticalMs = 0;
+};
+
+/// Wall-clock milliseconds per stage of the last Step (summed over its sub-steps).
+struct Profile {
+  double broadPhase = 0;   ///< AABB update and candidate pairs
+  double narrowPhase = 0;  ///< manifolds for candidate pairs
+  double persistence = 0;  ///< matching manifolds to last step's, warm-start impulses
+  double solve = 0;        ///< contact solver (velocity and position passes)
+  double integrate = 0;    ///< velocities and positions
+  double total = 0;        ///< the whole Step
+  std::array<StageBalance, kStageCount> balance{};  ///< per stage, indexed by Stage
+
+  /// Adds another profile field by field (totals over several steps).
+  Profile& operator+=(const Profile& o) {
+    broadPhase += o.broadPhase, narrowPhase += o.narrowPhase, persistence += o.persistence;
+    solve += o.solve, integrate += o.integrate, total += o.total;
+    for (size_t k = 0; k < kStageCount; ++k) {
+      balance[k].workMs += o.balance[k].workMs;
+      balance[k].criticalMs += o.balance[k].criticalMs;
+    }
+    return *this;
+  }
+};
+
+/// Counts from the last Step.
+struct Counters {
+  int bodies = 0;
+  int candidatePairs = 0;    ///< pairs whose AABBs overlap, from the broad phase
+  int contacts = 0;          ///< manifolds with at least one point (touching or speculative)
+  int touchingContacts = 0;  ///< manifolds with a point at separation <= 0 (with sleep on, sleeping islands' too)
+  int contactPoints = 0;
+  bool pairsReused = false;  ///< this step's pairs came from the pair cache (WorldDef::reusePairs)
+};
+
+/// A contact as read back for validation and drawing.
+struct ContactInfo {
+  BodyId bodyA;
+  BodyId bodyB;
+  Vec2 normal;  ///< unit, from A to B
+  int pointCount = 0;
+  Vec2 points[2];
+  Real separations[2] = {0, 0};
+  /// The solver's accumulated impulses (N s): pgs the step's; soft_step its last sub-step's (a
+  /// resting load's share of one sub-step, dt / softSubSteps of its weight).
+  Real normalImpulses[2] = {0, 0};
+  Real tangentImpulses[2] = {0, 0};
+};
+
+/// A ray's hit on a body (World::RayCastClosest, World::RayCastAll).
+struct RayHit {
+  BodyId body;
+  Vec2 point;         ///< where the ray enters the shape (m)
+  Vec2 normal;        ///< the shape's outward unit normal there
+  Real fraction = 0;  ///< of the translation, in [0, 1]: point = origin + fraction * translation
+};
+
+/// Two bodies that began or ended touching in the last Step (World::GetContactBeginEvents).
+/// bodyA.index < bodyB.index.
+struct ContactEvent {
+  BodyId bodyA;
+  BodyId bodyB;
+  friend constexpr bool operator==(ContactEvent a, ContactEvent b) = default;
+};
+
+}  // namespace quadrant

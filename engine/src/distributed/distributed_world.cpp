@@ -1,0 +1,983 @@
+// The distributed world: tiles, ownership, migration, shadows, neighbour rounds and the split
+// Jacobi solve (quadrant/distributed_world.h describes the scheme).
+#include "quadrant/distributed_world.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <string>
+#include <type_traits>
+
+#include "collision/broad_phase.h"
+#include "dynamics/jacobi_solve.h"
+#include "quadrant/bit_hash.h"
+#include "quadrant/task_system.h"
+#include "parallel/stage_runner.h"
+#include "world/validation.h"
+#include "world/world_internal.h"
+
+namespace quadrant {
+namespace {
+
+// A body as it travels between ranks: everything a rank needs to collide, solve and integrate
+// it. Mass data travels (it is not recomputed) so a shadow holds exactly its owner's bits.
+struct Record {
+  uint32_t id;
+  BodyType type;
+  Transform xf;
+  Vec2 center;
+  Vec2 localCenter;
+  BodyVelocity vel;
+  BodyInverseMass inv;
+  Real mass, inertia, linearDamping, angularDamping, boundRadius;
+  ShapeDef shape;
+  Filter filter;
+};
+static_assert(std::is_trivially_copyable_v<Record>);
+
+// A warm-start entry keyed by the pair of body ids (ContactCache keys by dense index, which in a
+// World without destroyed bodies is the same order).
+struct CacheEntry {
+  uint64_t key;
+  int32_t pointCount;
+  uint32_t ids[2];
+  Real normalImpulse[2];
+  Real tangentImpulse[2];
+};
+static_assert(std::is_trivially_copyable_v<CacheEntry>);
+
+// The velocity exchange of the solve: a boundary body's velocity and its contact count.
+struct VelocityRecord {
+  BodyVelocity vel;
+  int32_t count;
+};
+static_assert(std::is_trivially_copyable_v<VelocityRecord>);
+
+uint64_t PairKey(uint32_t a, uint32_t b) { return (uint64_t(a) << 32) | b; }
+
+// splitmix64: the id checksum sums a mixed id so that a lost body and a duplicated one cannot
+// cancel (a plain sum of ids can: lose 3, duplicate 1 and 2).
+uint64_t MixId(uint64_t x) {
+  x += 0x9e3779b97f4a7c15ull;
+  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
+  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
+  return x ^ (x >> 31);
+}
+
+template <class T>
+void Put(std::vector<char>& buf, const T& value) {
+  const size_t at = buf.size();
+  buf.resize(at + sizeof(T));
+  std::memcpy(buf.data() + at, &value, sizeof(T));
+}
+
+template <class T>
+T Take(const std::vector<char>& buf, size_t& at) {
+  if (at + sizeof(T) > buf.size()) throw std::logic_error("DistributedWorld: truncated message");
+  T value;
+  std::memcpy(&value, buf.data() + at, sizeof(T));
+  at += sizeof(T);
+  return value;
+}
+
+uint32_t Morton(uint32_t x, uint32_t y) {
+  uint32_t code = 0;
+  for (int bit = 0; bit < 16; ++bit) {
+    code |= ((x >> bit) & 1u) << (2 * bit);
+    code |= ((y >> bit) & 1u) << (2 * bit + 1);
+  }
+  return code;
+}
+
+uint64_t HashScene(std::span<const BodyDef> bodies) {
+  BitHash h;
+  auto mix = [&h](Real x) { h.Mix(x); };
+  mix(Real(bodies.size() % (1u << 20)));
+  mix(Real(bodies.size() >> 20));
+  for (const BodyDef& b : bodies) {
+    mix(Real(int(b.type)));
+    mix(b.position.x), mix(b.position.y), mix(b.angle);
+    mix(b.linearVelocity.x), mix(b.linearVelocity.y), mix(b.angularVelocity);
+    mix(b.linearDamping), mix(b.angularDamping);
+    const ShapeDef& s = b.shape;
+    mix(Real(int(s.type)));
+    mix(s.circle.center.x), mix(s.circle.center.y), mix(s.circle.radius);
+    mix(Real(s.polygon.count));
+    for (int k = 0; k < s.polygon.count && k < kMaxPolygonVertices; ++k) {
+      mix(s.polygon.vertices[k].x), mix(s.polygon.vertices[k].y);
+    }
+    mix(s.density), mix(s.friction), mix(s.restitution);
+    // 16 bits at a time: a float holds integers exactly only up to 2^24.
+    for (uint32_t bits : {b.filter.categoryBits, b.filter.maskBits}) mix(Real(bits & 0xFFFFu)), mix(Real(bits >> 16));
+  }
+  return h.Value();
+}
+
+}  // namespace
+
+struct DistributedWorld::Impl {
+  WorldDef def;
+  DistributedDef dist;
+  MPI_Comm comm = MPI_COMM_NULL;
+  int rank = 0, size = 1;
+  Real tileW = 0, tileH = 0;
+  std::vector<int> tileOwner;  // by tile index tx + ty * tilesX
+  std::vector<int> tileOrder;  // tile indices in Morton order (the order ranks get them in)
+  std::vector<int64_t> tileCost;  // this rank's work per tile in the last step (load balance)
+  int64_t stepCount = 0;
+  std::vector<Vec2> stepStartCenters;  // owned bodies' centres when the step began (tile costs)
+  std::vector<int> neighbours;  // ascending ranks
+  std::vector<int> neighbourSlot;  // rank -> index in neighbours, -1 if not a neighbour
+
+  bool loaded = false;
+  std::vector<Record> statics;  // every static body, on every rank, id order
+  std::vector<Record> owned;    // this rank's moving bodies, id order
+  std::vector<CacheEntry> cache;  // contacts of owned bodies, key order
+  uint64_t expectedCount = 0, expectedChecksum = 0;
+
+  std::unique_ptr<TaskSystem> tasks;
+  std::unique_ptr<StageRunner> run;
+  std::unique_ptr<BroadPhase> broadPhase;
+  JacobiSolve solve;
+  DistributedStats stats;
+
+  // Per-step scratch (kept between steps for its capacity).
+  struct Source {
+    uint32_t id;
+    int kind;  // 0 static, 1 owned, 2 shadow
+    int index;
+    int neighbour;
+  };
+  std::vector<Source> sources;
+  std::vector<Record> shadows;
+  Bodies local;
+  std::vector<uint8_t> localOwned;
+  std::vector<int> ownedLocal;                    // owned index -> local index
+  std::vector<std::vector<int>> sentShadows;      // per neighbour: owned indices sent, in order
+  std::vector<std::vector<int>> receivedShadows;  // per neighbour: local indices, in order
+  std::vector<std::vector<char>> out, in;
+  std::vector<CandidatePair> pairs, ownPairs;
+  std::vector<Contact> contacts;
+
+  int TileX(Real x) const {
+    const double t = std::floor((double(x) - double(dist.bounds.lower.x)) / double(tileW));
+    return int(std::clamp(t, 0.0, double(dist.tilesX - 1)));
+  }
+  int TileY(Real y) const {
+    const double t = std::floor((double(y) - double(dist.bounds.lower.y)) / double(tileH));
+    return int(std::clamp(t, 0.0, double(dist.tilesY - 1)));
+  }
+  int OwnerOf(Vec2 c) const { return tileOwner[size_t(TileX(c.x) + TileY(c.y) * dist.tilesX)]; }
+
+  // One neighbour round: out[k] goes to neighbours[k] (every neighbour gets a message, empty or
+  // not); in[k] is what neighbours[k] sent, read in rank order (a probe names its source).
+  void Round(int tag) {
+    const int n = static_cast<int>(neighbours.size());
+    std::vector<MPI_Request> requests(size_t(n), MPI_REQUEST_NULL);
+    for (int k = 0; k < n; ++k) {
+      MPI_Isend(out[k].data(), static_cast<int>(out[k].size()), MPI_BYTE, neighbours[k], tag, comm, &requests[k]);
+      stats.bytesSent += static_cast<int64_t>(out[k].size());
+    }
+    for (int k = 0; k < n; ++k) {
+      MPI_Status status;
+      MPI_Probe(neighbours[k], tag, comm, &status);
+      int count = 0;
+      MPI_Get_count(&status, MPI_BYTE, &count);
+      in[k].resize(size_t(count));
+      MPI_Recv(in[k].data(), count, MPI_BYTE, neighbours[k], tag, comm, MPI_STATUS_IGNORE);
+    }
+    MPI_Waitall(n, requests.data(), MPI_STATUSES_IGNORE);
+    ++stats.rounds;
+  }
+  void ClearOut() {
+    for (auto& b : out) b.clear();
+  }
+
+  static Record ToRecord(const Bodies& b, int i, uint32_t id) {
+    Record r;
+    std::memset(static_cast<void*>(&r), 0, sizeof r);  // padding included: messages carry no stray bytes
+    r.id = id;
+    r.type = b.type[i];
+    r.xf = b.xf[i];
+    r.center = b.center[i];
+    r.localCenter = b.localCenter[i];
+    r.vel = b.vel[i];
+    r.inv = b.inv[i];
+    r.mass = b.mass[i];
+    r.inertia = b.inertia[i];
+    r.linearDamping = b.linearDamping[i];
+    r.angularDamping = b.angularDamping[i];
+    r.boundRadius = b.boundRadius[i];
+    r.shape = b.shape[i];
+    r.filter = b.filter[i];
+    return r;
+  }
+
+  static void AppendRecord(Bodies& b, const Record& r) {
+    const int i = b.Count();
+    b.ForEachArray([](auto& v) { v.emplace_back(); });
+    b.type[i] = r.type;
+    b.xf[i] = r.xf;
+    b.center[i] = r.center;
+    b.localCenter[i] = r.localCenter;
+    b.vel[i] = r.vel;
+    b.inv[i] = r.inv;
+    b.mass[i] = r.mass;
+    b.inertia[i] = r.inertia;
+    b.linearDamping[i] = r.linearDamping;
+    b.angularDamping[i] = r.angularDamping;
+    b.shape[i] = r.shape;
+    b.boundRadius[i] = r.boundRadius;
+    b.dynamic[i] = r.type == BodyType::kDynamic ? 1 : 0;
+    b.slot[i] = r.id;
+    b.awake[i] = r.type == BodyType::kStatic ? 0 : 1;
+    b.sleepTime[i] = 0;
+    b.islandOf[i] = 0;
+    b.filter[i] = r.filter;
+  }
+
+  // The broad-phase box of a record for a step of dt (the World's formula, world_internal.h).
+  AABB BoxOf(const Record& r, Real dt) const { return SweptBox(r.shape, r.xf, r.vel, r.boundRadius, def, dt); }
+
+  void DealTiles(const std::vector<int64_t>& cost);
+  void FindNeighbours();
+  void Rebalance(bool force);
+  void Migrate(Real dt);
+  void SendShadows(Real reach, Real dt);
+  void BuildLocal(Real dt);
+  void FindContacts(Real dt);
+  void ExchangeVelocities(bool counts, int tag);
+  void StoreCache();
+  void CheckCounts();
+};
+
+DistributedWorld::DistributedWorld(const WorldDef& def, const DistributedDef& dist, MPI_Comm comm)
+    : impl_(std::make_unique<Impl>()) {
+  Impl& w = *impl_;
+  MPI_Comm_rank(comm, &w.rank);
+  MPI_Comm_size(comm, &w.size);
+  // Every check below reads only values every rank shares: all ranks throw alike.
+  ValidateWorldDef(def);
+  Require(def.solver == SolverType::kJacobi,
+          "DistributedWorld: WorldDef.solver must be SolverType::kJacobi (pgs, soft_step and thesis are Gauss-Seidel "
+          "over a global order; see quadrant/distributed_world.h)");
+  Require(!def.effects.sleep, "DistributedWorld: effects.sleep is not supported");
+  Require(def.scheme == ParallelScheme::kDeterministic, "DistributedWorld: only ParallelScheme::kDeterministic");
+  Require(IsFinite(dist.bounds.lower) && IsFinite(dist.bounds.upper) && dist.bounds.lower.x < dist.bounds.upper.x &&
+              dist.bounds.lower.y < dist.bounds.upper.y,
+          "DistributedDef.bounds must be finite and non-empty");
+  Require(dist.tilesX >= 1 && dist.tilesX <= 1024 && dist.tilesY >= 1 && dist.tilesY <= 1024,
+          "DistributedDef.tilesX and tilesY must be in [1, 1024]");
+  Require(dist.rebalanceInterval >= 0, "DistributedDef.rebalanceInterval must be >= 0");
+  Require(IsFinite(dist.rebalanceThreshold) && dist.rebalanceThreshold >= 1,
+          "DistributedDef.rebalanceThreshold must be finite and >= 1");
+  const int tiles = dist.tilesX * dist.tilesY;
+  Require(w.size <= tiles, "DistributedWorld: " + std::to_string(w.size) + " ranks but only " + std::to_string(tiles) +
+                               " tiles (" + std::to_string(dist.tilesX) + " x " + std::to_string(dist.tilesY) +
+                               "): every rank needs at least one tile");
+  w.def = def;
+  w.dist = dist;
+  MPI_Comm_dup(comm, &w.comm);
+  w.tileW = (dist.bounds.upper.x - dist.bounds.lower.x) / Real(dist.tilesX);
+  w.tileH = (dist.bounds.upper.y - dist.bounds.lower.y) / Real(dist.tilesY);
+
+  // Tiles in Morton order, dealt in contiguous runs: at first equal numbers of tiles per rank.
+  w.tileOrder.resize(static_cast<size_t>(tiles));
+  for (int t = 0; t < tiles; ++t) w.tileOrder[size_t(t)] = t;
+  std::sort(w.tileOrder.begin(), w.tileOrder.end(), [&](int a, int b) {
+    return Morton(uint32_t(a % dist.tilesX), uint32_t(a / dist.tilesX)) <
+           Morton(uint32_t(b % dist.tilesX), uint32_t(b / dist.tilesX));
+  });
+  w.tileCost.assign(static_cast<size_t>(tiles), 0);
+  w.DealTiles(std::vector<int64_t>(static_cast<size_t>(tiles), 1));
+  w.tasks = MakeThreadPool(def.threadCount);
+  w.run = std::make_unique<StageRunner>(*w.tasks, def.minParallelItems);
+  w.broadPhase = MakeBroadPhase(def.broadPhase, def.quadTreeMaxDepth);
+}
+
+// Deals the tiles, in Morton order, to the ranks in contiguous runs of about equal total cost
+// (every rank at least one tile): rank r's run ends at the first tile whose middle passes
+// (r + 1) / P of the total. Equal costs give equal numbers of tiles.
+void DistributedWorld::Impl::DealTiles(const std::vector<int64_t>& cost) {
+  const int tiles = static_cast<int>(tileOrder.size());
+  std::vector<int64_t> prefix(size_t(tiles) + 1, 0);
+  for (int i = 0; i < tiles; ++i) prefix[size_t(i) + 1] = prefix[size_t(i)] + cost[size_t(tileOrder[size_t(i)])];
+  const double total = double(prefix[size_t(tiles)]);
+  tileOwner.assign(size_t(tiles), 0);
+  int start = 0;
+  for (int r = 0; r < size; ++r) {
+    int end = tiles;
+    if (r + 1 < size) {
+      const double target = total * double(r + 1) / double(size);
+      end = start + 1;
+      const int last = tiles - (size - 1 - r);  // leave a tile for every later rank
+      while (end < last && double(prefix[size_t(end)]) + 0.5 * double(cost[size_t(tileOrder[size_t(end)])]) <= target) ++end;
+    }
+    for (int i = start; i < end; ++i) tileOwner[size_t(tileOrder[size_t(i)])] = r;
+    start = end;
+  }
+  FindNeighbours();
+}
+
+// The ranks owning a tile next to one of this rank's (8-neighbourhood), ascending.
+void DistributedWorld::Impl::FindNeighbours() {
+  neighbours.clear();
+  neighbourSlot.assign(static_cast<size_t>(size), -1);
+  const int tiles = dist.tilesX * dist.tilesY;
+  for (int t = 0; t < tiles; ++t) {
+    if (tileOwner[size_t(t)] != rank) continue;
+    const int tx = t % dist.tilesX, ty = t / dist.tilesX;
+    for (int dy = -1; dy <= 1; ++dy) {
+      for (int dx = -1; dx <= 1; ++dx) {
+        const int x = tx + dx, y = ty + dy;
+        if (x < 0 || y < 0 || x >= dist.tilesX || y >= dist.tilesY) continue;
+        const int owner = tileOwner[size_t(x + y * dist.tilesX)];
+        if (owner != rank) neighbourSlot[size_t(owner)] = 0;
+      }
+    }
+  }
+  for (int r = 0; r < size; ++r) {
+    if (neighbourSlot[size_t(r)] == 0) {
+      neighbourSlot[size_t(r)] = static_cast<int>(neighbours.size());
+      neighbours.push_back(r);
+    }
+  }
+  const size_t nb = neighbours.size();
+  out.assign(nb, {});
+  in.assign(nb, {});
+  sentShadows.assign(nb, {});
+  receivedShadows.assign(nb, {});
+  stats.neighbours = static_cast<int>(nb);
+}
+
+// Load balance: the tiles' costs of the last step (bodies owned plus their contacts: counts, not
+// times, so the new partition is the same on every run) summed over the ranks; if the most loaded
+// rank carries more than threshold times the mean (or `force`), the tiles are dealt again by cost
+// and every body whose tile changed owner moves there with its warm-start entries (one
+// all-to-all: a new owner need not be a neighbour). The arithmetic of a step does not depend on
+// the partition, so the states are the same bits with or without it.
+void DistributedWorld::Impl::Rebalance(bool force) {
+  std::vector<int64_t> cost(tileCost.size(), 0);
+  MPI_Allreduce(tileCost.data(), cost.data(), static_cast<int>(cost.size()), MPI_INT64_T, MPI_SUM, comm);
+  std::vector<double> perRank(size_t(size), 0.0);
+  double total = 0;
+  for (size_t t = 0; t < cost.size(); ++t) {
+    perRank[size_t(tileOwner[t])] += double(cost[t]);
+    total += double(cost[t]);
+  }
+  const double imbalance = total > 0 ? *std::max_element(perRank.begin(), perRank.end()) / (total / size) : 1.0;
+  if (!force && !(imbalance > double(dist.rebalanceThreshold))) return;
+  if (total <= 0) return;
+  DealTiles(cost);
+  ++stats.rebalances;
+
+  std::vector<std::vector<char>> to(static_cast<size_t>(size));
+  std::vector<std::vector<uint32_t>> leaving(static_cast<size_t>(size));
+  std::vector<Record> staying;
+  for (const Record& r : owned) {
+    const int owner = OwnerOf(r.center);
+    if (owner == rank) {
+      staying.push_back(r);
+    } else {
+      leaving[size_t(owner)].push_back(r.id);
+      Put(to[size_t(owner)], r);
+    }
+  }
+  std::vector<char> send;
+  std::vector<int> sendCounts(size_t(size), 0), sendDispls(size_t(size), 0);
+  for (int r = 0; r < size; ++r) {
+    sendDispls[size_t(r)] = static_cast<int>(send.size());
+    Put(send, uint32_t(leaving[size_t(r)].size()));
+    send.insert(send.end(), to[size_t(r)].begin(), to[size_t(r)].end());
+    std::vector<char> entries;
+    uint32_t n = 0;
+    const auto& ids = leaving[size_t(r)];
+    for (const CacheEntry& e : cache) {
+      if (std::binary_search(ids.begin(), ids.end(), uint32_t(e.key >> 32)) ||
+          std::binary_search(ids.begin(), ids.end(), uint32_t(e.key))) {
+        Put(entries, e);
+        ++n;
+      }
+    }
+    Put(send, n);
+    send.insert(send.end(), entries.begin(), entries.end());
+    sendCounts[size_t(r)] = static_cast<int>(send.size()) - sendDispls[size_t(r)];
+  }
+  std::vector<int> recvCounts(size_t(size), 0), recvDispls(size_t(size), 0);
+  MPI_Alltoall(sendCounts.data(), 1, MPI_INT, recvCounts.data(), 1, MPI_INT, comm);
+  int totalRecv = 0;
+  for (int r = 0; r < size; ++r) {
+    recvDispls[size_t(r)] = totalRecv;
+    totalRecv += recvCounts[size_t(r)];
+  }
+  std::vector<char> recv(static_cast<size_t>(totalRecv));
+  MPI_Alltoallv(send.data(), sendCounts.data(), sendDispls.data(), MPI_BYTE, recv.data(), recvCounts.data(),
+                recvDispls.data(), MPI_BYTE, comm);
+  owned.swap(staying);
+  for (int r = 0; r < size; ++r) {
+    const std::vector<char> part(recv.begin() + recvDispls[size_t(r)],
+                                 recv.begin() + recvDispls[size_t(r)] + recvCounts[size_t(r)]);
+    size_t at = 0;
+    const uint32_t bodies = Take<uint32_t>(part, at);
+    for (uint32_t j = 0; j < bodies; ++j) owned.push_back(Take<Record>(part, at));
+    const uint32_t entries = Take<uint32_t>(part, at);
+    for (uint32_t j = 0; j < entries; ++j) cache.push_back(Take<CacheEntry>(part, at));
+  }
+  std::sort(owned.begin(), owned.end(), [](const Record& a, const Record& b) { return a.id < b.id; });
+  std::stable_sort(cache.begin(), cache.end(), [](const CacheEntry& a, const CacheEntry& b) { return a.key < b.key; });
+  cache.erase(std::unique(cache.begin(), cache.end(), [](const CacheEntry& a, const CacheEntry& b) { return a.key == b.key; }),
+              cache.end());
+}
+
+DistributedWorld::~DistributedWorld() {
+  if (impl_ && impl_->comm != MPI_COMM_NULL) MPI_Comm_free(&impl_->comm);
+}
+
+void DistributedWorld::Load(std::span<const BodyDef> bodies) {
+  Impl& w = *impl_;
+  // The same scene on every rank, checked by its hash: min and max over the ranks agree.
+  const uint64_t hash = HashScene(bodies);
+  uint64_t lo = 0, hi = 0;
+  MPI_Allreduce(&hash, &lo, 1, MPI_UINT64_T, MPI_MIN, w.comm);
+  MPI_Allreduce(&hash, &hi, 1, MPI_UINT64_T, MPI_MAX, w.comm);
+  Require(lo == hi, "DistributedWorld::Load: the scene differs between ranks (scene hashes range from " +
+                        std::to_string(lo) + " to " + std::to_string(hi) + ")");
+  Require(bodies.size() < (uint64_t(1) << 31), "DistributedWorld::Load: more than 2^31 bodies");
+  // Rows made by the World's own code (validation and mass data): the same bits as a World's.
+  // Identical scenes make every rank refuse the same body with the same message.
+  // Each body is made in a one-row scratch and kept only if it is static or this rank's, so a
+  // rank holds its share of a large scene, not all of it (the caller's BodyDefs aside).
+  std::vector<Record> statics, owned;
+  uint64_t count = 0, checksum = 0;
+  Bodies row;
+  for (size_t i = 0; i < bodies.size(); ++i) {
+    row.ForEachArray([](auto& v) { v.clear(); });
+    AppendBody(row, bodies[i], w.def, static_cast<uint32_t>(i));
+    const Record r = Impl::ToRecord(row, 0, static_cast<uint32_t>(i));
+    if (r.type == BodyType::kStatic) {
+      statics.push_back(r);
+      continue;
+    }
+    ++count;
+    checksum += MixId(r.id);
+    if (w.OwnerOf(r.center) == w.rank) owned.push_back(r);
+  }
+  w.statics.swap(statics);
+  w.owned.swap(owned);
+  w.cache.clear();
+  w.expectedCount = count;
+  w.expectedChecksum = checksum;
+  w.loaded = true;
+  std::fill(w.tileCost.begin(), w.tileCost.end(), 0);
+  w.CheckCounts();
+}
+
+void DistributedWorld::Step(Real dt) {
+  Require(IsFinite(dt) && dt > 0, "Step: dt must be finite and > 0");
+  Require(dt <= kMaxTimeStep, "Step: dt must be <= 1 s");
+  Impl& w = *impl_;
+  Require(w.loaded, "DistributedWorld::Step: Load a scene first");
+  const DistributedStats previous = w.stats;
+  w.stats = DistributedStats{};
+  w.stats.neighbours = previous.neighbours;
+  if (w.dist.rebalanceInterval > 0 && w.stepCount > 0 && w.stepCount % w.dist.rebalanceInterval == 0) {
+    w.Rebalance(false);
+  }
+  ++w.stepCount;
+
+  // The halo: the farthest any moving body's box reaches from its centre this step, over all
+  // ranks (a max is exact in any order), and whether any body left its neighbourhood of tiles.
+  double local[2] = {0, 0};
+  for (const Record& r : w.owned) {
+    const AABB box = w.BoxOf(r, dt);
+    const double reach = std::max({double(r.center.x - box.lower.x), double(box.upper.x - r.center.x),
+                                   double(r.center.y - box.lower.y), double(box.upper.y - r.center.y)});
+    local[0] = std::max(local[0], reach);
+    const int owner = w.OwnerOf(r.center);
+    if (owner != w.rank && w.neighbourSlot[size_t(owner)] < 0) local[1] = 1;
+  }
+  double global[2] = {0, 0};
+  MPI_Allreduce(local, global, 2, MPI_DOUBLE, MPI_MAX, w.comm);
+  const double tile = std::min(double(w.tileW), double(w.tileH));
+  Require(2 * global[0] <= tile,
+          "DistributedWorld::Step: a body's broad-phase box reaches " + std::to_string(global[0]) +
+              " m from its centre, more than half a tile (" + std::to_string(tile) +
+              " m): the body is too large (or too fast) for the tiles; use fewer tiles");
+  Require(global[1] == 0, "DistributedWorld::Step: a body moved past the tiles next to its own in one step");
+
+  w.Migrate(dt);
+  w.stepStartCenters.clear();
+  for (const Record& r : w.owned) w.stepStartCenters.push_back(r.center);
+  w.SendShadows(Real(global[0]), dt);
+  w.BuildLocal(dt);
+  w.FindContacts(dt);
+
+  const int k = w.def.velocityIterations;
+  IntegrateVelocities(w.local, w.def, dt, *w.run);
+  w.solve.Begin(w.local, w.def, dt, w.contacts);
+  w.ExchangeVelocities(true, 3);
+  w.solve.Prepare(w.def);
+  for (int it = 0; it < k; ++it) {
+    w.solve.Iterate(w.local, w.def);
+    if (it + 1 < k) w.ExchangeVelocities(false, 4);
+  }
+  w.solve.Finish(w.local, w.def, dt, w.contacts, *w.run);
+  w.StoreCache();
+  for (size_t o = 0; o < w.owned.size(); ++o) {
+    const int i = w.ownedLocal[o];
+    w.owned[o].xf = w.local.xf[i];
+    w.owned[o].center = w.local.center[i];
+    w.owned[o].vel = w.local.vel[i];
+  }
+  w.stats.ownedBodies = static_cast<int>(w.owned.size());
+  w.stats.contacts = static_cast<int>(w.contacts.size());
+  // Work per tile of this step, for load balancing: each owned body and each of its contacts,
+  // booked to the tile its centre was in when the step began.
+  std::fill(w.tileCost.begin(), w.tileCost.end(), 0);
+  const std::vector<int32_t>& counts = w.solve.Counts();
+  for (size_t o = 0; o < w.owned.size(); ++o) {
+    const int i = w.ownedLocal[o];
+    const Vec2 c0 = w.stepStartCenters[o];
+    w.tileCost[size_t(w.TileX(c0.x) + w.TileY(c0.y) * w.dist.tilesX)] += 1 + counts[size_t(i)];
+  }
+  w.CheckCounts();
+}
+
+// Round 1: bodies whose centre is now in another rank's tile go there, with the warm-start
+// entries of their contacts (the new owner computes those contacts next).
+void DistributedWorld::Impl::Migrate(Real) {
+  ClearOut();
+  std::vector<std::vector<uint32_t>> leaving(neighbours.size());
+  std::vector<Record> staying;
+  staying.reserve(owned.size());
+  for (const Record& r : owned) {
+    const int owner = OwnerOf(r.center);
+    if (owner == rank) {
+      staying.push_back(r);
+      continue;
+    }
+    const int k = neighbourSlot[size_t(owner)];  // checked collectively in Step
+    leaving[size_t(k)].push_back(r.id);
+    Put(out[size_t(k)], r);
+  }
+  for (size_t k = 0; k < neighbours.size(); ++k) {
+    // Entries touching a leaving body, after a separator count of bodies (records first).
+    std::vector<char> entries;
+    uint32_t n = 0;
+    const auto& ids = leaving[k];
+    for (const CacheEntry& e : cache) {
+      const uint32_t a = uint32_t(e.key >> 32), b = uint32_t(e.key);
+      if (std::binary_search(ids.begin(), ids.end(), a) || std::binary_search(ids.begin(), ids.end(), b)) {
+        Put(entries, e);
+        ++n;
+      }
+    }
+    std::vector<char> message;
+    Put(message, uint32_t(ids.size()));
+    message.insert(message.end(), out[k].begin(), out[k].end());
+    Put(message, n);
+    message.insert(message.end(), entries.begin(), entries.end());
+    out[k].swap(message);
+  }
+  Round(1);
+  owned.swap(staying);
+  for (size_t k = 0; k < neighbours.size(); ++k) {
+    size_t at = 0;
+    const uint32_t bodies = Take<uint32_t>(in[k], at);
+    for (uint32_t j = 0; j < bodies; ++j) owned.push_back(Take<Record>(in[k], at));
+    stats.migratedIn += static_cast<int>(bodies);
+    const uint32_t entries = Take<uint32_t>(in[k], at);
+    for (uint32_t j = 0; j < entries; ++j) cache.push_back(Take<CacheEntry>(in[k], at));
+  }
+  std::sort(owned.begin(), owned.end(), [](const Record& a, const Record& b) { return a.id < b.id; });
+  // The same contact may arrive from two ranks (both bodies moved); the entries are equal (both
+  // ranks computed it with the same arithmetic), so one is kept.
+  std::stable_sort(cache.begin(), cache.end(), [](const CacheEntry& a, const CacheEntry& b) { return a.key < b.key; });
+  cache.erase(std::unique(cache.begin(), cache.end(), [](const CacheEntry& a, const CacheEntry& b) { return a.key == b.key; }),
+              cache.end());
+}
+
+// Round 2: every owned body goes as a shadow to each other rank owning a tile that its box,
+// widened by the global reach, overlaps. An owned body of that rank has its centre in such a tile
+// and its box within `reach` of it, so every pair with one of its bodies is found there.
+void DistributedWorld::Impl::SendShadows(Real reach, Real dt) {
+  ClearOut();
+  for (auto& s : sentShadows) s.clear();
+  std::vector<int> targets;
+  for (size_t o = 0; o < owned.size(); ++o) {
+    const Record& r = owned[o];
+    const AABB box = BoxOf(r, dt);
+    const int x0 = TileX(box.lower.x - reach), x1 = TileX(box.upper.x + reach);
+    const int y0 = TileY(box.lower.y - reach), y1 = TileY(box.upper.y + reach);
+    targets.clear();
+    for (int y = y0; y <= y1; ++y) {
+      for (int x = x0; x <= x1; ++x) {
+        const int owner = tileOwner[size_t(x + y * dist.tilesX)];
+        if (owner != rank) targets.push_back(owner);
+      }
+    }
+    std::sort(targets.begin(), targets.end());
+    targets.erase(std::unique(targets.begin(), targets.end()), targets.end());
+    for (int t : targets) {
+      const int k = neighbourSlot[size_t(t)];
+      if (k < 0) throw std::logic_error("DistributedWorld: a shadow for a rank that is not a neighbour");
+      Put(out[size_t(k)], r);
+      sentShadows[size_t(k)].push_back(static_cast<int>(o));
+    }
+  }
+  Round(2);
+}
+
+// The rank's bodies in id order (statics, owned, shadows merged): every pair then has the same
+// orientation (a < b) and every contact list the same order as in one process.
+void DistributedWorld::Impl::BuildLocal(Real dt) {
+  sources.clear();
+  shadows.clear();
+  for (size_t i = 0; i < statics.size(); ++i) sources.push_back({statics[i].id, 0, int(i), -1});
+  for (size_t i = 0; i < owned.size(); ++i) sources.push_back({owned[i].id, 1, int(i), -1});
+  for (size_t k = 0; k < neighbours.size(); ++k) {
+    size_t at = 0;
+    while (at < in[k].size()) {
+      shadows.push_back(Take<Record>(in[k], at));
+      sources.push_back({shadows.back().id, 2, int(shadows.size() - 1), int(k)});
+    }
+  }
+  std::sort(sources.begin(), sources.end(), [](const Source& a, const Source& b) { return a.id < b.id; });
+  for (size_t i = 1; i < sources.size(); ++i) {
+    if (sources[i].id == sources[i - 1].id) throw std::logic_error("DistributedWorld: a body held twice");
+  }
+  local.ForEachArray([](auto& v) { v.clear(); });  // capacity kept: no allocation once warm
+  localOwned.assign(sources.size(), 0);
+  ownedLocal.assign(owned.size(), -1);
+  for (auto& r : receivedShadows) r.clear();
+  for (size_t i = 0; i < sources.size(); ++i) {
+    const Source& s = sources[i];
+    const Record& r = s.kind == 0 ? statics[size_t(s.index)] : s.kind == 1 ? owned[size_t(s.index)] : shadows[size_t(s.index)];
+    AppendRecord(local, r);
+    // As the World: a static body's box is made once at creation (dt 0), a moving one's each step.
+    local.aabb[i] = BroadPhaseBox(local, static_cast<int>(i), def, r.type == BodyType::kStatic ? Real(0) : dt);
+    if (s.kind == 1) {
+      localOwned[i] = 1;
+      ownedLocal[size_t(s.index)] = static_cast<int>(i);
+    }
+  }
+  // Shadows were sent in their owner's id order, so walking the id-sorted sources per neighbour
+  // gives the order of the neighbour's velocity messages.
+  for (size_t i = 0; i < sources.size(); ++i) {
+    if (sources[i].kind == 2) receivedShadows[size_t(sources[i].neighbour)].push_back(static_cast<int>(i));
+  }
+  stats.shadowBodies = static_cast<int>(shadows.size());
+}
+
+// The contacts of the rank's own bodies: broad phase over everything it holds, pairs without an
+// owned body dropped (their owners compute them), then the World's narrow phase, key order and
+// warm-start impulses.
+void DistributedWorld::Impl::FindContacts(Real dt) {
+  broadPhase->FindPairs(local.aabb, local.dynamic, pairs, *run);
+  ownPairs.clear();
+  // The World's collision filter (Box2D's rule) on the same pairs; its compaction keeps order.
+  const std::vector<Filter>& f = local.filter;
+  for (const CandidatePair& p : pairs) {
+    if (!localOwned[size_t(p.a)] && !localOwned[size_t(p.b)]) continue;
+    if ((f[size_t(p.a)].maskBits & f[size_t(p.b)].categoryBits) == 0 ||
+        (f[size_t(p.b)].maskBits & f[size_t(p.a)].categoryBits) == 0) {
+      continue;
+    }
+    ownPairs.push_back(p);
+  }
+  contacts.clear();
+  CollidePairs(local, def, dt, ownPairs, contacts);
+  std::sort(contacts.begin(), contacts.end(), [](const Contact& x, const Contact& y) { return x.Key() < y.Key(); });
+  if (!def.effects.warmStarting) return;
+  // ContactCache::Restore's rule: the entry of the same pair, points matched by feature id.
+  for (Contact& c : contacts) {
+    const uint64_t key = PairKey(local.slot[size_t(c.a)], local.slot[size_t(c.b)]);
+    auto it = std::lower_bound(cache.begin(), cache.end(), key, [](const CacheEntry& e, uint64_t k) { return e.key < k; });
+    if (it == cache.end() || it->key != key) continue;
+    for (int k = 0; k < c.manifold.pointCount; ++k) {
+      ManifoldPoint& p = c.manifold.points[k];
+      for (int j = 0; j < it->pointCount; ++j) {
+        if (it->ids[j] == p.id) {
+          p.normalImpulse = it->normalImpulse[j];
+          p.tangentImpulse = it->tangentImpulse[j];
+          break;
+        }
+      }
+    }
+  }
+}
+
+// A solve round: the velocities (and after warm starting, the contact counts) of every owned body
+// that is a shadow elsewhere replace that shadow's partial ones there.
+void DistributedWorld::Impl::ExchangeVelocities(bool counts, int tag) {
+  ClearOut();
+  std::vector<int32_t>& count = solve.Counts();
+  for (size_t k = 0; k < neighbours.size(); ++k) {
+    for (int o : sentShadows[k]) {
+      const int i = ownedLocal[size_t(o)];
+      Put(out[k], VelocityRecord{local.vel[size_t(i)], count[size_t(i)]});
+    }
+  }
+  Round(tag);
+  for (size_t k = 0; k < neighbours.size(); ++k) {
+    size_t at = 0;
+    if (in[k].size() != receivedShadows[k].size() * sizeof(VelocityRecord)) {
+      throw std::logic_error("DistributedWorld: a velocity message does not match the shadows");
+    }
+    for (int i : receivedShadows[k]) {
+      const VelocityRecord v = Take<VelocityRecord>(in[k], at);
+      local.vel[size_t(i)] = v.vel;
+      if (counts) count[size_t(i)] = v.count;
+    }
+  }
+}
+
+// As ContactCache::Store: the contacts that carry an impulse, by id pair.
+void DistributedWorld::Impl::StoreCache() {
+  cache.clear();
+  if (!def.effects.warmStarting) return;
+  for (const Contact& c : contacts) {
+    const Manifold& m = c.manifold;
+    bool carries = false;
+    for (int k = 0; k < m.pointCount; ++k) carries = carries || m.points[k].normalImpulse != 0 || m.points[k].tangentImpulse != 0;
+    if (!carries) continue;
+    CacheEntry e;
+    std::memset(static_cast<void*>(&e), 0, sizeof e);
+    e.key = PairKey(local.slot[size_t(c.a)], local.slot[size_t(c.b)]);
+    e.pointCount = m.pointCount;
+    for (int k = 0; k < m.pointCount; ++k) {
+      e.ids[k] = m.points[k].id;
+      e.normalImpulse[k] = m.points[k].normalImpulse;
+      e.tangentImpulse[k] = m.points[k].tangentImpulse;
+    }
+    cache.push_back(e);
+  }
+}
+
+// Nothing lost, nothing duplicated: the global count of owned bodies and the sum of their mixed
+// ids (exact integer sums, modulo 2^64) against the loaded scene's.
+void DistributedWorld::Impl::CheckCounts() {
+  int64_t cost = 0;
+  for (int64_t c : tileCost) cost += c;
+  uint64_t local[3] = {uint64_t(owned.size()), 0, uint64_t(cost)};
+  for (const Record& r : owned) local[1] += MixId(r.id);
+  uint64_t global[3] = {0, 0, 0};
+  MPI_Allreduce(local, global, 3, MPI_UINT64_T, MPI_SUM, comm);
+  int64_t most = 0;
+  MPI_Allreduce(&cost, &most, 1, MPI_INT64_T, MPI_MAX, comm);
+  stats.imbalance = global[2] > 0 ? double(most) / (double(global[2]) / size) : 1.0;
+  Require(global[0] == expectedCount && global[1] == expectedChecksum,
+          "DistributedWorld: body bookkeeping broken: " + std::to_string(global[0]) + " bodies owned, " +
+              std::to_string(expectedCount) + " loaded (or the id checksum differs)");
+}
+
+std::vector<BodyState> DistributedWorld::GatherStates() const {
+  const Impl& w = *impl_;
+  std::vector<BodyState> mine;
+  auto state = [](const Record& r) {
+    BodyState s;
+    s.id = r.id;
+    s.position = r.xf.p;
+    s.rotation = r.xf.q;
+    s.linearVelocity = r.vel.v;
+    s.angularVelocity = r.vel.w;
+    s.mass = r.mass;
+    return s;
+  };
+  for (const Record& r : w.owned) mine.push_back(state(r));
+  const int bytes = static_cast<int>(mine.size() * sizeof(BodyState));
+  std::vector<int> counts(size_t(w.size)), displs(size_t(w.size));
+  MPI_Allgather(&bytes, 1, MPI_INT, counts.data(), 1, MPI_INT, w.comm);
+  int total = 0;
+  for (int r = 0; r < w.size; ++r) {
+    displs[size_t(r)] = total;
+    total += counts[size_t(r)];
+  }
+  std::vector<BodyState> all(size_t(total) / sizeof(BodyState));
+  MPI_Allgatherv(mine.data(), bytes, MPI_BYTE, all.data(), counts.data(), displs.data(), MPI_BYTE, w.comm);
+  for (const Record& r : w.statics) all.push_back(state(r));
+  std::sort(all.begin(), all.end(), [](const BodyState& a, const BodyState& b) { return a.id < b.id; });
+  return all;
+}
+
+uint64_t DistributedWorld::StateHash() const {
+  BitHash h;
+  for (const BodyState& s : GatherStates()) {
+    h.Mix(s.position.x);
+    h.Mix(s.position.y);
+    h.Mix(s.rotation.c);
+    h.Mix(s.rotation.s);
+    h.Mix(s.linearVelocity.x);
+    h.Mix(s.linearVelocity.y);
+    h.Mix(s.angularVelocity);
+  }
+  return h.Value();
+}
+
+// ---- checkpoints ------------------------------------------------------------------------------
+//
+// Layout: magic, sizeof(Real), sizeof(Record), sizeof(CacheEntry), body count, entry count, the
+// records in id order, the entries in key order, then FNV-1a of everything before it. Warm-start
+// entries are written once per contact (two ranks hold equal copies of a boundary contact's).
+
+namespace {
+
+constexpr char kCheckpointMagic[8] = {'Q', 'D', 'C', 'K', 'P', 'T', '0', '1'};
+
+uint64_t Fnv(const char* data, size_t n) {
+  uint64_t h = 0xcbf29ce484222325ull;
+  for (size_t i = 0; i < n; ++i) {
+    h ^= static_cast<unsigned char>(data[i]);
+    h *= 0x100000001b3ull;
+  }
+  return h;
+}
+
+// All ranks' bytes on rank 0, in rank order.
+std::vector<char> GatherBytes(const std::vector<char>& mine, int rank, int size, MPI_Comm comm) {
+  const int bytes = static_cast<int>(mine.size());
+  std::vector<int> counts(size_t(size), 0), displs(size_t(size), 0);
+  MPI_Gather(&bytes, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, comm);
+  int total = 0;
+  for (int r = 0; r < size; ++r) {
+    displs[size_t(r)] = total;
+    total += counts[size_t(r)];
+  }
+  std::vector<char> all(rank == 0 ? size_t(total) : 0);
+  MPI_Gatherv(mine.data(), bytes, MPI_BYTE, all.data(), counts.data(), displs.data(), MPI_BYTE, 0, comm);
+  return all;
+}
+
+}  // namespace
+
+void DistributedWorld::WriteCheckpoint(const std::string& path) const {
+  const Impl& w = *impl_;
+  Require(w.loaded, "DistributedWorld::WriteCheckpoint: Load a scene first");
+  std::vector<char> mine;
+  for (const Record& r : w.owned) Put(mine, r);
+  const std::vector<char> records = GatherBytes(mine, w.rank, w.size, w.comm);
+  mine.clear();
+  for (const CacheEntry& e : w.cache) Put(mine, e);
+  const std::vector<char> entries = GatherBytes(mine, w.rank, w.size, w.comm);
+  int ok = 1;
+  if (w.rank == 0) {
+    std::vector<Record> bodies(w.statics);
+    for (size_t at = 0; at < records.size();) bodies.push_back(Take<Record>(records, at));
+    std::sort(bodies.begin(), bodies.end(), [](const Record& a, const Record& b) { return a.id < b.id; });
+    std::vector<CacheEntry> cache;
+    for (size_t at = 0; at < entries.size();) cache.push_back(Take<CacheEntry>(entries, at));
+    std::stable_sort(cache.begin(), cache.end(), [](const CacheEntry& a, const CacheEntry& b) { return a.key < b.key; });
+    cache.erase(std::unique(cache.begin(), cache.end(), [](const CacheEntry& a, const CacheEntry& b) { return a.key == b.key; }),
+                cache.end());
+    std::vector<char> file(kCheckpointMagic, kCheckpointMagic + sizeof kCheckpointMagic);
+    Put(file, uint32_t(sizeof(Real)));
+    Put(file, uint32_t(sizeof(Record)));
+    Put(file, uint32_t(sizeof(CacheEntry)));
+    Put(file, uint64_t(bodies.size()));
+    Put(file, uint64_t(cache.size()));
+    for (const Record& r : bodies) Put(file, r);
+    for (const CacheEntry& e : cache) Put(file, e);
+    Put(file, Fnv(file.data(), file.size()));
+    std::FILE* f = std::fopen(path.c_str(), "wb");
+    ok = f != nullptr && std::fwrite(file.data(), 1, file.size(), f) == file.size();
+    if (f != nullptr) ok = (std::fclose(f) == 0) && ok;
+  }
+  MPI_Bcast(&ok, 1, MPI_INT, 0, w.comm);
+  Require(ok != 0, "DistributedWorld::WriteCheckpoint: cannot write '" + path + "'");
+}
+
+void DistributedWorld::ReadCheckpoint(const std::string& path) {
+  Impl& w = *impl_;
+  // Every rank reads and checks the file itself; the verdicts are reduced so all ranks agree.
+  std::string error;
+  std::vector<char> file;
+  if (std::FILE* f = std::fopen(path.c_str(), "rb")) {
+    char chunk[65536];
+    size_t n;
+    while ((n = std::fread(chunk, 1, sizeof chunk, f)) > 0) file.insert(file.end(), chunk, chunk + n);
+    std::fclose(f);
+  } else {
+    error = "cannot open '" + path + "'";
+  }
+  std::vector<Record> statics, owned;
+  std::vector<CacheEntry> cache;
+  uint64_t count = 0, checksum = 0;
+  const size_t header = sizeof kCheckpointMagic + 3 * sizeof(uint32_t) + 2 * sizeof(uint64_t);
+  if (error.empty()) {
+    if (file.size() < header + sizeof(uint64_t) || std::memcmp(file.data(), kCheckpointMagic, sizeof kCheckpointMagic) != 0) {
+      error = "'" + path + "' is not a Quadrant checkpoint (or is truncated before its header ends)";
+    }
+  }
+  if (error.empty()) {
+    size_t at = sizeof kCheckpointMagic;
+    const uint32_t realSize = Take<uint32_t>(file, at), recordSize = Take<uint32_t>(file, at),
+                   entrySize = Take<uint32_t>(file, at);
+    const uint64_t bodies = Take<uint64_t>(file, at), entries = Take<uint64_t>(file, at);
+    if (realSize != sizeof(Real) || recordSize != sizeof(Record) || entrySize != sizeof(CacheEntry)) {
+      error = "'" + path + "' was written by another build (record sizes differ)";
+    } else if (bodies > (uint64_t(1) << 31) || entries > (uint64_t(1) << 40) ||
+               file.size() != header + bodies * sizeof(Record) + entries * sizeof(CacheEntry) + sizeof(uint64_t)) {
+      error = "'" + path + "' is truncated or has trailing bytes (size " + std::to_string(file.size()) + ")";
+    } else {
+      size_t end = file.size() - sizeof(uint64_t);
+      const uint64_t stored = Take<uint64_t>(file, end);
+      if (stored != Fnv(file.data(), file.size() - sizeof(uint64_t))) {
+        error = "'" + path + "' is corrupt (checksum mismatch)";
+      } else {
+        for (uint64_t i = 0; i < bodies && error.empty(); ++i) {
+          const Record r = Take<Record>(file, at);
+          if (r.id != i || !IsFinite(r.center) || !IsFinite(r.vel.v)) error = "'" + path + "' holds a malformed body";
+          if (r.type == BodyType::kStatic) {
+            statics.push_back(r);
+          } else {
+            ++count;
+            checksum += MixId(r.id);
+            if (w.OwnerOf(r.center) == w.rank) owned.push_back(r);
+          }
+        }
+        for (uint64_t i = 0; i < entries; ++i) cache.push_back(Take<CacheEntry>(file, at));
+      }
+    }
+  }
+  // Only the entries of this rank's contacts: those touching an owned body.
+  std::vector<uint32_t> ids;
+  for (const Record& r : owned) ids.push_back(r.id);
+  std::erase_if(cache, [&](const CacheEntry& e) {
+    return !std::binary_search(ids.begin(), ids.end(), uint32_t(e.key >> 32)) &&
+           !std::binary_search(ids.begin(), ids.end(), uint32_t(e.key));
+  });
+  const int bad = error.empty() ? 0 : 1;
+  int anyBad = 0;
+  MPI_Allreduce(&bad, &anyBad, 1, MPI_INT, MPI_MAX, w.comm);
+  Require(anyBad == 0, "DistributedWorld::ReadCheckpoint: " +
+                           (error.empty() ? std::string("another rank could not read the checkpoint") : error));
+  w.statics.swap(statics);
+  w.owned.swap(owned);
+  w.cache.swap(cache);
+  w.expectedCount = count;
+  w.expectedChecksum = checksum;
+  w.loaded = true;
+  std::fill(w.tileCost.begin(), w.tileCost.end(), 0);
+  w.CheckCounts();
+}
+
+void DistributedWorld::Rebalance() {
+  Require(impl_->loaded, "DistributedWorld::Rebalance: Load a scene first");
+  impl_->Rebalance(true);
+  impl_->CheckCounts();
+}
+
+std::vector<int> DistributedWorld::TileOwners() const { return impl_->tileOwner; }
+
+int DistributedWorld::Rank() const { return impl_->rank; }
+int DistributedWorld::Size() const { return impl_->size; }
+const DistributedStats& DistributedWorld::GetStats() const { return impl_->stats; }
+
+std::vector<uint32_t> DistributedWorld::OwnedIds() const {
+  std::vector<uint32_t> ids;
+  for (const Record& r : impl_->owned) ids.push_back(r.id);
+  return ids;
+}
+
+}  // namespace quadrant

@@ -1,0 +1,52 @@
+// The greedy colouring of the constraint graph (constraint_graph.h says what and why).
+#include "dynamics/constraint_graph.h"
+
+#include <algorithm>
+#include <bit>
+
+namespace quadrant {
+
+void ConstraintGraph::Prepare(StageRunner& run, int bodyCount, int m) {
+  bodyColors_.resize(bodyCount, 0);  // all zero between steps
+  ends_.resize(m);
+  colorOf_.resize(m);
+  comparable_ = m == lastCount_ && m > 0;
+  changed_.assign(size_t(run.Workers()), 0);
+}
+
+void ConstraintGraph::Finish(StageRunner& run, int bodyCount, int m, bool clearLater) {
+  lastCount_ = m;
+  bool same = comparable_;
+  for (int changed : changed_) same = same && changed == 0;
+  ++colorings_;
+  if (same) {
+    ++reused_;
+    return;  // order_ and colorStart_ are last step's; the body masks were cleared after it
+  }
+  run.Serial(Stage::kSolve, [&] {
+    int counts[kColors + 1] = {};
+    for (int c = 0; c < m; ++c) {
+      const auto [a, b] = ends_[c];
+      const uint64_t used = (a >= 0 ? bodyColors_[a] : 0) | (b >= 0 ? bodyColors_[b] : 0);
+      const int color = used == ~uint64_t(0) ? kColors : std::countr_one(used);
+      colorOf_[c] = color;
+      ++counts[color];
+      if (color < kColors) {
+        if (a >= 0) bodyColors_[a] |= uint64_t(1) << color;
+        if (b >= 0) bodyColors_[b] |= uint64_t(1) << color;
+      }
+    }
+    colorStart_.assign(kColors + 2, 0);
+    for (int k = 0; k <= kColors; ++k) colorStart_[k + 1] = colorStart_[k] + counts[k];
+    order_.resize(m);
+    fill_.assign(colorStart_.begin(), colorStart_.end() - 1);
+    for (int c = 0; c < m; ++c) order_[fill_[colorOf_[c]]++] = c;
+  });
+  if (m > 0 && !clearLater) {  // leave the masks zeroed for the next step
+    run.For(Stage::kSolve, bodyCount, run.MinItems(), [&](int begin, int end, int) {
+      std::fill(bodyColors_.begin() + begin, bodyColors_.begin() + end, uint64_t(0));
+    });
+  }
+}
+
+}  // namespace quadrant

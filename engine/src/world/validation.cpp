@@ -1,0 +1,128 @@
+// Validation of world and body definitions (validation.h).
+#include "world/validation.h"
+
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <span>
+#include <string>
+
+namespace quadrant {
+
+void ValidateWorldDef(const WorldDef& d) {
+  Require(IsFinite(d.gravity), "WorldDef.gravity is not finite");
+  Require(d.solver == SolverType::kThesis || d.solver == SolverType::kPgs || d.solver == SolverType::kSoftStep ||
+              d.solver == SolverType::kJacobi,
+          "WorldDef.solver is unknown");
+  Require(d.softSubSteps >= 1, "WorldDef.softSubSteps must be >= 1");
+  Require(d.softSubSteps <= kMaxIterations, "WorldDef.softSubSteps must be <= 1000");
+  Require(IsFinite(d.contactHertz) && d.contactHertz > 0, "WorldDef.contactHertz must be > 0");
+  Require(IsFinite(d.contactDampingRatio) && d.contactDampingRatio >= 0, "WorldDef.contactDampingRatio must be >= 0");
+  Require(IsFinite(d.contactPushMaxVelocity) && d.contactPushMaxVelocity > 0,
+          "WorldDef.contactPushMaxVelocity must be > 0");
+  Require(IsFinite(d.contactPushMaxDepth) && d.contactPushMaxDepth > 0, "WorldDef.contactPushMaxDepth must be > 0");
+  Require(d.softRelaxIterations >= 1 && d.softRelaxIterations <= kMaxIterations,
+          "WorldDef.softRelaxIterations must be in [1, 1000]");
+  Require(IsFinite(d.softMassRatioLimit) && (d.softMassRatioLimit == 0 || d.softMassRatioLimit >= 1),
+          "WorldDef.softMassRatioLimit must be 0 (off) or >= 1");
+  Require(d.broadPhase == BroadPhaseType::kQuadTree || d.broadPhase == BroadPhaseType::kUniformGrid,
+          "WorldDef.broadPhase is unknown");
+  Require(d.velocityIterations >= 1, "WorldDef.velocityIterations must be >= 1");
+  Require(d.velocityIterations <= kMaxIterations, "WorldDef.velocityIterations must be <= 1000");
+  Require(d.positionIterations >= 0, "WorldDef.positionIterations must be >= 0");
+  Require(d.positionIterations <= kMaxIterations, "WorldDef.positionIterations must be <= 1000");
+  Require(d.thesisPasses >= 1, "WorldDef.thesisPasses must be >= 1");
+  Require(d.thesisPasses <= kMaxIterations, "WorldDef.thesisPasses must be <= 1000");
+  Require(d.restitutionIterations >= 1, "WorldDef.restitutionIterations must be >= 1");
+  Require(d.restitutionIterations <= kMaxIterations, "WorldDef.restitutionIterations must be <= 1000");
+  Require(IsFinite(d.linearSlop) && d.linearSlop >= 0, "WorldDef.linearSlop must be finite and >= 0");
+  Require(IsFinite(d.baumgarte) && d.baumgarte >= 0 && d.baumgarte <= 1, "WorldDef.baumgarte must be in [0, 1]");
+  Require(IsFinite(d.maxLinearCorrection) && d.maxLinearCorrection > 0, "WorldDef.maxLinearCorrection must be > 0");
+  Require(IsFinite(d.speculativeDistance) && d.speculativeDistance >= 0,
+          "WorldDef.speculativeDistance must be finite and >= 0");
+  Require(IsFinite(d.restitutionThreshold) && d.restitutionThreshold >= 0,
+          "WorldDef.restitutionThreshold must be finite and >= 0");
+  Require(d.restitution == RestitutionPolicy::kCollisions || d.restitution == RestitutionPolicy::kBox2d,
+          "WorldDef.restitution is unknown");
+  Require(d.restitution == RestitutionPolicy::kCollisions || d.solver != SolverType::kThesis,
+          "WorldDef.restitution = kBox2d needs SolverType::kPgs or kSoftStep");
+  Require(IsFinite(d.polygonSkin) && d.polygonSkin >= 0 && 2 * d.polygonSkin <= d.speculativeDistance,
+          "WorldDef.polygonSkin must be in [0, speculativeDistance / 2]");
+  // The quadrants scheme solves private copies of its bodies without their shapes (quadrants_scheme.cpp).
+  Require(d.polygonSkin == 0 || d.scheme == ParallelScheme::kDeterministic,
+          "WorldDef.polygonSkin > 0 is not supported with ParallelScheme::kQuadrants (use kDeterministic)");
+  Require(IsFinite(d.maxLinearSpeed) && d.maxLinearSpeed > 0, "WorldDef.maxLinearSpeed must be > 0");
+  Require(IsFinite(d.maxRotation) && d.maxRotation > 0, "WorldDef.maxRotation must be > 0");
+  Require(d.threadCount >= 1 && d.threadCount <= kMaxThreads, "WorldDef.threadCount must be in [1, 64]");
+  Require(d.quadTreeMaxDepth >= 1 && d.quadTreeMaxDepth <= 12, "WorldDef.quadTreeMaxDepth must be in [1, 12]");
+  Require(d.minParallelItems >= 1, "WorldDef.minParallelItems must be >= 1");
+  Require(d.scheme == ParallelScheme::kDeterministic || d.scheme == ParallelScheme::kQuadrants,
+          "WorldDef.scheme is unknown");
+  // The quadrants scheme runs the thesis or pgs kernels on its private body copies.
+  Require(d.solver != SolverType::kJacobi || d.scheme == ParallelScheme::kDeterministic,
+          "WorldDef.solver = kJacobi is not supported with ParallelScheme::kQuadrants (use kDeterministic)");
+  Require(IsFinite(d.linearSleepTolerance) && d.linearSleepTolerance >= 0,
+          "WorldDef.linearSleepTolerance must be finite and >= 0");
+  Require(IsFinite(d.angularSleepTolerance) && d.angularSleepTolerance >= 0,
+          "WorldDef.angularSleepTolerance must be finite and >= 0");
+  Require(IsFinite(d.timeToSleep) && d.timeToSleep > 0, "WorldDef.timeToSleep must be finite and > 0");
+  // The quadrants scheme solves private copies of its regions' bodies (quadrants_scheme.cpp)
+  // that carry no sleep state, and its results depend on the thread count anyway; sleeping is
+  // refused there rather than half supported.
+  Require(!(d.effects.sleep && d.scheme == ParallelScheme::kQuadrants),
+          "WorldDef.effects.sleep is not supported with ParallelScheme::kQuadrants (use kDeterministic)");
+}
+
+// std::to_string prints 1e-40 as 0.000000; %g keeps the exponent.
+std::string DensityText(Real density) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%g", double(density));
+  return buffer;
+}
+
+ShapeDef ValidateBodyDef(const BodyDef& def) {
+  Require(def.type == BodyType::kStatic || def.type == BodyType::kKinematic || def.type == BodyType::kDynamic,
+          "BodyDef.type is unknown");
+  Require(IsFinite(def.position) && IsFinite(def.angle), "BodyDef position or angle is not finite");
+  Require(std::abs(def.position.x) <= kMaxCoordinate && std::abs(def.position.y) <= kMaxCoordinate,
+          "BodyDef.position is beyond the coordinate limit of 1e6 m");
+  Require(IsFinite(def.linearVelocity) && IsFinite(def.angularVelocity), "BodyDef velocity is not finite");
+  Require(std::abs(def.linearVelocity.x) <= kMaxInputSpeed && std::abs(def.linearVelocity.y) <= kMaxInputSpeed &&
+              std::abs(def.angularVelocity) <= kMaxInputSpeed,
+          "BodyDef velocity is beyond the limit of 1e6 m/s (rad/s)");
+  Require(IsFinite(def.linearDamping) && def.linearDamping >= 0, "BodyDef.linearDamping must be finite and >= 0");
+  Require(IsFinite(def.angularDamping) && def.angularDamping >= 0, "BodyDef.angularDamping must be finite and >= 0");
+  ShapeDef shape = def.shape;
+  Require(IsFinite(shape.density) && shape.density >= 0, "ShapeDef.density must be finite and >= 0");
+  Require(def.type != BodyType::kDynamic || shape.density > 0, "a dynamic body needs ShapeDef.density > 0");
+  Require(IsFinite(shape.friction) && shape.friction >= 0, "ShapeDef.friction must be finite and >= 0");
+  Require(IsFinite(shape.restitution) && shape.restitution >= 0 && shape.restitution <= 1,
+          "ShapeDef.restitution must be in [0, 1]");
+  if (shape.type == ShapeType::kCircle) {
+    ValidateCircle(shape.circle);
+  } else if (shape.type == ShapeType::kPolygon) {
+    const int count = shape.polygon.count;
+    Require(count >= 3 && count <= kMaxPolygonVertices, "polygon vertex count must be in [3, 8], got " + std::to_string(count));
+    shape.polygon = MakePolygon(std::span<const Vec2>(shape.polygon.vertices.data(), size_t(count)));
+  } else {
+    throw Error("ShapeDef.type is unknown");
+  }
+  if (def.type == BodyType::kDynamic) {
+    // Density times area can overflow (or underflow) float: a mass or inertia that is not a
+    // positive finite number would poison the solver, so the body is refused.
+    // Subnormal values count as underflow: they lose precision and make 1/m overflow.
+    const MassData md = shape.type == ShapeType::kCircle ? ComputeMass(shape.circle, shape.density)
+                                                         : ComputeMass(shape.polygon, shape.density);
+    constexpr Real kSmallest = std::numeric_limits<Real>::min();
+    Require(IsFinite(md.mass) && md.mass >= kSmallest && IsFinite(md.rotationalInertia) &&
+                md.rotationalInertia >= kSmallest && IsFinite(Real(1) / md.mass) &&
+                IsFinite(Real(1) / md.rotationalInertia),
+            "the body's mass or rotational inertia is not a positive finite number (density " +
+                DensityText(shape.density) + ")");
+  }
+  return shape;
+}
+
+void CheckBodyDef(const BodyDef& def) { (void)ValidateBodyDef(def); }
+
+}  // namespace quadrant

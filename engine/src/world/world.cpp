@@ -1,0 +1,707 @@
+// The world: body storage, validation, and the step pipeline
+//   broad phase -> narrow phase -> persistence -> solver (velocities, contacts, positions).
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <iterator>
+#include <limits>
+#include <string>
+
+#include "collision/broad_phase.h"
+#include "collision/contact_cache.h"
+#include "collision/contact_sort.h"
+#include "dynamics/integrate.h"
+#include "dynamics/islands.h"
+#include "collision/narrow_phase.h"
+#include "collision/pair_cache.h"
+#include "collision/queries.h"
+#include "quadrant/task_system.h"
+#include "parallel/quadrants_scheme.h"
+#include "quadrant/world.h"
+#include "dynamics/solver.h"
+#include "parallel/stage_clock.h"
+#include "world/validation.h"
+#include "world/world_internal.h"
+
+namespace quadrant {
+
+uint64_t HashBodies(const Bodies& bodies);  // state_hash.cpp
+
+namespace {
+
+using Clock = StageClock;
+
+}  // namespace
+
+ShapeDef ShapeDef::MakeCircle(Real radius, Vec2 center) {
+  ShapeDef s;
+  s.type = ShapeType::kCircle;
+  s.circle = Circle{center, radius};
+  ValidateCircle(s.circle);
+  return s;
+}
+
+ShapeDef ShapeDef::Box(Real hx, Real hy, Vec2 center, Real angle) {
+  ShapeDef s;
+  s.type = ShapeType::kPolygon;
+  s.polygon = MakeBox(hx, hy, center, angle);
+  return s;
+}
+
+ShapeDef ShapeDef::FromPolygon(const Polygon& polygon) {
+  ShapeDef s;
+  s.type = ShapeType::kPolygon;
+  s.polygon = polygon;
+  return s;
+}
+
+struct World::Impl {
+  WorldDef def;
+  Bodies bodies;
+  // Id slots: generation per slot (odd bumps on free keep stale ids stale), dense index or -1.
+  std::vector<uint32_t> generation;
+  std::vector<int32_t> denseOf;
+  std::vector<uint32_t> freeSlots;
+
+  std::unique_ptr<TaskSystem> tasks;
+  std::unique_ptr<StageRunner> run;
+  std::unique_ptr<BroadPhase> broadPhase;
+  PairCache pairCache;  // the broad phase's pairs reused while the bodies rest (WorldDef::reusePairs)
+  bool pairsReused = false;  // this step's FindPairs was served by pairCache (Counters::pairsReused)
+  std::unique_ptr<Solver> solver;
+  std::unique_ptr<QuadrantsScheme> quadrants;  // only for ParallelScheme::kQuadrants
+  WorkerLists<Contact> workerContacts;  // the narrow phase's output, per worker
+  ContactCache cache;
+  Islands islands;  // only used when def.effects.sleep is on
+  std::vector<CandidatePair> pairs;
+  std::vector<Contact> contacts;
+  ContactSorter sorter;
+  bool contactsIncreasing = true;  // the sorter's check of `contacts` (ContactCache::Keep)
+  Profile profile;
+  Counters counters;
+  std::vector<std::pair<int, int>> countParts;  // CountContacts: per worker, points and touching contacts
+  int customFilters = 0;  // bodies whose Filter is not the default: the pair filter runs while > 0
+
+  // Queries (world.h): their own broad-phase instance on a one-thread runner (so they never wake
+  // the pool nor touch the step's profile), rebuilt when a query follows a change.
+  std::unique_ptr<TaskSystem> queryTasks;
+  std::unique_ptr<StageRunner> queryRun;
+  std::unique_ptr<BroadPhase> queryIndex;
+  std::vector<AABB> queryBoxes;
+  std::vector<int> queryFound;
+  bool queryStale = true;
+
+  // Contact events (def.contactEvents, or effects.sleep for the touching counter): touching pairs
+  // after this step and the last one.
+  std::vector<ContactEvent> touching, touchingBefore, beginEvents, endEvents;
+
+  int Dense(BodyId id) const {
+    if (id.generation == 0 || id.index >= generation.size() || generation[id.index] != id.generation ||
+        denseOf[id.index] < 0) {
+      throw Error("stale or invalid BodyId (index " + std::to_string(id.index) + ", generation " +
+                  std::to_string(id.generation) + ")");
+    }
+    return denseOf[id.index];
+  }
+
+  // The broad-phase box (world_internal.h, BroadPhaseBox: shared with the distributed world).
+  void UpdateAABB(int i, Real dt) { bodies.aabb[i] = BroadPhaseBox(bodies, i, def, dt); }
+
+  // Sleep (effects.sleep on only): wakes the islands of sleeping bodies that body i's box
+  // overlaps, and body i's own island.
+  void WakeAround(int i) {
+    if (!def.effects.sleep) return;
+    islands.WakeIslandOf(bodies, i);
+    islands.WakeOverlapping(bodies, bodies.aabb[i]);
+  }
+
+  void RunPipeline(Real dt);
+  void FindPairs(const BroadPhase::BoxUpdate* update = nullptr);
+  void UpdateContactEvents();
+  void PrepareQueries();
+  BodyId IdOf(int i) const { return BodyId{bodies.slot[i], generation[bodies.slot[i]]}; }  // one pass of every stage
+  void CountContacts(int candidatePairs);
+  void NarrowPhase(Real dt);
+  // Sorts the narrow phase's contacts and restores last step's impulses into them (warm starting).
+  void SortContacts() {
+    const bool persist = def.solver != SolverType::kThesis && def.effects.warmStarting;
+    sorter.Sort(*run, bodies.Count(), workerContacts, contacts, persist ? &cache : nullptr);
+    contactsIncreasing = sorter.StrictlyIncreasing();
+  }
+};
+
+World::World(const WorldDef& def) : impl_(std::make_unique<Impl>()) {
+  ValidateWorldDef(def);
+  impl_->def = def;
+  impl_->tasks = MakeThreadPool(def.threadCount);
+  impl_->run = std::make_unique<StageRunner>(*impl_->tasks, def.minParallelItems);
+  impl_->broadPhase = MakeBroadPhase(def.broadPhase, def.quadTreeMaxDepth);
+  impl_->solver = MakeSolver(def.solver);
+  if (def.scheme == ParallelScheme::kQuadrants) impl_->quadrants = std::make_unique<QuadrantsScheme>(def, def.threadCount);
+}
+
+World::~World() = default;
+World::World(World&&) noexcept = default;
+World& World::operator=(World&&) noexcept = default;
+
+int AppendBody(Bodies& b, const BodyDef& def, const WorldDef& worldDef, uint32_t slot) {
+  const ShapeDef shape = ValidateBodyDef(def);  // throws before anything changes
+  Require(worldDef.scheme != ParallelScheme::kQuadrants || def.filter == Filter{},
+          "CreateBody: a non-default collision filter needs ParallelScheme::kDeterministic");
+
+  MassData md{};
+  Real boundRadius = 0;
+  if (shape.type == ShapeType::kCircle) {
+    md = ComputeMass(shape.circle, shape.density);
+    boundRadius = shape.circle.radius;
+  } else {
+    md = ComputeMass(shape.polygon, shape.density);
+    for (int k = 0; k < shape.polygon.count; ++k) {
+      boundRadius = std::max(boundRadius, Length(shape.polygon.vertices[k] - md.center));
+    }
+  }
+  const bool dynamic = def.type == BodyType::kDynamic;  // its mass was checked by ValidateBodyDef
+
+  const int i = b.Count();
+  b.ForEachArray([](auto& v) { v.emplace_back(); });
+  const Transform xf{def.position, MakeRot(def.angle)};
+  b.type[i] = def.type;
+  b.xf[i] = xf;
+  b.center[i] = TransformPoint(xf, md.center);
+  b.localCenter[i] = md.center;
+  const bool moves = def.type != BodyType::kStatic;
+  b.vel[i] = moves ? BodyVelocity{def.linearVelocity, worldDef.effects.rotation ? def.angularVelocity : Real(0)}
+                   : BodyVelocity{};
+  b.inv[i] = dynamic ? BodyInverseMass{Real(1) / md.mass,
+                                       md.rotationalInertia > 0 ? Real(1) / md.rotationalInertia : Real(0)}
+                     : BodyInverseMass{};
+  b.mass[i] = dynamic ? md.mass : Real(0);
+  b.inertia[i] = dynamic ? md.rotationalInertia : Real(0);
+  b.linearDamping[i] = def.linearDamping;
+  b.angularDamping[i] = def.angularDamping;
+  b.shape[i] = shape;
+  b.boundRadius[i] = boundRadius;
+  b.aabb[i] = {};
+  b.dynamic[i] = dynamic ? 1 : 0;
+  b.slot[i] = slot;
+  b.awake[i] = def.type == BodyType::kStatic ? 0 : 1;
+  b.sleepTime[i] = 0;
+  b.islandOf[i] = 0;
+  b.filter[i] = def.filter;
+  b.userData[i] = def.userData;
+  b.aabb[i] = BroadPhaseBox(b, i, worldDef, 0);
+  return i;
+}
+
+BodyId World::CreateBody(const BodyDef& def) {
+  Impl& w = *impl_;
+  // The slot is taken only once the body is accepted (AppendBody validates before it adds).
+  const uint32_t slot = w.freeSlots.empty() ? static_cast<uint32_t>(w.generation.size()) : w.freeSlots.back();
+  const int i = AppendBody(w.bodies, def, w.def, slot);
+  if (!w.freeSlots.empty()) {
+    w.freeSlots.pop_back();
+  } else {
+    w.generation.push_back(1);
+    w.denseOf.push_back(-1);
+  }
+  w.denseOf[slot] = i;
+  w.customFilters += def.filter == Filter{} ? 0 : 1;
+  w.queryStale = true;
+  w.WakeAround(i);  // a body created touching a sleeping pile wakes it
+  return BodyId{slot, w.generation[slot]};
+}
+
+void World::DestroyBody(BodyId id) {
+  Impl& w = *impl_;
+  const int i = w.Dense(id);
+  w.WakeAround(i);  // what rested on the body falls again
+  const int last = w.bodies.Count() - 1;
+  Bodies& b = w.bodies;
+  w.customFilters -= b.filter[i] == Filter{} ? 0 : 1;
+  w.queryStale = true;
+  auto moveLast = [&](auto& v) {
+    v[i] = v[last];
+    v.pop_back();
+  };
+  b.ForEachArray(moveLast);
+  if (i != last) w.denseOf[b.slot[i]] = i;
+  w.denseOf[id.index] = -1;
+  // Generation 0 means null, so skip it when the counter wraps.
+  w.generation[id.index] = w.generation[id.index] + 1 == 0 ? 1 : w.generation[id.index] + 1;
+  w.freeSlots.push_back(id.index);
+  // Dense indices moved, so last step's contacts no longer name the right bodies.
+  w.cache.Clear();
+  w.contacts.clear();
+}
+
+bool World::IsValid(BodyId id) const {
+  const Impl& w = *impl_;
+  return id.generation != 0 && id.index < w.generation.size() && w.generation[id.index] == id.generation &&
+         w.denseOf[id.index] >= 0;
+}
+
+void World::Step(Real dt) { StepRepeated(dt, 1); }
+
+void World::StepRepeated(Real dt, int pipelineRepeats) {
+  Require(IsFinite(dt) && dt > 0, "Step: dt must be finite and > 0");
+  Require(dt <= kMaxTimeStep, "Step: dt must be <= 1 s");
+  Require(pipelineRepeats >= 1, "StepRepeated: pipelineRepeats must be >= 1");
+  Require(pipelineRepeats <= kMaxIterations, "StepRepeated: pipelineRepeats must be <= 1000");
+  Impl& w = *impl_;
+  w.queryStale = true;
+  w.profile = Profile{};
+  w.run->Reset();
+  w.run->BeginStep();
+  const auto start = Clock::now();
+  const Real h = dt / Real(pipelineRepeats);
+  for (int s = 0; s < pipelineRepeats; ++s) w.RunPipeline(h);
+  w.profile.total = Ms(start, Clock::now());
+  w.profile.balance = w.run->Balance();
+  // With sleep on, the touching pairs are tracked even without events: a sleeping island's
+  // contacts are not in `contacts` (it gets no pairs), yet it still touches, so the counter counts
+  // the tracked pairs (as Box2D, Bullet and Chipmunk count a sleeping pile's contacts).
+  if (w.def.contactEvents || w.def.effects.sleep) {
+    w.UpdateContactEvents();
+    w.counters.touchingContacts = static_cast<int>(w.touching.size());
+  }
+}
+
+void World::Impl::FindPairs(const BroadPhase::BoxUpdate* update) {
+  pairsReused = false;
+  if (update && def.reusePairs && !def.effects.sleep) {
+    pairsReused = pairCache.UpdateAndFindPairs(*broadPhase, bodies.aabb, bodies.dynamic, pairs, *run, *update);
+  } else if (update) {
+    broadPhase->UpdateAndFindPairs(bodies.aabb, bodies.dynamic, pairs, *run, *update);
+  } else {
+    broadPhase->FindPairs(bodies.aabb, bodies.dynamic, pairs, *run);
+  }
+  if (customFilters == 0) return;  // every body collides with everything: nothing to drop
+  // Box2D's rule (world.h, Filter). Compacting in place keeps the pairs' deterministic order.
+  run->Serial(Stage::kBroadPhase, [&] {
+    const std::vector<Filter>& f = bodies.filter;
+    pairs.erase(std::remove_if(pairs.begin(), pairs.end(),
+                               [&](const CandidatePair& p) {
+                                 return (f[p.a].maskBits & f[p.b].categoryBits) == 0 ||
+                                        (f[p.b].maskBits & f[p.a].categoryBits) == 0;
+                               }),
+                pairs.end());
+  });
+}
+
+namespace {
+bool EventLess(const ContactEvent& x, const ContactEvent& y) {
+  if (x.bodyA.index != y.bodyA.index) return x.bodyA.index < y.bodyA.index;
+  if (x.bodyB.index != y.bodyB.index) return x.bodyB.index < y.bodyB.index;
+  if (x.bodyA.generation != y.bodyA.generation) return x.bodyA.generation < y.bodyA.generation;
+  return x.bodyB.generation < y.bodyB.generation;
+}
+}  // namespace
+
+// Begin and end events as the difference of two sorted lists of touching pairs, named by id
+// (not by dense index, which destroying a body changes): the order depends on ids only, so it is
+// the same for any thread count whenever the contacts are.
+void World::Impl::UpdateContactEvents() {
+  std::swap(touching, touchingBefore);
+  touching.clear();
+  for (const Contact& c : contacts) {
+    bool touches = false;
+    for (int k = 0; k < c.manifold.pointCount; ++k) touches = touches || c.manifold.points[k].separation <= 0;
+    if (!touches) continue;
+    BodyId a = IdOf(c.a), b = IdOf(c.b);
+    if (b.index < a.index) std::swap(a, b);
+    touching.push_back({a, b});
+  }
+  if (def.effects.sleep) {
+    // Sleeping bodies get no pairs (among themselves or with statics), so their contacts are not
+    // in `contacts`; a pile that falls asleep has not stopped touching. A pair of bodies that are
+    // both still there and neither simulated (asleep or static) keeps its touch from last step.
+    auto idle = [&](BodyId id) {
+      if (id.index >= generation.size() || generation[id.index] != id.generation || denseOf[id.index] < 0) return false;
+      return bodies.awake[denseOf[id.index]] == 0;
+    };
+    for (const ContactEvent& e : touchingBefore) {
+      if (idle(e.bodyA) && idle(e.bodyB)) touching.push_back(e);
+    }
+  }
+  std::sort(touching.begin(), touching.end(), EventLess);
+  // The step an island falls asleep its pairs are both in `contacts` and carried over: once each.
+  touching.erase(std::unique(touching.begin(), touching.end()), touching.end());
+  beginEvents.clear();
+  endEvents.clear();
+  std::set_difference(touching.begin(), touching.end(), touchingBefore.begin(), touchingBefore.end(),
+                      std::back_inserter(beginEvents), EventLess);
+  std::set_difference(touchingBefore.begin(), touchingBefore.end(), touching.begin(), touching.end(),
+                      std::back_inserter(endEvents), EventLess);
+}
+
+// The query structure over every body's current shape box, grown a little (1 mm, and 1e-6 of
+// the coordinate far out) so float rounding in the box never hides a shape the exact double
+// tests (queries.cpp) would report.
+void World::Impl::PrepareQueries() {
+  if (!queryStale) return;
+  if (!queryIndex) {
+    queryTasks = MakeThreadPool(1);
+    queryRun = std::make_unique<StageRunner>(*queryTasks, def.minParallelItems);
+    queryIndex = MakeBroadPhase(def.broadPhase, def.quadTreeMaxDepth);
+  }
+  const int n = bodies.Count();
+  queryBoxes.resize(n);
+  for (int i = 0; i < n; ++i) {
+    const ShapeDef& s = bodies.shape[i];
+    AABB box = s.type == ShapeType::kCircle ? ComputeAABB(s.circle, bodies.xf[i]) : ComputeAABB(s.polygon, bodies.xf[i]);
+    const Real far = std::max(std::max(std::abs(box.lower.x), std::abs(box.lower.y)),
+                              std::max(std::abs(box.upper.x), std::abs(box.upper.y)));
+    const Real m = Real(1e-3) + Real(1e-6) * far;
+    box.lower = box.lower - Vec2{m, m};
+    box.upper = box.upper + Vec2{m, m};
+    queryBoxes[i] = box;
+  }
+  queryIndex->BuildForQueries(queryBoxes, *queryRun);
+  queryStale = false;
+}
+
+void World::Impl::RunPipeline(Real dt) {
+  const int n = bodies.Count();
+  auto t0 = Clock::now();
+  const bool sleepOn = def.effects.sleep;
+  // The boxes of [begin, end): sleeping bodies keep the box they fell asleep with (awake is 0
+  // for them and for statics).
+  struct Update {
+    Impl* w;
+    Real dt;
+    static void Run(const void* ctx, int begin, int end) {
+      const Update& u = *static_cast<const Update*>(ctx);
+      Bodies& bodies = u.w->bodies;
+      if (u.w->def.effects.sleep) {
+        for (int i = begin; i < end; ++i) {
+          if (bodies.awake[i]) u.w->UpdateAABB(i, u.dt);
+        }
+      } else {
+        for (int i = begin; i < end; ++i) {
+          if (bodies.type[i] != BodyType::kStatic) u.w->UpdateAABB(i, u.dt);
+        }
+      }
+    }
+  };
+  const Update update{this, dt};
+  const BroadPhase::BoxUpdate boxUpdate{&Update::Run, &update};
+  if (quadrants) {
+    run->For(Stage::kBroadPhase, n, run->MinItems(), [&](int begin, int end, int) { boxUpdate(begin, end); });
+    int pairCount = 0;
+    profile.broadPhase += Ms(t0, Clock::now());  // the AABB update; the scheme times the rest
+    quadrants->Step(dt, def, bodies, *run, cache, contacts, pairCount, profile);
+    CountContacts(pairCount);
+    return;
+  }
+  FindPairs(&boxUpdate);  // the boxes are updated inside (UpdateAndFindPairs)
+  auto t1 = Clock::now();
+  NarrowPhase(dt);
+  auto t2 = Clock::now();
+  const bool persist = def.solver != SolverType::kThesis && def.effects.warmStarting;
+  // Last step's solved contacts become the cache (ContactCache::Keep): nothing is copied at the
+  // end of the step, and `contacts` stays readable (GetContacts) until this step refills it.
+  if (persist) cache.Keep(contacts, contactsIncreasing);
+  SortContacts();  // times itself (kPersistence); the narrow phase's contacts, restored, are in `contacts` after it
+  if (sleepOn) {
+    // An awake body touches a sleeping island: the island wakes in this step. Its bodies' pairs
+    // (among themselves and with the ground) were not searched, so the broad and narrow phases
+    // run again with them awake; repeated while that wakes further islands. (Timed with
+    // persistence: it is rare and short.)
+    while (islands.WakeTouched(bodies, contacts) > 0) {
+      for (int i : islands.Changed()) UpdateAABB(i, dt);
+      FindPairs();
+      NarrowPhase(dt);
+      SortContacts();
+    }
+  }
+  auto t3 = Clock::now();
+
+  StepContext ctx;
+  ctx.dt = dt;
+  ctx.def = &def;
+  ctx.bodies = &bodies;
+  ctx.contacts = contacts;
+  ctx.profile = &profile;
+  ctx.run = run.get();
+  solver->Step(ctx);
+  if (sleepOn) {
+    // Timed as part of the solve: Box2D 2.4 also builds its islands in the solve.
+    const auto ts = Clock::now();
+    run->Serial(Stage::kSolve, [&] {
+      islands.Update(bodies, contacts, def, dt);
+      // A sleeping body keeps its box until it wakes: the tight one at rest, not this step's sweep.
+      for (int i : islands.Changed()) UpdateAABB(i, 0);
+    });
+    profile.solve += Ms(ts, Clock::now());
+  }
+
+  profile.broadPhase += Ms(t0, t1);
+  profile.narrowPhase += Ms(t1, t2);
+  profile.persistence += Ms(t2, t3);
+
+  CountContacts(static_cast<int>(pairs.size()));
+}
+
+void World::Impl::CountContacts(int candidatePairs) {
+  counters = Counters{};
+  counters.bodies = bodies.Count();
+  counters.candidatePairs = candidatePairs;
+  counters.pairsReused = pairsReused;
+  counters.contacts = static_cast<int>(contacts.size());
+  // In parallel (sums of integers: any split gives the same counts). Serial, it was 0.7 % of the
+  // base-100 pyramid's instructions a step, all of it on one thread at any thread count.
+  countParts.assign(size_t(run->Workers()), {0, 0});
+  run->For(Stage::kPersistence, static_cast<int>(contacts.size()), run->MinHeavyItems(), [&](int begin, int end, int worker) {
+    int points = 0, touchingContacts = 0;
+    for (int i = begin; i < end; ++i) {
+      const Manifold& m = contacts[i].manifold;
+      points += m.pointCount;
+      bool touching = false;
+      for (int k = 0; k < m.pointCount; ++k) touching = touching || m.points[k].separation <= 0;
+      touchingContacts += touching ? 1 : 0;
+    }
+    countParts[size_t(worker)].first += points;
+    countParts[size_t(worker)].second += touchingContacts;
+  });
+  for (const auto& [points, touchingContacts] : countParts) {
+    counters.contactPoints += points;
+    counters.touchingContacts += touchingContacts;
+  }
+}
+
+void World::Impl::NarrowPhase(Real dt) {
+  workerContacts.Reset(run->Workers());
+  run->For(Stage::kNarrowPhase, static_cast<int>(pairs.size()), run->MinHeavyItems(),
+           [&](int begin, int end, int worker) {
+             CollidePairs(bodies, def, dt, std::span<const CandidatePair>(pairs).subspan(begin, end - begin),
+                          workerContacts[worker]);
+           });
+  // The workers' contacts are put in key order and merged by SortContacts.
+}
+
+Vec2 World::GetPosition(BodyId id) const { return impl_->bodies.xf[impl_->Dense(id)].p; }
+Real World::GetAngle(BodyId id) const { return quadrant::GetAngle(impl_->bodies.xf[impl_->Dense(id)].q); }
+Rot World::GetRotation(BodyId id) const { return impl_->bodies.xf[impl_->Dense(id)].q; }
+Vec2 World::GetLinearVelocity(BodyId id) const { return impl_->bodies.vel[impl_->Dense(id)].v; }
+Real World::GetAngularVelocity(BodyId id) const { return impl_->bodies.vel[impl_->Dense(id)].w; }
+Vec2 World::GetWorldCenter(BodyId id) const { return impl_->bodies.center[impl_->Dense(id)]; }
+Real World::GetMass(BodyId id) const { return impl_->bodies.mass[impl_->Dense(id)]; }
+Real World::GetRotationalInertia(BodyId id) const { return impl_->bodies.inertia[impl_->Dense(id)]; }
+BodyType World::GetType(BodyId id) const { return impl_->bodies.type[impl_->Dense(id)]; }
+AABB World::GetAABB(BodyId id) const {
+  const int i = impl_->Dense(id);
+  const ShapeDef& s = impl_->bodies.shape[i];
+  const Transform& xf = impl_->bodies.xf[i];
+  return s.type == ShapeType::kCircle ? ComputeAABB(s.circle, xf) : ComputeAABB(s.polygon, xf);
+}
+const ShapeDef& World::GetShape(BodyId id) const { return impl_->bodies.shape[impl_->Dense(id)]; }
+
+void World::SetLinearVelocity(BodyId id, Vec2 v) {
+  const int i = impl_->Dense(id);
+  Require(IsFinite(v), "SetLinearVelocity: velocity is not finite");
+  Require(std::abs(v.x) <= kMaxInputSpeed && std::abs(v.y) <= kMaxInputSpeed,
+          "SetLinearVelocity: velocity is beyond the limit of 1e6 m/s");
+  if (impl_->bodies.type[i] == BodyType::kStatic) return;  // static bodies have no velocity
+  if (impl_->def.effects.sleep) impl_->islands.WakeIslandOf(impl_->bodies, i);
+  impl_->bodies.vel[i].v = v;
+}
+
+void World::SetAngularVelocity(BodyId id, Real w) {
+  const int i = impl_->Dense(id);
+  Require(IsFinite(w), "SetAngularVelocity: angular velocity is not finite");
+  Require(std::abs(w) <= kMaxInputSpeed, "SetAngularVelocity: angular velocity is beyond the limit of 1e6 rad/s");
+  if (impl_->bodies.type[i] == BodyType::kStatic || !impl_->def.effects.rotation) return;
+  if (impl_->def.effects.sleep) impl_->islands.WakeIslandOf(impl_->bodies, i);
+  impl_->bodies.vel[i].w = w;
+}
+
+void World::SetTransform(BodyId id, Vec2 position, Real angle) {
+  Impl& w = *impl_;
+  const int i = w.Dense(id);
+  Require(IsFinite(position) && IsFinite(angle), "SetTransform: position or angle is not finite");
+  Require(std::abs(position.x) <= kMaxCoordinate && std::abs(position.y) <= kMaxCoordinate,
+          "SetTransform: position is beyond the coordinate limit of 1e6 m");
+  w.WakeAround(i);  // the body and what rested on it at its old place
+  w.bodies.xf[i] = Transform{position, MakeRot(angle)};
+  w.bodies.center[i] = TransformPoint(w.bodies.xf[i], w.bodies.localCenter[i]);
+  w.UpdateAABB(i, 0);
+  w.queryStale = true;
+  w.WakeAround(i);  // what it lands on
+}
+
+void World::ApplyLinearImpulse(BodyId id, Vec2 impulse, Vec2 worldPoint) {
+  Impl& w = *impl_;
+  const int i = w.Dense(id);
+  Require(IsFinite(impulse) && IsFinite(worldPoint), "ApplyLinearImpulse: impulse or point is not finite");
+  Require(std::abs(worldPoint.x) <= kMaxCoordinate && std::abs(worldPoint.y) <= kMaxCoordinate,
+          "ApplyLinearImpulse: point is beyond the coordinate limit of 1e6 m");
+  if (w.bodies.type[i] != BodyType::kDynamic) return;
+  // Compute in double and check before writing: the world must stay as it was if refused.
+  // A sleeping body's stored inverse mass is 0; the impulse acts on its awake one.
+  const BodyInverseMass inv = w.def.effects.sleep ? Islands::AwakeInverseMass(w.bodies, i) : w.bodies.inv[i];
+  const double vx = double(w.bodies.vel[i].v.x) + double(inv.invMass) * impulse.x;
+  const double vy = double(w.bodies.vel[i].v.y) + double(inv.invMass) * impulse.y;
+  const Vec2 r = worldPoint - w.bodies.center[i];
+  const double wz = double(w.bodies.vel[i].w) +
+                    (w.def.effects.rotation ? double(inv.invInertia) * (double(r.x) * impulse.y - double(r.y) * impulse.x) : 0.0);
+  Require(std::abs(vx) <= kMaxInputSpeed && std::abs(vy) <= kMaxInputSpeed && std::abs(wz) <= kMaxInputSpeed,
+          "ApplyLinearImpulse: the resulting velocity is beyond the limit of 1e6 m/s (rad/s)");
+  if (w.def.effects.sleep) w.islands.WakeIslandOf(w.bodies, i);
+  w.bodies.vel[i].v = {Real(vx), Real(vy)};
+  w.bodies.vel[i].w = Real(wz);
+}
+
+bool World::IsAwake(BodyId id) const { return impl_->bodies.awake[impl_->Dense(id)] != 0; }
+
+void World::SetAwake(BodyId id, bool awake) {
+  Impl& w = *impl_;
+  const int i = w.Dense(id);
+  if (w.bodies.type[i] != BodyType::kDynamic || !w.def.effects.sleep) return;
+  if (awake) {
+    w.islands.WakeIslandOf(w.bodies, i);
+  } else if (w.bodies.awake[i]) {
+    Islands::Sleep(w.bodies, i, w.bodies.slot[i]);  // an island of its own
+    w.UpdateAABB(i, 0);
+  }
+}
+
+uint64_t World::GetUserData(BodyId id) const { return impl_->bodies.userData[impl_->Dense(id)]; }
+void World::SetUserData(BodyId id, uint64_t userData) { impl_->bodies.userData[impl_->Dense(id)] = userData; }
+Filter World::GetFilter(BodyId id) const { return impl_->bodies.filter[impl_->Dense(id)]; }
+
+void World::SetFilter(BodyId id, Filter filter) {
+  Impl& w = *impl_;
+  const int i = w.Dense(id);
+  Require(w.def.scheme != ParallelScheme::kQuadrants || filter == Filter{},
+          "SetFilter: a non-default collision filter needs ParallelScheme::kDeterministic");
+  w.customFilters += (filter == Filter{} ? 0 : 1) - (w.bodies.filter[i] == Filter{} ? 0 : 1);
+  w.bodies.filter[i] = filter;
+}
+
+void World::QueryAABB(const AABB& box, std::vector<BodyId>& out, uint32_t categoryMask) const {
+  Require(IsFinite(box.lower) && IsFinite(box.upper), "QueryAABB: the box is not finite");
+  Require(box.lower.x <= box.upper.x && box.lower.y <= box.upper.y,
+          "QueryAABB: the box's lower corner is above or right of its upper corner");
+  Impl& w = *impl_;
+  w.PrepareQueries();
+  w.queryFound.clear();
+  w.queryIndex->QueryBox(box, w.queryBoxes, w.queryFound);
+  std::sort(w.queryFound.begin(), w.queryFound.end());  // GetBodyIds order
+  out.clear();
+  for (int i : w.queryFound) {
+    if ((w.bodies.filter[i].categoryBits & categoryMask) != 0 && ShapeOverlapsBox(w.bodies.shape[i], w.bodies.xf[i], box)) {
+      out.push_back(w.IdOf(i));
+    }
+  }
+}
+
+namespace {
+void CheckRay(const char* call, Vec2 origin, Vec2 translation) {
+  const std::string c = call;
+  Require(IsFinite(origin) && IsFinite(translation), c + ": origin or translation is not finite");
+  Require(translation.x != 0 || translation.y != 0, c + ": the translation is zero (a ray needs a direction)");
+  const Vec2 end = origin + translation;
+  Require(IsFinite(end) && std::abs(origin.x) <= kMaxCoordinate && std::abs(origin.y) <= kMaxCoordinate &&
+              std::abs(end.x) <= kMaxCoordinate && std::abs(end.y) <= kMaxCoordinate,
+          c + ": origin or end is beyond the coordinate limit of 1e6 m");
+}
+}  // namespace
+
+void World::RayCastAll(Vec2 origin, Vec2 translation, std::vector<RayHit>& out, uint32_t categoryMask) const {
+  CheckRay("RayCastAll", origin, translation);
+  Impl& w = *impl_;
+  w.PrepareQueries();
+  w.queryFound.clear();
+  const Vec2 end = origin + translation;
+  w.queryIndex->QuerySegment(origin, end, w.queryBoxes, w.queryFound);
+  std::sort(w.queryFound.begin(), w.queryFound.end());
+  out.clear();
+  for (int i : w.queryFound) {
+    RayHit hit;
+    if ((w.bodies.filter[i].categoryBits & categoryMask) == 0) continue;
+    if (!RayCastShape(w.bodies.shape[i], w.bodies.xf[i], origin, end, hit)) continue;
+    hit.body = w.IdOf(i);
+    out.push_back(hit);
+  }
+  // Stable: equal fractions stay in GetBodyIds order.
+  std::stable_sort(out.begin(), out.end(), [](const RayHit& a, const RayHit& b) { return a.fraction < b.fraction; });
+}
+
+std::optional<RayHit> World::RayCastClosest(Vec2 origin, Vec2 translation, uint32_t categoryMask) const {
+  CheckRay("RayCastClosest", origin, translation);
+  Impl& w = *impl_;
+  w.PrepareQueries();
+  w.queryFound.clear();
+  const Vec2 end = origin + translation;
+  w.queryIndex->QuerySegment(origin, end, w.queryBoxes, w.queryFound);
+  std::optional<RayHit> best;
+  int bestIndex = -1;
+  for (int i : w.queryFound) {
+    RayHit hit;
+    if ((w.bodies.filter[i].categoryBits & categoryMask) == 0) continue;
+    if (!RayCastShape(w.bodies.shape[i], w.bodies.xf[i], origin, end, hit)) continue;
+    if (best && (hit.fraction > best->fraction || (hit.fraction == best->fraction && i > bestIndex))) continue;
+    hit.body = w.IdOf(i);
+    best = hit;
+    bestIndex = i;
+  }
+  return best;
+}
+
+std::span<const ContactEvent> World::GetContactBeginEvents() const {
+  Require(impl_->def.contactEvents, "GetContactBeginEvents: contact events are off (WorldDef::contactEvents)");
+  return impl_->beginEvents;
+}
+
+std::span<const ContactEvent> World::GetContactEndEvents() const {
+  Require(impl_->def.contactEvents, "GetContactEndEvents: contact events are off (WorldDef::contactEvents)");
+  return impl_->endEvents;
+}
+
+int World::GetBodyCount() const { return impl_->bodies.Count(); }
+
+std::vector<BodyId> World::GetBodyIds() const {
+  std::vector<BodyId> ids;
+  ids.reserve(impl_->bodies.Count());
+  for (uint32_t slot : impl_->bodies.slot) ids.push_back(BodyId{slot, impl_->generation[slot]});
+  return ids;
+}
+
+const WorldDef& World::GetDef() const { return impl_->def; }
+const Profile& World::GetProfile() const { return impl_->profile; }
+const Counters& World::GetCounters() const { return impl_->counters; }
+
+std::vector<ContactInfo> World::GetContacts() const {
+  const Impl& w = *impl_;
+  std::vector<ContactInfo> out;
+  out.reserve(w.contacts.size());
+  for (const Contact& c : w.contacts) {
+    ContactInfo info;
+    const uint32_t sa = w.bodies.slot[c.a], sb = w.bodies.slot[c.b];
+    info.bodyA = BodyId{sa, w.generation[sa]};
+    info.bodyB = BodyId{sb, w.generation[sb]};
+    info.normal = c.manifold.normal;
+    info.pointCount = c.manifold.pointCount;
+    for (int k = 0; k < c.manifold.pointCount; ++k) {
+      info.points[k] = c.manifold.points[k].point;
+      info.separations[k] = c.manifold.points[k].separation;
+      info.normalImpulses[k] = c.manifold.points[k].normalImpulse;
+      info.tangentImpulses[k] = c.manifold.points[k].tangentImpulse;
+    }
+    out.push_back(info);
+  }
+  return out;
+}
+
+uint64_t World::StateHash() const { return HashBodies(impl_->bodies); }
+
+std::vector<int> World::GetOwners() const {
+  if (!impl_->quadrants) return {};
+  std::vector<int> owners = impl_->quadrants->Owners();
+  owners.resize(impl_->bodies.Count(), 0);  // bodies created since the last step: not yet assigned
+  return owners;
+}
+
+AABB World::GetPartitionRegion() const { return impl_->quadrants ? impl_->quadrants->Region() : AABB{}; }
+
+}  // namespace quadrant

@@ -1,0 +1,147 @@
+// The world's data, shared by the stages. Dense arrays indexed by body (no per-body heap
+// objects), split by who touches them: the solver reads and writes only `vel` and `inv`,
+// integration `center`, `xf`, `vel`, and the broad phase only `aabb` and `dynamic`.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "collision/narrow_phase.h"
+#include "quadrant/types.h"
+#include "parallel/stage_runner.h"
+
+namespace quadrant {
+
+struct BodyVelocity {
+  Vec2 v;
+  Real w = 0;
+};
+
+struct BodyInverseMass {
+  Real invMass = 0;
+  Real invInertia = 0;
+};
+
+/// Dense body arrays. Index i is a body's dense index; ids map to it through the world's slots.
+struct Bodies {
+  std::vector<BodyType> type;
+  std::vector<Transform> xf;           ///< body origin and rotation
+  std::vector<Vec2> center;            ///< world centre of mass
+  std::vector<Vec2> localCenter;       ///< centre of mass in body coordinates
+  std::vector<BodyVelocity> vel;
+  std::vector<BodyInverseMass> inv;
+  std::vector<Real> mass;
+  std::vector<Real> inertia;
+  std::vector<Real> linearDamping;
+  std::vector<Real> angularDamping;
+  std::vector<ShapeDef> shape;
+  std::vector<Real> boundRadius;       ///< farthest shape point from the centre of mass
+  std::vector<AABB> aabb;
+  std::vector<uint8_t> dynamic;        ///< 1 for dynamic bodies: pairs need at least one
+  std::vector<uint32_t> slot;          ///< dense index -> id slot
+  // Sleep (islands.cpp; read and written only when effects.sleep is on). A sleeping dynamic
+  // body has awake 0, dynamic 0, velocity 0 and inverse mass 0, so every stage treats it as
+  // static without a sleep test of its own; waking restores them from mass and inertia.
+  std::vector<uint8_t> awake;          ///< 1 for simulated bodies: kinematic and awake dynamic
+  std::vector<Real> sleepTime;         ///< seconds the body has been below the sleep tolerances
+  std::vector<uint32_t> islandOf;      ///< while asleep: the id of the island it fell asleep with
+  // Cold: read only by the pair filter (when some body has a non-default filter), the queries
+  // and the user.
+  std::vector<Filter> filter;
+  std::vector<uint64_t> userData;
+
+  int Count() const { return static_cast<int>(type.size()); }
+
+  /// Calls fn on every array above: the one list of them (adding and removing a body use it,
+  /// so an array added here is grown and shrunk with the rest).
+  template <class Fn>
+  void ForEachArray(Fn&& fn) {
+    fn(type), fn(xf), fn(center), fn(localCenter), fn(vel), fn(inv), fn(mass), fn(inertia);
+    fn(linearDamping), fn(angularDamping), fn(shape), fn(boundRadius), fn(aabb), fn(dynamic);
+    fn(slot), fn(awake), fn(sleepTime), fn(islandOf), fn(filter), fn(userData);
+  }
+};
+
+/// A touching or speculative contact between two bodies (dense indices, a < b).
+struct Contact {
+  int32_t a = 0;
+  int32_t b = 0;
+  Real friction = 0;
+  Real restitution = 0;
+  Manifold manifold;
+
+  uint64_t Key() const { return (uint64_t(uint32_t(a)) << 32) | uint32_t(b); }
+};
+
+struct CandidatePair;
+
+/// Validates `def` (throws quadrant::Error and adds nothing on bad input), computes its mass
+/// data and appends the body to `bodies` with id slot `slot`; returns its dense index. The one
+/// place a body row is made: World::CreateBody and the distributed world both use it.
+int AppendBody(Bodies& bodies, const BodyDef& def, const WorldDef& worldDef, uint32_t slot);
+
+// The broad-phase box of a body: its shape's AABB grown by half the speculative distance on
+// every side (so two shapes closer than that distance pair up), and for moving bodies swept
+// by this step's displacement, so a pair that can meet within the step is found before it
+// touches and the speculative contact stops it at the surface. Shared with the distributed
+// world, which must find exactly the World's pairs.
+//
+// The shape's box is computed here, inline, with exactly ComputeAABB's arithmetic (mass.cpp),
+// instead of calling it: the out-of-line call takes the Transform in two registers that the
+// callee spills as two 8-byte stores and reloads as one 16-byte load, which cannot be forwarded
+// from the stores and stalls. perf put 44 % of ComputeAABB's samples on that load, and
+// ComputeAABB at 18 % of all cycles of circle stress 16000 at 1 thread (main ef96acf).
+inline AABB ShapeBox(const ShapeDef& s, const Transform& xf) {
+  if (s.type == ShapeType::kCircle) {
+    const Vec2 p = TransformPoint(xf, s.circle.center);
+    const Vec2 r{s.circle.radius, s.circle.radius};
+    return {p - r, p + r};
+  }
+  const Polygon& poly = s.polygon;
+  Vec2 lower = TransformPoint(xf, poly.vertices[0]);
+  Vec2 upper = lower;
+  for (int k = 1; k < poly.count; ++k) {
+    const Vec2 v = TransformPoint(xf, poly.vertices[k]);
+    lower = Min(lower, v);
+    upper = Max(upper, v);
+  }
+  return {lower, upper};
+}
+
+inline AABB SweptBox(const ShapeDef& s, const Transform& xf, const BodyVelocity& bv, Real boundRadius,
+                     const WorldDef& def, Real dt) {
+  AABB box = ShapeBox(s, xf);
+  // Without continuous collision the box is not swept (dt 0 below): only the base margin.
+  const Real sweep = def.effects.continuous ? dt : Real(0);
+  const Real margin = Real(0.5) * def.speculativeDistance + sweep * std::abs(bv.w) * boundRadius;
+  const Vec2 d = sweep * bv.v;
+  box.lower = box.lower + Vec2{std::min(d.x, Real(0)) - margin, std::min(d.y, Real(0)) - margin};
+  box.upper = box.upper + Vec2{std::max(d.x, Real(0)) + margin, std::max(d.y, Real(0)) + margin};
+  return box;
+}
+
+/// The same for body i of `bodies`.
+inline AABB BroadPhaseBox(const Bodies& bodies, int i, const WorldDef& def, Real dt) {
+  return SweptBox(bodies.shape[i], bodies.xf[i], bodies.vel[i], bodies.boundRadius[i], def, dt);
+}
+
+
+/// Narrow phase for a list of pairs: manifolds with material mixing, speculative points kept
+/// only where the gap can close within the step. Appends to `out` in pair order.
+void CollidePairs(const Bodies& bodies, const WorldDef& def, Real dt, std::span<const CandidatePair> pairs,
+                  std::vector<Contact>& out);
+
+/// What a solver needs for one (sub-)step.
+struct StepContext {
+  Real dt = 0;
+  const WorldDef* def = nullptr;
+  Bodies* bodies = nullptr;
+  std::span<Contact> contacts;
+  Profile* profile = nullptr;
+  StageRunner* run = nullptr;
+};
+
+}  // namespace quadrant
