@@ -67,6 +67,13 @@ struct Softness {
   Real impulseScale = 0;
 };
 
+// How a contact of two dynamic bodies meets WorldDef::softMassRatioLimit this step: not at all
+// (plain), with the light body's masses scaled (limited), or over the ratio with the light body
+// unsupported, so unscaled (cold). A cold contact is not warm-started: an impulse built with the
+// scaled masses of an earlier step, applied to the light body's own, throws it (random extreme
+// worlds went non-finite within 30 steps: 66 of 300, none without the warm start).
+enum class LaneEnds : uint8_t { kPlain, kLimited, kCold };
+
 Softness MakeSoftness(Real hertz, Real zeta, Real h) {
   if (hertz <= 0) return {};
   const Real omega = 2 * std::numbers::pi_v<Real> * hertz;
@@ -377,18 +384,26 @@ class SoftStepSolver final : public Solver {
             // absorbs momentum there anyway, and between free bodies momentum stays exact (with the
             // limit on every contact the random campaign's 1:100 hits lost up to 1.99 of the mover's
             // momentum, and a 1:100 head-on hit came out wrong).
-            bool limited = false;
+            bool limited = false, cold = false;
             if (massLimit > 0 && cc.invMassA > 0 && cc.invMassB > 0) {
-              if (cc.invMassA > massLimit * cc.invMassB && supported_[cc.a] == stamp_) {
-                const Real f = massLimit * cc.invMassB / cc.invMassA;
-                g.invMassA[lane] *= f;
-                g.invIA[lane] *= f;
-                limited = true;
-              } else if (cc.invMassB > massLimit * cc.invMassA && supported_[cc.b] == stamp_) {
-                const Real f = massLimit * cc.invMassA / cc.invMassB;
-                g.invMassB[lane] *= f;
-                g.invIB[lane] *= f;
-                limited = true;
+              if (cc.invMassA > massLimit * cc.invMassB) {
+                if (supported_[cc.a] == stamp_) {
+                  const Real f = massLimit * cc.invMassB / cc.invMassA;
+                  g.invMassA[lane] *= f;
+                  g.invIA[lane] *= f;
+                  limited = true;
+                } else {
+                  cold = true;
+                }
+              } else if (cc.invMassB > massLimit * cc.invMassA) {
+                if (supported_[cc.b] == stamp_) {
+                  const Real f = massLimit * cc.invMassA / cc.invMassB;
+                  g.invMassB[lane] *= f;
+                  g.invIB[lane] *= f;
+                  limited = true;
+                } else {
+                  cold = true;
+                }
               }
             }
             const Softness& s = (cc.invMassA == 0 || cc.invMassB == 0) ? staticSoft : soft;
@@ -419,8 +434,8 @@ class SoftStepSolver final : public Solver {
                 p.normalMass[lane] = kn > 0 ? Real(1) / kn : Real(0);
                 p.tangentMass[lane] = kt > 0 ? Real(1) / kt : Real(0);
               }
-              p.normalImpulse[lane] = pc.normalImpulse;
-              p.tangentImpulse[lane] = pc.tangentImpulse;
+              p.normalImpulse[lane] = cold ? Real(0) : pc.normalImpulse;
+              p.tangentImpulse[lane] = cold ? Real(0) : pc.tangentImpulse;
               p.collisionImpulse[lane] = pc.collisionImpulse * collisionShare_;
             }
           }
@@ -442,7 +457,8 @@ class SoftStepSolver final : public Solver {
     const Vec2 n = contact.manifold.normal;
     const Real invMassA = inv_[a].invMass, invMassB = inv_[b].invMass;
     const Real invIA = kRotation ? inv_[a].invInertia : Real(0), invIB = kRotation ? inv_[b].invInertia : Real(0);
-    const bool limited = FillLaneEnds<kRotation>(g, lane, c, contact, soft, staticSoft, massLimit);
+    const LaneEnds ends = FillLaneEnds<kRotation>(g, lane, c, contact, soft, staticSoft, massLimit);
+    const bool limited = ends == LaneEnds::kLimited, cold = ends == LaneEnds::kCold;
     const Real mA = g.invMassA[lane], iA = g.invIA[lane], mB = g.invMassB[lane], iB = g.invIB[lane];
     const Real skin = ctx.def->polygonSkin > 0 ? PolygonSkin(*ctx.def, bodies.shape[a].type == ShapeType::kPolygon,
                                                              bodies.shape[b].type == ShapeType::kPolygon)
@@ -481,8 +497,8 @@ class SoftStepSolver final : public Solver {
       p.normalMass[lane] = kn > 0 ? Real(1) / kn : Real(0);
       p.tangentMass[lane] = kt > 0 ? Real(1) / kt : Real(0);
       p.separation[lane] = mp.separation - skin;
-      p.normalImpulse[lane] = mp.normalImpulse;
-      p.tangentImpulse[lane] = mp.tangentImpulse;
+      p.normalImpulse[lane] = cold ? Real(0) : mp.normalImpulse;
+      p.tangentImpulse[lane] = cold ? Real(0) : mp.tangentImpulse;
       p.collisionImpulse[lane] = Real(0) * collisionShare_;  // no collisions without restitution
     }
   }
@@ -491,7 +507,7 @@ class SoftStepSolver final : public Solver {
   // inverse masses (with WorldDef::softMassRatioLimit, as BuildRows says) and softness. Returns
   // whether the limit scaled the lane's masses.
   template <bool kRotation>
-  [[gnu::always_inline]] bool FillLaneEnds(SoftRowGroup& g, int lane, int c, const Contact& contact, const Softness& soft,
+  [[gnu::always_inline]] LaneEnds FillLaneEnds(SoftRowGroup& g, int lane, int c, const Contact& contact, const Softness& soft,
                                            const Softness& staticSoft, Real massLimit) {
     const int a = contact.a, b = contact.b;
     const Vec2 n = contact.manifold.normal;
@@ -504,18 +520,26 @@ class SoftStepSolver final : public Solver {
     g.ny[lane] = n.y;
     g.friction[lane] = contact.friction;
     Real mA = invMassA, iA = invIA, mB = invMassB, iB = invIB;
-    bool limited = false;
+    LaneEnds ends = LaneEnds::kPlain;
     if (massLimit > 0 && invMassA > 0 && invMassB > 0) {
-      if (invMassA > massLimit * invMassB && supported_[a] == stamp_) {
-        const Real f = massLimit * invMassB / invMassA;
-        mA *= f;
-        iA *= f;
-        limited = true;
-      } else if (invMassB > massLimit * invMassA && supported_[b] == stamp_) {
-        const Real f = massLimit * invMassA / invMassB;
-        mB *= f;
-        iB *= f;
-        limited = true;
+      if (invMassA > massLimit * invMassB) {
+        if (supported_[a] == stamp_) {
+          const Real f = massLimit * invMassB / invMassA;
+          mA *= f;
+          iA *= f;
+          ends = LaneEnds::kLimited;
+        } else {
+          ends = LaneEnds::kCold;
+        }
+      } else if (invMassB > massLimit * invMassA) {
+        if (supported_[b] == stamp_) {
+          const Real f = massLimit * invMassA / invMassB;
+          mB *= f;
+          iB *= f;
+          ends = LaneEnds::kLimited;
+        } else {
+          ends = LaneEnds::kCold;
+        }
       }
     }
     g.invMassA[lane] = mA;
@@ -526,7 +550,7 @@ class SoftStepSolver final : public Solver {
     g.biasRate[lane] = s.biasRate;
     g.massScale[lane] = s.massScale;
     g.impulseScale[lane] = s.impulseScale;
-    return limited;
+    return ends;
   }
 
   // FillLeanLane for a whole group with rotation (the default): the per-lane part (bodies,
@@ -555,7 +579,9 @@ class SoftStepSolver final : public Solver {
       }
       const Contact& contact = contacts_[graph_.ContactOf(c)];
       const int a = contact.a, b = contact.b;
-      if (FillLaneEnds<true>(g, lane, c, contact, soft, staticSoft, massLimit)) limitedLane[lane] = 1;
+      const LaneEnds ends = FillLaneEnds<true>(g, lane, c, contact, soft, staticSoft, massLimit);
+      if (ends == LaneEnds::kLimited) limitedLane[lane] = 1;
+      const bool cold = ends == LaneEnds::kCold;
       const Real skin = skinOn ? PolygonSkin(*ctx.def, bodies.shape[a].type == ShapeType::kPolygon,
                                              bodies.shape[b].type == ShapeType::kPolygon)
                                : Real(0);
@@ -575,8 +601,8 @@ class SoftStepSolver final : public Solver {
         px[pt][lane] = mp.point.x;
         py[pt][lane] = mp.point.y;
         p.separation[lane] = mp.separation - skin;
-        p.normalImpulse[lane] = mp.normalImpulse;
-        p.tangentImpulse[lane] = mp.tangentImpulse;
+        p.normalImpulse[lane] = cold ? Real(0) : mp.normalImpulse;
+        p.tangentImpulse[lane] = cold ? Real(0) : mp.tangentImpulse;
         p.collisionImpulse[lane] = Real(0) * collisionShare_;  // no collisions without restitution
       }
     }
