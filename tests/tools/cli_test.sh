@@ -62,7 +62,7 @@ expect_refusal "exclude each other" "$DRIVER" bench --baseline --compare --out "
 # bench --ranks (the distributed runs): its own options only, rank counts in [1, 64].
 expect_refusal "--ranks '0'" "$DRIVER" bench --ranks 0 --out "$OUT"
 expect_refusal "--ranks '1,,2'" "$DRIVER" bench --ranks 1,,2 --out "$OUT"
-expect_refusal "only --steps and --out" "$DRIVER" bench --ranks 1,2 --threads 2 --out "$OUT"
+expect_refusal "only --steps, --out and --record" "$DRIVER" bench --ranks 1,2 --threads 2 --out "$OUT"
 expect_refusal "--steps '0'" "$DRIVER" bench --ranks 1 --steps 0 --out "$OUT"
 expect_refusal "unknown command 'benhc'" "$DRIVER" benhc
 expect_refusal "unknown engine 'nosuchengine'" "$DRIVER" hardcases --peers nosuchengine --out "$OUT"
@@ -71,6 +71,7 @@ expect_refusal "is not a directory" "$DRIVER" validate --out "$WORK/a_file/x"
 expect_refusal "is not a directory" "$DRIVER" figure13 --out "$WORK/a_file/x"
 expect_refusal "unknown argument '--nope'" "$DRIVER" accuracy --nope
 expect_refusal "unknown argument '--nope'" "$DRIVER" effects --nope
+expect_refusal "unknown argument '--nope'" "$DRIVER" results-index --nope
 
 # The programs themselves: one line, exit 2, nothing run.
 expect_refusal "--counts" "$BENCH" --counts abc
