@@ -21,6 +21,9 @@
 // processes used during the benchmark, if it lasted 0.25 s or more) and load_avg (1-minute
 // load average after it); label = final state hash (16 hex digits).
 //
+// N is the scene's dynamic bodies as built: a count the scene rounds (pyramid to a whole base,
+// many_pyramids to a multiple of 55) is named and reported as the count that ran (issue #29).
+//
 // Own flags (declared in ParseOwnFlags, cli_args.h; parsed and removed before Google Benchmark
 // sees the command line; --help lists them with their defaults):
 //   --scenes a,b      scenes to run            (default: DefaultBenchScenes(), sparse and dense)
@@ -283,6 +286,11 @@ class MemoryProbe {
 
 // ---- Scenes --------------------------------------------------------------------------------
 
+/// The scene's dynamic bodies: the N a benchmark is named and reported by.
+int DynamicBodies(const qs::Scene& scene) {
+  return int(std::count_if(scene.bodies.begin(), scene.bodies.end(), [](const qs::BodyDesc& b) { return b.dynamic; }));
+}
+
 /// One line saying how a scene is set up, computed from the scene itself.
 std::string DescribeScene(const qs::Scene& scene) {
   double bodyArea = 0;
@@ -434,8 +442,9 @@ int main(int argc, char** argv) {
   quadrant::cli::Parser parser(
       "quadrant_bench",
       "The engine comparison suite (Google Benchmark). Benchmarks are named "
-      "<scene>/<engine>/n:<N>/threads:<T>.\nCombinations an engine cannot run are counted in one line on "
-      "stderr and listed in the JSON context\n'unsupported'.");
+      "<scene>/<engine>/n:<N>/threads:<T>,\nN the scene's dynamic bodies (a scene that rounds a count, as "
+      "pyramid to a whole base, runs and names\nthe count it built). Combinations an engine cannot run are "
+      "counted in one line on stderr and listed\nin the JSON context 'unsupported'.");
   Options opts = ParseOwnFlags(parser, argc, argv);
   if (opts.list) {
     PrintNames();
@@ -468,12 +477,25 @@ int main(int argc, char** argv) {
     std::vector<qs::Capabilities> caps;
     for (const std::string& engine : opts.engines) caps.push_back(qs::MakeAdapter(engine)->Caps());
 
-    // Counts per scene: --counts for every scene, or each scene's own defaults.
+    // Counts per scene: --counts for every scene, or each scene's own defaults, each taken as the
+    // dynamic bodies the scene builds for it (issue #29: pyramid rounds a count down to a whole
+    // base, many_pyramids to a multiple of 55, a fixed-size scene ignores it), so that n:<N> and
+    // the report's "N = " are the count that ran; counts that build the same scene run once.
+    // Building a scene with its own count gives the same scene.
     std::vector<std::vector<int>> sceneCounts;
-    std::vector<std::string> countsText;
+    std::vector<std::string> countsText, rounded;
     for (const std::string& sceneName : opts.scenes) {
-      sceneCounts.push_back(opts.counts.empty() ? qs::DefaultBenchCounts(sceneName) : opts.counts);
-      countsText.push_back(fmt::format("{}:{}", sceneName, JoinList(sceneCounts.back(), "+")));
+      std::vector<int>& built = sceneCounts.emplace_back();
+      for (int asked : opts.counts.empty() ? qs::DefaultBenchCounts(sceneName) : opts.counts) {
+        const int n = DynamicBodies(qs::MakeScene(sceneName, asked, opts.seed));
+        if (n != asked) rounded.push_back(fmt::format("{}:{}->{}", sceneName, asked, n));
+        if (std::find(built.begin(), built.end(), n) == built.end()) built.push_back(n);
+      }
+      countsText.push_back(fmt::format("{}:{}", sceneName, JoinList(built, "+")));
+    }
+    if (!rounded.empty()) {
+      std::fprintf(stderr, "quadrant_bench: run and named as the scenes build them: %s (asked->built)\n",
+                   JoinList(rounded, ", ").c_str());
     }
 
     // Scene descriptions for the context, from the smallest count (the settings do not depend
@@ -557,6 +579,7 @@ int main(int argc, char** argv) {
     benchmark::AddCustomContext("scenes", JoinList(opts.scenes));
     benchmark::AddCustomContext("engines", JoinList(opts.engines));
     benchmark::AddCustomContext("counts", JoinList(countsText));
+    benchmark::AddCustomContext("counts_rounded", JoinList(rounded));  // asked->built, where they differ
     benchmark::AddCustomContext("thread_counts", JoinList(opts.threads));
     benchmark::AddCustomContext("steps", fmt::format("{}", opts.steps));
     benchmark::AddCustomContext("warmup", fmt::format("{}", opts.warmup));
