@@ -15,6 +15,7 @@
 // A bad command line is exactly one line on stderr and exit status 2, nothing on stdout:
 //   <program>: --option: <what it accepts> (got '<value>')
 //   <program>: --option: unknown case 'x'; <what it accepts> (got 'a,x')   (a list's bad item)
+//   <program>: --option: <what it accepts> (got nothing)     (no value, or a required one missing)
 //   <program>: unknown option '--frob' (accepted: --out, --steps, ...)
 // `--help` (or `-h`) prints the program's own options on stdout and exits 0. With PassThrough
 // (programs on Google Benchmark), arguments with the given prefix stay in argv for the next parser,
