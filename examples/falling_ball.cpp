@@ -9,7 +9,7 @@
 using namespace quadrant;
 
 int main() {
-  WorldDef def;                                   // gravity (0,-10), pgs solver, 8 iterations
+  WorldDef def;                                   // gravity (0,-10), soft_step, 4 sub-steps
   World world(def);
   BodyDef ground;                                 // static by default
   ground.shape = ShapeDef::Box(20, 0.5f);
