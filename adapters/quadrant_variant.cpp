@@ -15,17 +15,8 @@
 // limit of 10) with the uniform grid and the deterministic scheme.
 // relax<N> and ratio<N> override the engine's defaults; "pgs" alone is Box2D 2.4's solver.
 //
-// Solver budget for soft_step: a scene states the budget a case needs as pgs velocity
-// iterations (Box2D 2.4's default 8; 16 or 32 in the hard cases that need more). Box2D 3 spends
-// its default on 4 sub-steps, so soft_step gets velocityIterations / 2 sub-steps (4 at the
-// default) and its contact stiffness scales with them (30 Hz at 4 sub-steps, 60 Hz at 8): each
-// sub-step then holds its contacts exactly as soft as a default sub-step (the soft
-// coefficients depend on hertz x sub-step, which stays 30 Hz / 240 Hz), so a larger budget is the
-// default solver on a finer sub-step, not a different spring. Why both: more sub-steps alone do not
-// stop a soft contact's sag, load / (m_eff (2 pi hertz)^2), which does not depend on the
-// sub-step (mass_ratio_400 at 16 sub-steps and 30 Hz: 0.085 m, limit 0.02); and at 8 sub-steps
-// and 30 Hz the 15-box stack's top slid 0.16 m (at 60 Hz: 0.0003 m). sub<N> sets the sub-steps
-// explicitly and leaves the stiffness at the engine's default.
+// MakeWorldDef turns a scene's iteration budget into soft_step sub-steps and contact stiffness
+// (4 sub-steps at 30 Hz for the default 8 iterations); the comment there says why.
 #include "quadrant_variant.h"
 
 #include <algorithm>
@@ -110,6 +101,17 @@ QuadrantVariant QuadrantVariant::Parse(std::string_view variant) {
   return v;
 }
 
+// The solver budget for soft_step: a scene states the budget a case needs as pgs velocity
+// iterations (Box2D 2.4's default 8; 16 or 32 in the hard cases that need more). Box2D 3 spends
+// its default on 4 sub-steps, so soft_step gets velocityIterations / 2 sub-steps (4 at the
+// default) and its contact stiffness scales with them (30 Hz at 4 sub-steps, 60 Hz at 8): each
+// sub-step then holds its contacts exactly as soft as a default sub-step (the soft
+// coefficients depend on hertz x sub-step, which stays 30 Hz / 240 Hz), so a larger budget is the
+// default solver on a finer sub-step, not a different spring. Why both: more sub-steps alone do not
+// stop a soft contact's sag, load / (m_eff (2 pi hertz)^2), which does not depend on the
+// sub-step (mass_ratio_400 at 16 sub-steps and 30 Hz: 0.085 m, limit 0.02); and at 8 sub-steps
+// and 30 Hz the 15-box stack's top slid 0.16 m (at 60 Hz: 0.0003 m). sub<N> sets the sub-steps
+// explicitly and leaves the stiffness at the engine's default.
 WorldDef QuadrantVariant::MakeWorldDef(const Scene& scene, int threads) const {
   WorldDef def;
   def.gravity = scene.gravity;

@@ -19,6 +19,7 @@
 #include <thread>
 #include <vector>
 
+#include "cli_args.h"
 #include "quadrant/distributed_world.h"
 #include "quadrant/error.h"
 #include "scenes.h"
@@ -33,21 +34,6 @@ std::vector<BodyDef> ToBodyDefs(const scene::Scene& s) {
   out.reserve(s.bodies.size());
   for (const scene::BodyDesc& b : s.bodies) out.push_back(scene::ToBodyDef(b));
   return out;
-}
-
-[[noreturn]] void Usage(int rank, const std::string& message) {
-  if (rank == 0) std::fprintf(stderr, "quadrant_distributed: %s\n", message.c_str());
-  MPI_Finalize();
-  std::exit(2);
-}
-
-int ParseInt(int rank, const char* name, const char* text, int lo, int hi) {
-  char* end = nullptr;
-  const long v = std::strtol(text, &end, 10);
-  if (end == text || *end != '\0' || v < lo || v > hi) {
-    Usage(rank, std::string(name) + " must be an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
-  }
-  return static_cast<int>(v);
 }
 
 // Peak resident memory of this process (kB, Linux VmHWM), 0 where unknown.
@@ -74,35 +60,24 @@ int main(int argc, char** argv) {
   int count = 16000, steps = 100, warmup = 10, tiles = 0, iterations = 8;
   bool perRank = false;
   std::string ownersPath;  // --owners FILE: every body's position, radius and owner rank as CSV
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto value = [&]() -> const char* {
-      if (i + 1 >= argc) Usage(rank, a + " needs a value");
-      return argv[++i];
-    };
-    if (a == "--scene") {
-      sceneName = value();
-    } else if (a == "--count") {
-      count = ParseInt(rank, "--count", value(), 1, 10000000);
-    } else if (a == "--per-rank") {
-      perRank = true;
-    } else if (a == "--steps") {
-      steps = ParseInt(rank, "--steps", value(), 1, 1000000);
-    } else if (a == "--warmup") {
-      warmup = ParseInt(rank, "--warmup", value(), 0, 1000000);
-    } else if (a == "--tiles") {
-      tiles = ParseInt(rank, "--tiles", value(), 1, 1024);
-    } else if (a == "--owners") {
-      ownersPath = value();
-    } else if (a == "--iterations") {
-      iterations = ParseInt(rank, "--iterations", value(), 1, 1000);
-    } else {
-      Usage(rank, "unknown option '" + a + "' (accepted: --scene, --count, --per-rank, --steps, --warmup, --tiles, --iterations, --owners)");
-    }
-  }
-  if (sceneName != "circle_stress" && sceneName != "pyramid") {
-    Usage(rank, "--scene must be circle_stress or pyramid");
-  }
+  cli::Parser parser("quadrant_distributed",
+                "One distributed run under mpirun (tools/quadrant bench --ranks): rank 0 prints one JSON "
+                "object\n(ms per step, neighbour rounds, payload bytes, shadow fraction, imbalance, state "
+                "hash, peak memory).");
+  parser.Name("--scene", &sceneName, {"circle_stress", "pyramid"}, "scene", "the scene");
+  parser.Int("--count", &count, 1, 10000000, "bodies (circle_stress), or the pyramid's base when below 200 (else 20)");
+  parser.Flag("--per-rank", &perRank, "--count is per rank (circle_stress)");
+  parser.Int("--steps", &steps, 1, 1000000, "measured steps");
+  parser.Int("--warmup", &warmup, 0, 1000000, "steps before measuring");
+  parser.Int("--tiles", &tiles, 1, 1024, "tiles per side").Default("about 14 m per tile (circle_stress), 2 (pyramid)");
+  parser.Int("--iterations", &iterations, 1, 1000, "velocity iterations");
+  parser.String("--owners", &ownersPath, "FILE", "write every body's position, radius and owner rank as CSV");
+  parser.Quiet(rank != 0);  // every rank parses the same arguments; rank 0 speaks for them
+  parser.OnExit([](int status) {
+    MPI_Finalize();
+    std::exit(status);
+  });
+  parser.Parse(argc, argv);
   int code = 0;
   try {
     scene::Scene s;

@@ -16,7 +16,6 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
@@ -30,6 +29,7 @@
 #include <vector>
 
 #include "adapter.h"
+#include "cli_args.h"
 #include "quadrant/error.h"
 #include "report_common.h"
 #include "scenes.h"
@@ -206,44 +206,19 @@ std::optional<double> PositionDifference(const Comparison& c) {
   return worst;
 }
 
-[[noreturn]] void Usage(const std::string& problem) {
-  std::cerr << "quadrant_effects: " << problem << "\n"
-            << "usage: quadrant_effects --out DIR [--quick] [--count N] [--steps S] [--warmup W] "
-               "[--repetitions R]\n";
-  std::exit(2);
-}
-
-int IntArg(const std::string& flag, const std::string& value, int least, int most) {
-  const std::optional<int> v = quadrant::report::ParseInt(value, least, most);
-  if (!v) Usage(flag + " must be an integer in [" + std::to_string(least) + ", " + std::to_string(most) + "]");
-  return *v;
-}
-
 Args Parse(int argc, char** argv) {
   Args a;
-  for (int i = 1; i < argc; ++i) {
-    const std::string flag = argv[i];
-    if (flag == "-h" || flag == "--help") Usage("help");
-    if (flag == "--quick") {
-      a.quick = true;
-      continue;
-    }
-    if (i + 1 >= argc) Usage(flag + " needs a value");
-    const std::string value = argv[++i];
-    if (flag == "--out") {
-      a.out = value;
-    } else if (flag == "--count") {
-      a.count = IntArg(flag, value, 1, 1000000);
-    } else if (flag == "--steps") {
-      a.steps = IntArg(flag, value, 1, 1000000);
-    } else if (flag == "--warmup") {
-      a.warmup = IntArg(flag, value, 0, 1000000);
-    } else if (flag == "--repetitions") {
-      a.repetitions = IntArg(flag, value, 1, 1000);
-    } else {
-      Usage("unknown option " + flag);
-    }
-  }
+  quadrant::cli::Parser p("quadrant_effects",
+                          "What each effect of the scene API costs Quadrant (issue 6): time per step with the "
+                          "effect on and off,\nand the stress scenes with only the effects they need against "
+                          "all effects on. Writes DIR/effects.json\nand DIR/effects.md.");
+  p.String("--out", &a.out, "DIR", "the output directory");
+  p.Flag("--quick", &a.quick, "fewer bodies and steps");
+  p.Int("--count", &a.count, 1, 1000000, "bodies in the stress scenes").Default("8000; 1000 with --quick");
+  p.Int("--steps", &a.steps, 1, 1000000, "timed steps per run").Default("120; 20 with --quick");
+  p.Int("--warmup", &a.warmup, 0, 1000000, "untimed steps before timing").Default("30; 5 with --quick");
+  p.Int("--repetitions", &a.repetitions, 1, 1000, "timed runs of every side (the median is reported)");
+  p.Parse(argc, argv);
   if (a.count == 0) a.count = a.quick ? 1000 : 8000;
   if (a.steps == 0) a.steps = a.quick ? 20 : 120;
   if (a.warmup < 0) a.warmup = a.quick ? 5 : 30;

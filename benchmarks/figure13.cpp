@@ -1,20 +1,25 @@
 // The thesis's Figure 13: a 5000-circle stress scene under the quadrants scheme with 4
 // threads, written as CSV (one line per body: x, y, radius, owner thread or -1 for the master)
-// for tools/figure13.py to draw with the quad-tree. Usage: quadrant_figure13 OUT.csv [N] [steps]
+// for tools/figure13.py to draw with the quad-tree. Usage: quadrant_figure13 OUT.csv [bodies] [steps]
 #include <cstdio>
 #include <cstdlib>
 #include <string>
 
+#include "cli_args.h"
 #include "quadrant/world.h"
 #include "scenes.h"
 
 int main(int argc, char** argv) {
-  if (argc < 2) {
-    std::fprintf(stderr, "usage: quadrant_figure13 OUT.csv [bodies=5000] [steps=120]\n");
-    return 2;
-  }
-  const int count = argc > 2 ? std::atoi(argv[2]) : 5000;
-  const int steps = argc > 3 ? std::atoi(argv[3]) : 120;
+  std::string path;
+  int count = 5000, steps = 120;
+  quadrant::cli::Parser p("quadrant_figure13",
+                          "The thesis's Figure 13: a circle stress scene under the quadrants scheme with 4 "
+                          "threads, as CSV\n(x, y, radius, owner thread or -1 for the master, dynamic) for "
+                          "tools/figure13.py.");
+  p.String("OUT.csv", &path, "", "the CSV file to write").Required();
+  p.Int("bodies", &count, 1, 10000000, "circles in the scene");
+  p.Int("steps", &steps, 0, 100000000, "steps before the owners are written");
+  p.Parse(argc, argv);
   try {
     const quadrant::scene::Scene s = quadrant::scene::MakeScene("circle_stress", count, 42);
     quadrant::WorldDef def;
@@ -41,9 +46,9 @@ int main(int argc, char** argv) {
     for (int i = 0; i < steps; ++i) world.Step(s.timeStep);
     const std::vector<int> owners = world.GetOwners();
     const std::vector<quadrant::BodyId> ids = world.GetBodyIds();
-    FILE* out = std::fopen(argv[1], "w");
+    FILE* out = std::fopen(path.c_str(), "w");
     if (!out) {
-      std::fprintf(stderr, "quadrant_figure13: cannot write %s\n", argv[1]);
+      std::fprintf(stderr, "quadrant_figure13: cannot write %s\n", path.c_str());
       return 1;
     }
     const quadrant::AABB region = world.GetPartitionRegion();

@@ -9,7 +9,6 @@
 // every Quadrant case passes (all 16 are required of the default engine, issue #13's three
 // included), 1 when one fails (peers never change it), 2 on bad arguments.
 #include <algorithm>
-#include <cerrno>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -19,6 +18,8 @@
 #include <string>
 #include <vector>
 
+#include "cli_args.h"
+#include "cli_engines.h"
 #include "hard_case_checks.h"
 #include "quadrant/error.h"
 #include "report_common.h"
@@ -41,64 +42,20 @@ struct Args {
   int soakSteps = 100000;
 };
 
-using quadrant::report::SplitList;
-
-[[noreturn]] void Usage(const std::string& problem) {
-  // One line (issue 16): the problem and the usage, no more.
-  std::cerr << "quadrant_hardcases: " << problem
-            << " (usage: quadrant_hardcases --out DIR [--peers box2d,bullet,chipmunk|none] [--cases a,b] "
-               "[--soak-steps N])\n";
-  std::exit(2);
-}
-
-/// A refused name: one line, exit 2.
-[[noreturn]] void Refuse(const std::string& problem) {
-  std::cerr << "quadrant_hardcases: " << problem << "\n";
-  std::exit(2);
-}
-
-/// Every peer and case name is checked before the first case runs: a mistyped name is one line
-/// and exit 2, not minutes of cases and then an error from inside a case.
-void CheckNames(const Args& a) {
-  for (const std::string& peer : a.peers) {
-    try {
-      qs::MakeAdapter(peer);
-    } catch (const quadrant::Error& e) {
-      Refuse(std::string("--peers: ") + e.what() + "; or none");
-    }
-  }
-  const std::vector<std::string> known = qs::HardCaseNames();
-  for (const std::string& name : a.cases) {
-    if (std::find(known.begin(), known.end(), name) == known.end()) {
-      std::string list;
-      for (const std::string& k : known) list += (list.empty() ? "" : ", ") + k;
-      Refuse("--cases: unknown case '" + name + "' (accepted: " + list + ")");
-    }
-  }
-  if (a.cases.empty()) Refuse("--cases: empty list (accepted: hard case names, tools/quadrant help)");
-}
-
 Args Parse(int argc, char** argv) {
   Args a;
-  for (int i = 1; i < argc; ++i) {
-    const std::string flag = argv[i];
-    if (flag == "-h" || flag == "--help") Usage("help");
-    if (i + 1 >= argc) Usage(flag + " needs a value");
-    const std::string value = argv[++i];
-    if (flag == "--out") {
-      a.out = value;
-    } else if (flag == "--peers") {
-      a.peers = value == "none" ? std::vector<std::string>{} : SplitList(value);
-    } else if (flag == "--cases") {
-      a.cases = SplitList(value);
-    } else if (flag == "--soak-steps") {
-      const std::optional<int> v = quadrant::report::ParseInt(value, 1, 100000000);
-      if (!v) Usage("--soak-steps must be an integer in [1, 1e8]");
-      a.soakSteps = *v;
-    } else {
-      Usage("unknown option " + flag);
-    }
-  }
+  quadrant::cli::Parser p("quadrant_hardcases",
+                          "Runs every hard case on Quadrant (which must pass) and on the peers, and writes "
+                          "DIR/hardcases.json\nand DIR/hardcases.md. Exit status 0 when every Quadrant case "
+                          "passes, 1 when one fails.");
+  p.String("--out", &a.out, "DIR", "the output directory");
+  p.NameList("--peers", &a.peers, {}, "engine", "the peers to run the cases on too")
+      .Accepts(quadrant::cli::kEngineList)
+      .AllowNone()
+      .Check(quadrant::cli::EngineProblem);  // before the first case runs, not minutes into them
+  p.NameList("--cases", &a.cases, qs::HardCaseNames(), "case", "the cases to run").Default("all");
+  p.Int("--soak-steps", &a.soakSteps, 1, 100000000, "steps of the soak case");
+  p.Parse(argc, argv);
   return a;
 }
 
@@ -224,7 +181,6 @@ void Write(const std::filesystem::path& path, const std::string& text) {
 
 int main(int argc, char** argv) {
   const Args args = Parse(argc, argv);
-  CheckNames(args);
   std::vector<Row> rows;
   bool allPass = true;
   try {
@@ -246,7 +202,8 @@ int main(int argc, char** argv) {
       rows.push_back(std::move(row));
     }
   } catch (const quadrant::Error& e) {
-    Usage(e.what());
+    std::fprintf(stderr, "quadrant_hardcases: %s\n", e.what());
+    return 2;
   }
 
   std::filesystem::create_directories(args.out);

@@ -33,7 +33,6 @@
 #include <valgrind/callgrind.h>
 
 #include <algorithm>
-#include <cerrno>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
@@ -44,6 +43,8 @@
 #include <vector>
 
 #include "adapter.h"
+#include "cli_args.h"
+#include "cli_engines.h"
 #include "quadrant/error.h"
 #include "scene.h"
 #include "scenes.h"
@@ -131,35 +132,27 @@ struct Args {
   std::string engine = "quadrant";
 };
 
-long long ParseInt(const char* flag, const char* text, long long lo, long long hi) {
-  char* end = nullptr;
-  errno = 0;
-  const long long v = std::strtoll(text, &end, 10);
-  if (*text == '\0' || *end != '\0' || errno != 0 || v < lo || v > hi)
-    throw quadrant::Error(std::string(flag) + ": '" + text + "' is not an integer in [" +
-                          std::to_string(lo) + ", " + std::to_string(hi) + "]");
-  return v;
-}
-
 Args ParseArgs(int argc, char** argv) {
   Args a;
-  for (int i = 1; i < argc; ++i) {
-    const char* arg = argv[i];
-    if (std::strcmp(arg, "--info") == 0) {
-      a.info = true;
-      continue;
+  std::vector<std::string> scenes = qs::SceneNames();
+  if (std::find(scenes.begin(), scenes.end(), "pyramid") == scenes.end()) scenes.push_back("pyramid");
+  quadrant::cli::Parser p("quadrant_icount",
+                          "Steps one scene on the Quadrant engine a fixed number of times, for instruction "
+                          "counts under callgrind\n(tools/icount.py); prints key=... scene=... source=... "
+                          "bodies=... steps=... hash=....");
+  p.Name("--scene", &a.scene, scenes, "scene", "the scene (required unless --info)");
+  p.Int("--count", &a.count, 1, 1000000, "its count (required unless --info; pyramid: the base)").Default("");
+  p.Int("--steps", &a.steps, 1, 1000000, "steps counted (required unless --info)").Default("");
+  p.Int("--seed", &a.seed, 0, INT64_MAX, "the scene's seed");
+  p.Name("--engine", &a.engine, {}, "engine", "a Quadrant variant to step instead (quadrant:VARIANT)")
+      .Check(quadrant::cli::EngineProblem);
+  p.Flag("--info", &a.info, "print the build (compiler, build type, flags, extra_work) and exit");
+  p.Parse(argc, argv);
+  if (!a.info) {
+    for (const char* name : {"--scene", "--count", "--steps"}) {
+      if (!p.Given(name)) p.FailMissing(name);
     }
-    if (i + 1 >= argc) throw quadrant::Error(std::string("unknown or incomplete argument '") + arg + "'");
-    const char* value = argv[++i];
-    if (std::strcmp(arg, "--scene") == 0) a.scene = value;
-    else if (std::strcmp(arg, "--count") == 0) a.count = int(ParseInt(arg, value, 1, 1000000));
-    else if (std::strcmp(arg, "--steps") == 0) a.steps = int(ParseInt(arg, value, 1, 1000000));
-    else if (std::strcmp(arg, "--seed") == 0) a.seed = uint64_t(ParseInt(arg, value, 0, INT64_MAX));
-    else if (std::strcmp(arg, "--engine") == 0) a.engine = value;
-    else throw quadrant::Error(std::string("unknown argument '") + arg + "'");
   }
-  if (!a.info && (a.scene.empty() || a.count == 0 || a.steps == 0))
-    throw quadrant::Error("--scene, --count and --steps are required");
   return a;
 }
 
@@ -176,16 +169,7 @@ const char* Compiler() {
 }  // namespace
 
 int main(int argc, char** argv) {
-  Args args;
-  try {
-    args = ParseArgs(argc, argv);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr,
-                 "quadrant_icount: %s\nusage: quadrant_icount --scene NAME --count N --steps S "
-                 "[--seed X] [--engine quadrant:VARIANT] | --info\n",
-                 e.what());
-    return 2;
-  }
+  const Args args = ParseArgs(argc, argv);
   if (args.info) {
     std::printf("compiler=%s\nbuild_type=%s\ncxx_flags=%s\nextra_work=%d\n", Compiler(),
                 QUADRANT_BUILD_TYPE, QUADRANT_CXX_FLAGS, QUADRANT_ICOUNT_INJECT_EXTRA_WORK);

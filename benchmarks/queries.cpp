@@ -23,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "gbench_main.h"
 #include "quadrant/world.h"
 #include "scenes.h"
 
@@ -203,9 +204,9 @@ void Register() {
 
 int main(int argc, char** argv) {
   Register();
-  benchmark::Initialize(&argc, argv);
-  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 2;
-  benchmark::RunSpecifiedBenchmarks();
-  benchmark::Shutdown();
-  return 0;
+  return quadrant::cli::GoogleBenchmarkMain("quadrant_queries",
+                                            "World queries (QueryAABB, ray casts) timed against Box2D 2.4.1's on "
+                                            "the stress scenes, named\nqueries/<kind>/<engine>/<scene>/<N>. No "
+                                            "options of its own.",
+                                            argc, argv);
 }

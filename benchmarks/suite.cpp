@@ -21,7 +21,11 @@
 // processes used during the benchmark, if it lasted 0.25 s or more) and load_avg (1-minute
 // load average after it); label = final state hash (16 hex digits).
 //
-// Own flags (parsed and removed before Google Benchmark sees the command line):
+// N is the scene's dynamic bodies as built: a count the scene rounds (pyramid to a whole base,
+// many_pyramids to a multiple of 55) is named and reported as the count that ran (issue #29).
+//
+// Own flags (declared in ParseOwnFlags, cli_args.h; parsed and removed before Google Benchmark
+// sees the command line; --help lists them with their defaults):
 //   --scenes a,b      scenes to run            (default: DefaultBenchScenes(), sparse and dense)
 //   --engines a,b     engines to run           (default: every adapter)
 //   --counts 1000,... body counts, every scene (default: each scene's DefaultBenchCounts)
@@ -29,8 +33,9 @@
 //   --steps S         timed steps              (default 120)
 //   --warmup W        untimed steps before timing (default 30)
 //   --seed X          scene seed               (default 42)
-// Everything else (--benchmark_repetitions, --benchmark_out, --benchmark_filter, ...) goes to
-// Google Benchmark.
+//   --list            the engine and scene names
+// Google Benchmark's own flags (--benchmark_repetitions, --benchmark_out, --benchmark_filter,
+// ...) go to it; any other argument is refused in one line.
 
 #include <benchmark/benchmark.h>
 #include <fmt/format.h>
@@ -44,7 +49,6 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
 #include <exception>
 #include <fstream>
 #include <map>
@@ -57,6 +61,8 @@
 #include <vector>
 
 #include "adapter.h"
+#include "cli_args.h"
+#include "cli_engines.h"
 #include "progress_reporter.h"
 #include "quadrant/error.h"
 #include "scene.h"
@@ -81,77 +87,8 @@ struct Options {
   int steps = 120;
   int warmup = 30;
   uint64_t seed = 42;
+  bool list = false;
 };
-
-/// A command-line mistake: reported with the usage hint, exit code 2.
-struct UsageError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
-
-void PrintUsage(std::FILE* out) {
-  std::fputs(
-      "quadrant_bench: the engine comparison suite (Google Benchmark).\n"
-      "\n"
-      "Own flags (the rest goes to Google Benchmark, e.g. --benchmark_repetitions=3\n"
-      "--benchmark_out=bench.json --benchmark_out_format=json\n"
-      "--benchmark_enable_random_interleaving=true):\n"
-      "  --scenes a,b       scenes (default circle_stress,polygon_stress,pyramid,many_pyramids,tumbler)\n"
-      "  --engines a,b      engines (default: all adapters)\n"
-      "  --counts 1000,...  body counts for every scene (default: each scene's own; stress scenes\n"
-      "                     1000,2000,4000,8000,16000, pyramid 1275,5050, many_pyramids 1375,2750,\n"
-      "                     tumbler 1024,2025)\n"
-      "  --threads 1,2,...  engine thread counts (default 1,2,3,4)\n"
-      "  --steps S          timed steps per run (default 120)\n"
-      "  --warmup W         untimed steps before timing (default 30)\n"
-      "  --seed X           scene seed (default 42)\n"
-      "  --list             print the engine and scene names and exit\n"
-      "Benchmarks are named <scene>/<engine>/n:<N>/threads:<T>. Combinations an engine cannot\n"
-      "run are counted in one line on stderr and listed in the JSON context 'unsupported'.\n",
-      out);
-}
-
-std::vector<std::string> SplitList(std::string_view text, char sep = ',') {
-  std::vector<std::string> out;
-  size_t start = 0;
-  while (start <= text.size()) {
-    size_t end = text.find(sep, start);
-    if (end == std::string_view::npos) end = text.size();
-    std::string item(text.substr(start, end - start));
-    if (!item.empty()) out.push_back(std::move(item));
-    start = end + 1;
-  }
-  return out;
-}
-
-long long ParseInteger(const std::string& flag, const std::string& text, long long lo,
-                       long long hi) {
-  errno = 0;
-  char* end = nullptr;
-  long long value = std::strtoll(text.c_str(), &end, 10);
-  if (text.empty() || end == nullptr || *end != '\0' || errno != 0 || value < lo || value > hi)
-    throw UsageError(fmt::format("{}: '{}' is not an integer in [{}, {}]", flag, text, lo, hi));
-  return value;
-}
-
-/// A flag's comma-separated list: no empty items ("1000,,2000", ",", "" are mistakes, not
-/// shorter lists); `accepted` says what the flag takes, for the one-line error.
-std::vector<std::string> ParseList(const std::string& flag, const std::string& text,
-                                   std::string_view accepted) {
-  std::vector<std::string> out = SplitList(text);
-  size_t commas = 0;
-  for (char c : text) commas += c == ',' ? 1 : 0;
-  if (out.empty() || out.size() != commas + 1)
-    throw UsageError(fmt::format("{}: '{}' has an empty item; give a comma-separated list of {}", flag,
-                                 text, accepted));
-  return out;
-}
-
-std::vector<int> ParseIntList(const std::string& flag, const std::string& text, int lo, int hi) {
-  std::vector<int> out;
-  for (const std::string& item : ParseList(flag, text, fmt::format("integers in [{}, {}]", lo, hi)))
-    out.push_back(int(ParseInteger(flag, item, lo, hi)));
-  return out;
-}
 
 template <typename T>
 std::string JoinList(const std::vector<T>& items, std::string_view sep = ",") {
@@ -163,64 +100,38 @@ std::string JoinList(const std::vector<T>& items, std::string_view sep = ",") {
   return out;
 }
 
-/// Parses and removes the suite's own flags from argv (both "--flag value" and
-/// "--flag=value"); leaves everything else for benchmark::Initialize.
-Options ParseOwnFlags(int& argc, char** argv) {
+/// Declares the suite's own flags on `p`, then parses and removes them from argv ("--flag value"
+/// and "--flag=value"); leaves Google Benchmark's (--benchmark_*) for benchmark::Initialize. A bad
+/// flag is one line naming it and what it accepts, exit 2 (issue 16); --help prints these flags,
+/// then Google Benchmark's.
+Options ParseOwnFlags(quadrant::cli::Parser& p, int& argc, char** argv) {
   Options opts;
-  static const char* const kOwn[] = {"--scenes", "--engines", "--counts", "--threads",
-                                     "--steps",  "--warmup",  "--seed"};
-  int write = 1;
-  for (int read = 1; read < argc; ++read) {
-    std::string arg = argv[read];
-    std::string flag = arg, value;
-    bool own = false;
-    for (const char* name : kOwn) {
-      const size_t len = std::strlen(name);
-      if (arg == name) {
-        if (read + 1 >= argc) throw UsageError(fmt::format("{} needs a value", name));
-        flag = name;
-        value = argv[++read];
-        own = true;
-      } else if (arg.compare(0, len, name) == 0 && arg.size() > len && arg[len] == '=') {
-        flag = name;
-        value = arg.substr(len + 1);
-        own = true;
-      }
-      if (own) break;
-    }
-    if (!own) {
-      argv[write++] = argv[read];
-      continue;
-    }
-    if (flag == "--scenes") {
-      opts.scenes = ParseList(flag, value, "scene names (tools/quadrant help lists them)");
-    } else if (flag == "--engines") {
-      opts.engines = ParseList(flag, value, "engine names (quadrant, quadrant:<variant>, box2d, bullet, chipmunk)");
-    } else if (flag == "--counts") {
-      opts.counts = ParseIntList(flag, value, 1, 10'000'000);
-    } else if (flag == "--threads") {
-      opts.threads = ParseIntList(flag, value, 1, 64);  // 64: WorldDef.threadCount's limit, the most any engine runs
-    } else if (flag == "--steps") {
-      opts.steps = int(ParseInteger(flag, value, 1, 100'000'000));
-    } else if (flag == "--warmup") {
-      opts.warmup = int(ParseInteger(flag, value, 0, 100'000'000));
-    } else if (flag == "--seed") {
-      opts.seed = uint64_t(ParseInteger(flag, value, 0, INT64_MAX));
-    }
+  std::string counts;
+  for (const std::string& scene : opts.scenes) {
+    counts += fmt::format("{}{} {}", counts.empty() ? "" : ", ", scene, JoinList(qs::DefaultBenchCounts(scene)));
   }
-  argc = write;
-  argv[argc] = nullptr;
+  p.NameList("--scenes", &opts.scenes, qs::SceneNames(), "scene", "scenes");
+  p.NameList("--engines", &opts.engines, {}, "engine", "engines")
+      .Accepts(quadrant::cli::kEngineList)
+      .Check(quadrant::cli::EngineProblem)
+      .Default("every adapter, and quadrant:quadrants");
+  p.IntList("--counts", &opts.counts, 1, 10'000'000, "body counts for every scene").Default("each scene's own: " + counts);
+  // 64: WorldDef.threadCount's limit, the most any engine runs.
+  p.IntList("--threads", &opts.threads, 1, 64, "engine thread counts");
+  p.Int("--steps", &opts.steps, 1, 100'000'000, "timed steps per run");
+  p.Int("--warmup", &opts.warmup, 0, 100'000'000, "untimed steps before timing");
+  p.Int("--seed", &opts.seed, 0, INT64_MAX, "scene seed");
+  p.Flag("--list", &opts.list, "print the engine and scene names and exit");
+  p.PassThrough("--benchmark_",
+                "The rest goes to Google Benchmark, e.g. --benchmark_repetitions=3 --benchmark_out=bench.json\n"
+                "--benchmark_out_format=json --benchmark_enable_random_interleaving=true.\n\n"
+                "Google Benchmark flags:");
+  p.Parse(argc, argv);
   return opts;
 }
 
 /// --list: the accepted engine and scene names, one "kind: name" per line (tools/quadrant help
 /// prints the same lists; tests/tools/cli_test.sh checks that they agree).
-bool ListRequested(int argc, char** argv) {
-  for (int i = 1; i < argc; ++i)
-    if (std::strcmp(argv[i], "--list") == 0) return true;
-  return false;
-}
-
 void PrintNames() {
   for (const std::string& name : qs::AdapterNames()) std::printf("engine: %s\n", name.c_str());
   for (const std::string& name : qs::SceneNames()) std::printf("scene: %s\n", name.c_str());
@@ -375,6 +286,11 @@ class MemoryProbe {
 
 // ---- Scenes --------------------------------------------------------------------------------
 
+/// The scene's dynamic bodies: the N a benchmark is named and reported by.
+int DynamicBodies(const qs::Scene& scene) {
+  return int(std::count_if(scene.bodies.begin(), scene.bodies.end(), [](const qs::BodyDesc& b) { return b.dynamic; }));
+}
+
 /// One line saying how a scene is set up, computed from the scene itself.
 std::string DescribeScene(const qs::Scene& scene) {
   double bodyArea = 0;
@@ -523,25 +439,16 @@ void RunJob(benchmark::State& state, const Job& job) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  Options opts;
-  bool help = false;
-  for (int i = 1; i < argc; ++i)
-    if (std::strcmp(argv[i], "--help") == 0 || std::strcmp(argv[i], "-h") == 0) help = true;
-  try {
-    opts = ParseOwnFlags(argc, argv);
-  } catch (const UsageError& e) {
-    // One line naming the flag and what it accepts (issue 16); --help has the full usage.
-    std::fprintf(stderr, "quadrant_bench: %s\n", e.what());
-    return 2;
-  }
-  if (ListRequested(argc, argv)) {
+  quadrant::cli::Parser parser(
+      "quadrant_bench",
+      "The engine comparison suite (Google Benchmark). Benchmarks are named "
+      "<scene>/<engine>/n:<N>/threads:<T>,\nN the scene's dynamic bodies (a scene that rounds a count, as "
+      "pyramid to a whole base, runs and names\nthe count it built). Combinations an engine cannot run are "
+      "counted in one line on stderr and listed\nin the JSON context 'unsupported'.");
+  Options opts = ParseOwnFlags(parser, argc, argv);
+  if (opts.list) {
     PrintNames();
     return 0;
-  }
-  if (help) {
-    PrintUsage(stdout);
-    std::fputs("\nGoogle Benchmark flags:\n", stdout);
-    std::fflush(stdout);
   }
   // Progress total: every registered benchmark runs once per repetition (unless filtered).
   // Read before Initialize, which removes the flags it knows from argv.
@@ -551,7 +458,7 @@ int main(int argc, char** argv) {
   // Google Benchmark's flags first (prints its help and exits on --help), so that a mistyped
   // flag is reported before the engines are probed.
   benchmark::Initialize(&argc, argv);
-  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 2;
+  parser.FailOnRest(argc, argv);
 
   std::vector<std::string> unsupported;
   std::map<std::string, int> unsupportedReasons;  // reason -> combinations, for the summary line
@@ -570,12 +477,25 @@ int main(int argc, char** argv) {
     std::vector<qs::Capabilities> caps;
     for (const std::string& engine : opts.engines) caps.push_back(qs::MakeAdapter(engine)->Caps());
 
-    // Counts per scene: --counts for every scene, or each scene's own defaults.
+    // Counts per scene: --counts for every scene, or each scene's own defaults, each taken as the
+    // dynamic bodies the scene builds for it (issue #29: pyramid rounds a count down to a whole
+    // base, many_pyramids to a multiple of 55, a fixed-size scene ignores it), so that n:<N> and
+    // the report's "N = " are the count that ran; counts that build the same scene run once.
+    // Building a scene with its own count gives the same scene.
     std::vector<std::vector<int>> sceneCounts;
-    std::vector<std::string> countsText;
+    std::vector<std::string> countsText, rounded;
     for (const std::string& sceneName : opts.scenes) {
-      sceneCounts.push_back(opts.counts.empty() ? qs::DefaultBenchCounts(sceneName) : opts.counts);
-      countsText.push_back(fmt::format("{}:{}", sceneName, JoinList(sceneCounts.back(), "+")));
+      std::vector<int>& built = sceneCounts.emplace_back();
+      for (int asked : opts.counts.empty() ? qs::DefaultBenchCounts(sceneName) : opts.counts) {
+        const int n = DynamicBodies(qs::MakeScene(sceneName, asked, opts.seed));
+        if (n != asked) rounded.push_back(fmt::format("{}:{}->{}", sceneName, asked, n));
+        if (std::find(built.begin(), built.end(), n) == built.end()) built.push_back(n);
+      }
+      countsText.push_back(fmt::format("{}:{}", sceneName, JoinList(built, "+")));
+    }
+    if (!rounded.empty()) {
+      std::fprintf(stderr, "quadrant_bench: run and named as the scenes build them: %s (asked->built)\n",
+                   JoinList(rounded, ", ").c_str());
     }
 
     // Scene descriptions for the context, from the smallest count (the settings do not depend
@@ -659,6 +579,7 @@ int main(int argc, char** argv) {
     benchmark::AddCustomContext("scenes", JoinList(opts.scenes));
     benchmark::AddCustomContext("engines", JoinList(opts.engines));
     benchmark::AddCustomContext("counts", JoinList(countsText));
+    benchmark::AddCustomContext("counts_rounded", JoinList(rounded));  // asked->built, where they differ
     benchmark::AddCustomContext("thread_counts", JoinList(opts.threads));
     benchmark::AddCustomContext("steps", fmt::format("{}", opts.steps));
     benchmark::AddCustomContext("warmup", fmt::format("{}", opts.warmup));

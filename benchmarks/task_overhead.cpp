@@ -10,6 +10,7 @@
 #include <cmath>
 #include <vector>
 
+#include "gbench_main.h"
 #include "quadrant/task_system.h"
 
 namespace {
@@ -88,4 +89,9 @@ BENCHMARK(BM_ThreadPoolEightStages)->Apply(Args);
 
 }  // namespace
 
-BENCHMARK_MAIN();
+int main(int argc, char** argv) {
+  return quadrant::cli::GoogleBenchmarkMain(
+      "quadrant_task_overhead",
+      "The per-call overhead of a parallel-for: Quadrant's thread pool against OpenMP. No options of its own.", argc,
+      argv);
+}

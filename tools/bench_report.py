@@ -23,15 +23,13 @@ never a crash.
 """
 
 import argparse
-import datetime
-import json
 import math
 import os
 import re
 import statistics
 import sys
 
-import gbench_json  # the one reader of Google Benchmark names in tools/
+import gbench_json  # the one reader of Google Benchmark JSON in tools/
 import plot_style  # one colour and label per engine in every figure
 
 LABEL_RE = re.compile(r"^[0-9a-f]{16}$")
@@ -44,37 +42,6 @@ ENGINE_TITLES = {
     "bullet": "Bullet 3.24 (2D)",
     "chipmunk": "Chipmunk 7",
 }
-
-
-class ReportError(Exception):
-    pass
-
-
-def load_json(path):
-    try:
-        with open(path, encoding="utf-8") as f:
-            return json.load(f)
-    except OSError as e:
-        raise ReportError(f"{path}: cannot read: {e}")
-    except json.JSONDecodeError as e:
-        raise ReportError(f"{path}: not valid JSON: {e}")
-
-
-def parse_name(name):
-    """(scene, engine, n, threads, aggregate or None) of a row's name, by the one rule of
-    gbench_json (which also accepts variant names with '+', e.g. quadrant:pgs+it8)."""
-    parsed = gbench_json.parse_quadrant_name(name)
-    if not parsed:
-        return None
-    m = gbench_json.AGGREGATE_RE.search(name)
-    return parsed + (m.group("aggregate") if m else None,)
-
-
-def is_aggregate(row):
-    if row.get("run_type") == "aggregate":
-        return True
-    parsed = parse_name(row.get("name", ""))
-    return bool(parsed and parsed[4])
 
 
 def row_steps_per_second(row):
@@ -93,37 +60,29 @@ def row_steps_per_second(row):
 
 
 def check(path):
-    """Returns a list of problems (empty if the file is well formed)."""
-    problems = []
+    """Returns a list of problems (empty if the file is well formed): gbench_json's of the file's
+    structure, then quadrant_bench's of every row."""
     try:
-        data = load_json(path)
-    except ReportError as e:
+        data = gbench_json.read(path)
+    except gbench_json.GBenchError as e:
         return [str(e)]
+    problems, benches = gbench_json.structure_problems(data)
     if not isinstance(data, dict):
-        return ["top level is not a JSON object"]
-    if not isinstance(data.get("context"), dict):
-        problems.append('missing or malformed "context" object')
-    benches = data.get("benchmarks")
-    if not isinstance(benches, list):
-        problems.append('missing or malformed "benchmarks" array')
         return problems
-    if not benches:
-        problems.append('"benchmarks" is empty: nothing was run')
     iterations = 0
     for i, row in enumerate(benches):
         if not isinstance(row, dict):
             problems.append(f"benchmarks[{i}] is not an object")
             continue
         name = row.get("name", "")
-        parsed = parse_name(name)
-        if not parsed:
+        if not gbench_json.parse_quadrant_name(name):
             problems.append(f"benchmarks[{i}]: name {name!r} does not match <scene>/<engine>/n:<int>/threads:<int>")
             continue
         if row.get("error_occurred"):
             problems.append(f"{name}: failed: {row.get('error_message', 'no message')}")
             continue
-        aggregate = row.get("aggregate_name") or parsed[4]
-        if is_aggregate(row):
+        aggregate = gbench_json.aggregate_of(row)
+        if aggregate:
             if aggregate in ("mean", "median"):
                 v = row.get("steps_per_second")
                 if not (isinstance(v, (int, float)) and v > 0):
@@ -137,9 +96,7 @@ def check(path):
         if not (isinstance(label, str) and LABEL_RE.match(label)):
             problems.append(f"{name}: label {label!r} is not a 16-hex-digit state hash")
     if benches and iterations == 0 and not any(
-        isinstance(r, dict) and (r.get("aggregate_name") == "median" or r.get("name", "").endswith("_median"))
-        for r in benches
-    ):
+            isinstance(r, dict) and gbench_json.aggregate_of(r) == "median" for r in benches):
         problems.append("no per-repetition rows and no _median rows")
     return problems
 
@@ -149,26 +106,15 @@ def check(path):
 
 class Results:
     def __init__(self, data):
+        """data: a Google Benchmark file as gbench_json.load returns it; its rows are read by
+        gbench_json.Rows (per-repetition rows, _median aggregates, failures by base name) and
+        keyed here by (scene, engine, n, threads)."""
         self.context = data.get("context", {}) if isinstance(data, dict) else {}
-        rows = data.get("benchmarks", []) if isinstance(data, dict) else []
-        reps = {}  # key -> list of rows
-        medians = {}  # key -> aggregate median row
-        self.failed = []
-        for row in rows:
-            if not isinstance(row, dict):
-                continue
-            parsed = parse_name(row.get("name", ""))
-            if not parsed:
-                continue
-            key = parsed[:4]
-            if row.get("error_occurred"):
-                self.failed.append((row.get("name"), row.get("error_message", "")))
-                continue
-            if is_aggregate(row):
-                if (row.get("aggregate_name") or parsed[4]) == "median":
-                    medians[key] = row
-                continue
-            reps.setdefault(key, []).append(row)
+        rows = gbench_json.Rows(data)
+        key_of = {name: gbench_json.parse_quadrant_name(name) for name in rows.order}
+        reps = {key_of[name]: r for name, r in rows.reps.items() if key_of[name]}  # key -> list of rows
+        medians = {key_of[name]: r for name, r in rows.medians.items() if key_of[name]}  # key -> median row
+        self.failed = [(name, msg) for name, msg in rows.failed_rows if gbench_json.parse_quadrant_name(name)]
         self.stats = {}  # key -> dict
         for key in set(reps) | set(medians):
             rows_k = reps.get(key)
@@ -201,8 +147,7 @@ class Results:
                 }
         # Orders: as in the context where given, else as first seen; Quadrant first.
         seen_scenes, seen_engines = [], []
-        for row in rows:
-            parsed = parse_name(row.get("name", "")) if isinstance(row, dict) else None
+        for parsed in (key_of[name] for name in rows.order):
             if parsed:
                 if parsed[0] not in seen_scenes:
                     seen_scenes.append(parsed[0])
@@ -725,12 +670,9 @@ def main(argv):
         ap.error("give a JSON file (or --check FILE)")
 
     try:
-        data = load_json(args.json)
-    except ReportError as e:
+        data = gbench_json.load(args.json)
+    except gbench_json.GBenchError as e:
         print(f"bench_report: {e}", file=sys.stderr)
-        return 1
-    if not isinstance(data, dict) or not isinstance(data.get("benchmarks"), list):
-        print(f"bench_report: {args.json}: not a Google Benchmark JSON (no \"benchmarks\")", file=sys.stderr)
         return 1
     results = Results(data)
     if not results.stats:
@@ -741,14 +683,10 @@ def main(argv):
     busy = None
     if args.busy:
         try:
-            busy_data = load_json(args.busy)
-        except ReportError as e:
+            busy = Results(gbench_json.load(args.busy))
+        except gbench_json.GBenchError as e:
             print(f"bench_report: {e}", file=sys.stderr)
             return 1
-        if not isinstance(busy_data, dict) or not isinstance(busy_data.get("benchmarks"), list):
-            print(f"bench_report: {args.busy}: not a Google Benchmark JSON (no \"benchmarks\")", file=sys.stderr)
-            return 1
-        busy = Results(busy_data)
     text = markdown(results, args.json, busy)
     with open(os.path.join(out_dir, "speedup.md"), "w", encoding="utf-8") as f:
         f.write(text + "\n")

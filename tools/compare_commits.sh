@@ -15,6 +15,9 @@
 # sets and stopped by its process id when they end or the script fails (OUT_DIR/busy.txt says
 # which). A set that fails leaves the sets before it as they were; a set's directory is replaced
 # only once its run succeeded (it runs into OUT_DIR/.SET.tmp first).
+# OUT_DIR belongs outside results/ (e.g. runs/<machine>/vs_<commit>/, which git ignores): the raw
+# rounds are not committed; a comparison worth keeping goes into results/<machine>/comparisons.md
+# as its section (what was compared, this command, the SET.md tables and load.txt as written).
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 usage() { echo "usage: tools/compare_commits.sh OLD_BENCH NEW_BENCH OUT_DIR [--rounds R] [--only SET,...]" >&2; exit 2; }

@@ -1,4 +1,5 @@
-"""The one reader of Google Benchmark JSON in tools/ (bench_report.py, compare.py, history.py).
+"""The one reader of Google Benchmark JSON in tools/ (bench_report.py, compare.py, history.py):
+no other tool opens such a file or walks its "benchmarks" list.
 
 A quadrant_bench row is named <scene>/<engine>/n:<N>/threads:<T>, and Google Benchmark appends
 what is not part of a benchmark's identity: /iterations:<k>, /repeats:<k>, /min_time:<t>,
@@ -25,19 +26,41 @@ class GBenchError(Exception):
     """A file that cannot be read as Google Benchmark JSON; the message names the file."""
 
 
-def load(path):
-    """The parsed JSON of a Google Benchmark output file (a dict with a "benchmarks" list)."""
+def read(path):
+    """The parsed JSON of a file, whatever its structure (for a validator: structure_problems)."""
     try:
         with open(path, encoding="utf-8") as f:
-            data = json.load(f)
+            return json.load(f)
     except OSError as e:
         raise GBenchError(f"{path}: cannot read: {e.strerror or e}")
     except (json.JSONDecodeError, UnicodeDecodeError) as e:
         raise GBenchError(f"{path}: not valid JSON ({e})")
+
+
+def load(path):
+    """The parsed JSON of a Google Benchmark output file (a dict with a "benchmarks" list)."""
+    data = read(path)
     if not isinstance(data, dict) or not isinstance(data.get("benchmarks"), list):
         raise GBenchError(f'{path}: not Google Benchmark JSON (no "benchmarks" array; '
                           "write it with --benchmark_out=FILE --benchmark_out_format=json)")
     return data
+
+
+def structure_problems(data):
+    """(problems, rows) of parsed JSON: what is wrong with its top level, "context" and
+    "benchmarks" (empty when nothing is), and the "benchmarks" list ([] when there is none)."""
+    if not isinstance(data, dict):
+        return ["top level is not a JSON object"], []
+    problems = []
+    if not isinstance(data.get("context"), dict):
+        problems.append('missing or malformed "context" object')
+    rows = data.get("benchmarks")
+    if not isinstance(rows, list):
+        problems.append('missing or malformed "benchmarks" array')
+        return problems, []
+    if not rows:
+        problems.append('"benchmarks" is empty: nothing was run')
+    return problems, rows
 
 
 def aggregate_of(row):
@@ -76,14 +99,21 @@ class Rows:
         self.reps = {}      # name -> [rows], in file order
         self.medians = {}   # name -> the _median aggregate row
         self.failed = {}    # name -> error message
-        for i, row in enumerate(data.get("benchmarks", [])):
+        self.failed_rows = []  # (the row's full name, error message) of every failed row, in file order
+        self.order = []     # every base name, in the order of its first row (any kind of row)
+        seen = set()
+        for i, row in enumerate(data.get("benchmarks", []) if isinstance(data, dict) else []):
             if not isinstance(row, dict) or not isinstance(row.get("name"), str):
                 if strict:
                     raise GBenchError(f"{where}: benchmarks[{i}] is not a benchmark row (no name)")
                 continue
             name = base_name(row.get("run_name") or row["name"])
+            if name not in seen:
+                seen.add(name)
+                self.order.append(name)
             if row.get("error_occurred"):
                 self.failed[name] = row.get("error_message", "no message")
+                self.failed_rows.append((row["name"], row.get("error_message", "")))
                 continue
             aggregate = aggregate_of(row)
             if aggregate:

@@ -1,6 +1,6 @@
 // The hard cases on Quadrant: every case's criterion (benchmarks/scenes/hard_case_checks.cpp, the
-// same code tools/quadrant hardcases runs) must pass, with pgs (the default) and with soft_step
-// (except the cases listed as its known failures). The soak runs 3000 steps here instead of the
+// same code tools/quadrant hardcases runs) must pass, with the default engine (soft_step, all 16)
+// and with pgs (the 13 older cases). The soak runs 3000 steps here instead of the
 // tool's 100000 (2.5 minutes instead of 28 of simulated time) to keep the suite, which CI also
 // runs under ASan, fast. Also: the scene builders' contracts (body counts, order, materials) and
 // the penetration measure the criteria rely on.
@@ -74,7 +74,7 @@ double Figure(const HardCaseResult& r, const std::string& name) {
 // soft_step with Box2D 3's settings (b3soft) at its default 4 sub-steps (not the larger budget the mass-ratio scenes state): the
 // mass ratios fail their criteria there (a 30 Hz contact sags under 1000 N, and the plank creeps),
 // but the heavy bodies must stay up. With the soft contacts' push-out capped at 0.015 m and no
-// rigid rows below it (72b6974) the 100 kg box fell through the pyramid (heavy drift 12.2 m) and
+// rigid rows below it the 100 kg box fell through the pyramid (heavy drift 12.2 m) and
 // the plank's boxes sank into the ground (penetration 0.555 m). Measured: with no cap 0.076 m and
 // 0.088 m; with rigid rows below 0.01 m 0.097 m and 0.060 m (the plank drifts 0.53 m sideways).
 // (The box's penetration does not tell: 0.10 m with no cap, 0.092 m once it has fallen through.)

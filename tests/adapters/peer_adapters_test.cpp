@@ -395,7 +395,7 @@ TEST_P(SharedAdapterChecks, BallFallsAndRestsOnGround) { CheckBallFallsAndRestsO
 TEST_P(SharedAdapterChecks, HeadOnElasticCollision) {
   if (GetParam() == "bullet") {
     // Measured: Bullet's split impulse adds energy to this unequal-mass elastic collision (kinetic
-    // energy 2.09 J after, 1.57 J before; velocities -1.30 and 1.10 m/s for -1 and 1); the README
+    // energy 2.09 J after, 1.57 J before; velocities -1.30 and 1.10 m/s for -1 and 1); docs/suite.md
     // documents the same gain on the stress scenes. Its equal-mass case is checked in
     // bullet_adapter_test.cpp (HeadOnElasticCirclesExchangeVelocities).
     GTEST_SKIP() << "bullet: elastic collisions gain energy (split impulse), measured +33 % here";

@@ -1,6 +1,6 @@
 // The random validation campaign (benchmarks/scenes/random_hits.cpp) on a fixed sample: 300 hits
 // of seed 17 (under a second in a release build), the same code tools/quadrant validate --random
-// runs. Bounds are the committed campaign's figures on this sample (README "validation") with a
+// runs. Bounds are the committed campaign's figures on this sample (docs/validation.md) with a
 // margin of about a third, so a solver change that moves responses away from Box2D or from the
 // analytic impact fails here; the Box2D-compatible settings of pgs, soft_step and thesis must stay
 // below 1 % (issue #17).
@@ -69,7 +69,7 @@ TEST(RandomHits, Box2dCompatibleSettingStaysBelowOnePercent) {
 TEST(RandomHits, SoftStepBox2dCompatibleSettingStaysBelowOnePercent) {
   // soft_step's Box2D-compatible setting: Box2D's restitution, its skin and friction in each of four
   // relax passes (0.76 % here, 0.69 % on the 2000 hits; with the default two passes 1.06 % here and
-  // 0.82 % there). Each alone leaves it far above (README "validation").
+  // 0.82 % there). Each alone leaves it far above (docs/validation.md).
   const std::vector<CampaignRow> rows = Sample().Box2dRows();
   const char* compat = "box2d_restitution+box2d_skin+relax4+relaxfriction";
   EXPECT_LT(Find(rows, "all", "quadrant:soft_step", compat).p90, 0.01);

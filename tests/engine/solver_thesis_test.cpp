@@ -1,6 +1,6 @@
 // Tests for the thesis solver (engine/src/dynamics/solver_thesis.cpp): it may be crude, but it stays
-// bounded. At c70fd1b a dense closed box under gravity exploded: after 2000 steps most of the
-// 2000 circles were outside the box, falling at about 300 m/s.
+// bounded. With one plain pass a dense closed box under gravity exploded: after 2000 steps most
+// of the 2000 circles were outside the box, falling at about 300 m/s.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -49,8 +49,8 @@ ClosedBox MakeClosedBox(World& world, int count, Real areaFraction) {
 // input and the box starts at rest, so the pile's kinetic energy must stay a small part of the
 // potential energy it holds above the floor (below 1 %; measured after the fix: at most 1045 J
 // of about 330 kJ, the crude one-pass solver never quite stops a pile) and show no upward
-// trend (the largest over the second 1000 steps at most twice that over the first). At c70fd1b
-// the box ended mostly empty, the fastest bodies near 300 m/s.
+// trend (the largest over the second 1000 steps at most twice that over the first). With one
+// plain pass the box ended mostly empty, the fastest bodies near 300 m/s.
 void ExpectClosedBoxBounded(const WorldDef& def, int steps) {
   World world(def);
   const ClosedBox box = MakeClosedBox(world, 2000, Real(0.85));
@@ -90,8 +90,8 @@ TEST(ThesisSolverTest, DenseClosedBoxStaysClosedAndKineticEnergyBounded) {
   ExpectClosedBoxBounded(def, 2000);
 }
 
-// The same box with every switch of the thesis's Box2D-compatible setting (issue #17, README
-// "validation"): the coupled impulse at each touching point, accumulated over 8 passes, the
+// The same box with every switch of the thesis's Box2D-compatible setting (issue #17,
+// docs/validation.md): the coupled impulse at each touching point, accumulated over 8 passes, the
 // polygon skin, and Box2D's position pass instead of the push. 1000 steps: with its 8 passes 2000
 // steps took 38 s under ASan/UBSan. Measured: kinetic energy at most 619 J over the
 // first 500 steps and 149 J over the second (sampled every 50), fastest body 3.9 m/s (the default

@@ -473,8 +473,8 @@ TEST(WorldTest, PipelineRepeatsEqualSmallerSteps) {
 }
 
 // 43 bodies are far below the default grain (2048 items), so the grain is lowered to 4: every
-// stage splits across the workers, and the test checks that parallel sections really ran (at
-// c70fd1b this test compared a serial run with a serial run).
+// stage splits across the workers, and the test checks that parallel sections really ran (so
+// that it cannot compare a serial step with a serial step).
 TEST(WorldTest, ThreadCountDoesNotChangeTheResult) {
   WorldDef d1;
   d1.minParallelItems = 4;

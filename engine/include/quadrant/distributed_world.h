@@ -1,45 +1,24 @@
 // Quadrant over MPI: a world split among processes (ranks) by fixed world-space tiles, whose
-// state is bit-identical for any number of ranks and equal to a single-process World's.
+// state is bit-identical for any number of ranks and equal to a single-process World's made from
+// the same bodies in the same order with the same WorldDef (solver kJacobi): GatherStates and
+// StateHash give that World's state and hash. Built only where MPI is found (CMake option
+// QUADRANT_MPI, target quadrant::mpi); the engine itself never needs MPI.
 //
-// Built only where MPI is found (CMake option QUADRANT_MPI, target quadrant::mpi); the engine
-// itself never needs MPI.
+// Decomposition (after pe / waLBerla): the scene bounds are cut into a fixed grid of tiles, dealt
+// to the ranks in contiguous runs of Morton (Z) order (at 2x2 tiles and 4 ranks: the thesis's
+// four quadrants). A moving body belongs to the rank whose tile holds its centre of mass; static
+// bodies are known to every rank. The step's phases are described above DistributedWorld.
 //
-// Decomposition (after pe / waLBerla): the scene bounds are cut into a fixed grid of tiles; the
-// tiles, taken in Morton (Z) order, are dealt to the ranks in contiguous runs (at 2x2 tiles and
-// 4 ranks: the thesis's four quadrants). A moving body belongs to the rank whose tile holds its
-// centre of mass (bodies outside the bounds: the nearest edge tile); static bodies are known to
-// every rank (a wall spans every tile). Each step:
-//   1. migration: a body whose centre entered another rank's tile is sent there, with the
-//      warm-start impulses of its contacts;
-//   2. shadows: every moving body is sent, as a read-only shadow, to each other rank owning a
-//      tile that its broad-phase box reaches when widened by the largest such box's reach (so a
-//      rank sees every body that can touch one of its own);
-//   3. each rank finds the contacts of its own bodies and runs the Jacobi solve
-//      (engine/src/dynamics/jacobi_solve.h, SolverType::kJacobi): one exchange of its boundary bodies'
-//      velocities and contact counts after warm starting, one after every velocity iteration but
-//      the last;
-//   4. every step the global body count and an id checksum are compared with the loaded scene's
-//      by exact integer reductions (nothing lost, nothing duplicated).
-// A round sends exactly one message to every neighbour rank (a rank owning a tile next to one of
-// its own), empty or not, and reads the neighbours' messages in rank order, never arrival order.
-// For k velocity iterations a step takes k + 2 neighbour rounds and three small allreduces (the
-// halo reach, the body count and checksum, the most loaded rank's work); with load balancing on,
-// every rebalanceInterval steps an allreduce of the tiles' work and, when it re-deals them, an
-// all-to-all of the bodies that change owner.
+// Cost: for k velocity iterations a step takes k + 2 neighbour rounds (one message to every
+// neighbour rank each, empty or not, read in rank order) and three small allreduces. The Jacobi
+// solve needs about four times pgs's iterations for the same hold (base-10 pyramid, 300 steps,
+// apex drift: Jacobi 0.013 m at 32 iterations, pgs 0.013 m at 8; jacobi_solve.h).
 //
-// Determinism: each rank builds its bodies in id order and computes every contact of its own
-// bodies, so every body sees the same contacts, in the same order, with the same arithmetic as in
-// one process. GatherStates / StateHash give the World's state and hash for a World made from the
-// same bodies in the same order with the same WorldDef (solver kJacobi).
-//
-// Solvers: only kJacobi. pgs and soft_step are Gauss-Seidel over a global greedy colouring and
-// the thesis solver is one sequential pass: splitting them changes their arithmetic
-// (jacobi_solve.h says why). Sleep and the quadrants scheme are refused.
-//
-// Errors: bad input (an invalid WorldDef or body, scenes that differ between ranks, more ranks
-// than tiles, a body too large for the tiles) throws quadrant::Error with the same message on
-// every rank, since every such check runs on values all ranks share; a program that lets it
-// propagate exits non-zero on every rank instead of leaving the others waiting.
+// Solvers: only kJacobi; pgs, soft_step and the thesis solver are sequential over a global order,
+// and splitting them changes their arithmetic (jacobi_solve.h). Sleep and the quadrants scheme
+// are refused. Bad input throws quadrant::Error with the same message on every rank (every check
+// runs on values all ranks share), so a program that lets it propagate exits non-zero on every
+// rank instead of leaving the others waiting. docs/distributed.md describes use and results.
 #pragma once
 
 #include <mpi.h>
@@ -95,6 +74,27 @@ struct BodyState {
   Real mass = 0;  ///< 0 for static and kinematic bodies
 };
 
+// The step, on every rank:
+//   1. migration: a body whose centre entered another rank's tile is sent there, with the
+//      warm-start impulses of its contacts (bodies outside the bounds belong to the nearest
+//      edge tile);
+//   2. shadows: every moving body is sent, as a read-only shadow, to each other rank owning a
+//      tile that its broad-phase box reaches when widened by the largest such box's reach (so a
+//      rank sees every body that can touch one of its own);
+//   3. each rank finds the contacts of its own bodies and runs the Jacobi solve
+//      (engine/src/dynamics/jacobi_solve.h, SolverType::kJacobi): one exchange of its boundary
+//      bodies' velocities and contact counts after warm starting, one after every velocity
+//      iteration but the last;
+//   4. the global body count and an id checksum are compared with the loaded scene's by exact
+//      integer reductions (nothing lost, nothing duplicated).
+// A round sends exactly one message to every neighbour rank (a rank owning a tile next to one of
+// its own) and reads the neighbours' messages in rank order, never arrival order. The three
+// allreduces are the halo reach, the body count and checksum, and the most loaded rank's work;
+// with load balancing on, every rebalanceInterval steps an allreduce of the tiles' work and, when
+// it re-deals them, an all-to-all of the bodies that change owner.
+// Determinism: each rank builds its bodies in id order and computes every contact of its own
+// bodies, so every body sees the same contacts, in the same order, with the same arithmetic as in
+// one process.
 class DistributedWorld {
  public:
   /// Collective over `comm` (duplicated). Throws quadrant::Error on every rank for an invalid

@@ -95,7 +95,7 @@ enum class SolverType : uint8_t {
   /// step). velocityIterations applies; positionIterations and restitutionIterations do not.
   /// Its result does not depend on how bodies are split
   /// among processes: it is the solver of quadrant::DistributedWorld, whose state equals a
-  /// World's with this solver. Softer than pgs on stacks (README "More than one machine").
+  /// World's with this solver. Softer than pgs on stacks (docs/distributed.md).
   kJacobi,
 };
 
@@ -137,7 +137,7 @@ enum class RestitutionPolicy : uint8_t {
   /// simultaneously with friction and the other rows. soft_step: vn is captured before the step's
   /// sub-steps (before their gravity), and rigid rows with that target and friction act after the
   /// first sub-step's relax pass, the bodies moving as if they had from its start
-  /// (solver_soft_step.cpp). pgs and soft_step (World refuses it with thesis). README "validation"
+  /// (solver_soft_step.cpp). pgs and soft_step (World refuses it with thesis). docs/validation.md
   /// gives what it changes against Box2D and the analytic answer.
   kBox2d,
 };
@@ -157,7 +157,7 @@ enum class ParallelScheme : uint8_t {
 struct WorldDef {
   Vec2 gravity{0, Real(-10)};           ///< m/s^2
   /// The default is soft_step with two relax passes and a mass-ratio limit of 10 (below), chosen
-  /// by measurement (issue #13; README "solver"): it holds all 16 hard cases at the default budget,
+  /// by measurement (issue #13; docs/solvers.md): it holds all 16 hard cases at the default budget,
   /// pgs 13, and the base-100 pyramid costs it 43.2M instructions a step against pgs's 58.4M.
   SolverType solver = SolverType::kSoftStep;
   BroadPhaseType broadPhase = BroadPhaseType::kUniformGrid;
@@ -196,7 +196,7 @@ struct WorldDef {
   int softRelaxIterations = 2;
   /// soft_step: solve friction in every relax pass, not only the last. Where a lever arm couples
   /// friction and the normal row (an oblique corner hit), the passes then converge both as Box2D
-  /// 2.4.1's iterations do; part of soft_step's Box2D-compatible setting (README "validation").
+  /// 2.4.1's iterations do; part of soft_step's Box2D-compatible setting (docs/validation.md).
   bool softFrictionEveryRelaxPass = false;
   /// soft_step: 0 (off) or the largest mass ratio a contact between two dynamic bodies sees, >= 1.
   /// Where two bodies' masses differ by more, the lighter one takes part in their contact as if it
@@ -216,30 +216,30 @@ struct WorldDef {
   /// a point is solved as if its separation were smaller by the skins of the pair's polygons, so
   /// points within them are touching rows and bodies rest that far apart. 0 (the default): shapes
   /// are exactly their vertices. Box2D 2.4.1's b2_polygonRadius is 0.01; with it and
-  /// RestitutionPolicy::kBox2d Quadrant reproduces Box2D's responses (README "validation").
+  /// RestitutionPolicy::kBox2d Quadrant reproduces Box2D's responses (docs/validation.md).
   /// Deterministic scheme only (World refuses it with kQuadrants).
   Real polygonSkin = 0;
   /// thesis solver: solve its one impulse per contact with the normal and friction parts coupled
   /// (the 2x2 effective mass and the Coulomb cone) instead of by two separate formulas. Off (the
-  /// default): the thesis's method. README "validation" gives what it changes.
+  /// default): the thesis's method. docs/validation.md gives what it changes.
   bool thesisCoupledImpulse = false;
   /// thesis solver: one impulse at each touching point of a contact, in turn, instead of the
-  /// thesis's one impulse at their centroid. Off (the default): the thesis's method. README
-  /// "validation" gives what it changes.
+  /// thesis's one impulse at their centroid. Off (the default): the thesis's method.
+  /// docs/validation.md gives what it changes.
   bool thesisPointImpulses = false;
   /// thesis solver: passes over the contacts per step, >= 1. 1 (the default): the thesis's one
   /// pass; more let the impulses of a contact's two points, or of neighbouring contacts, settle
-  /// as an iterative solver's do. README "validation" gives what it changes.
+  /// as an iterative solver's do. docs/validation.md gives what it changes.
   int thesisPasses = 1;
   /// thesis solver: each point's impulse is a total accumulated over the step's passes and
   /// clamped as a total (normal >= 0, friction within mu times it), as Box2D 2.4.1's iterations
   /// do, instead of a fresh impulse per pass that only pushes. Only matters with thesisPasses > 1.
-  /// Off (the default): the thesis's method. README "validation" gives what it changes.
+  /// Off (the default): the thesis's method. docs/validation.md gives what it changes.
   bool thesisAccumulatedImpulse = false;
   /// thesis solver: remove penetration after the positions are integrated, by positionIterations
   /// passes of non-linear Gauss-Seidel at the touching points (Box2D 2.4.1's and pgs's position
   /// pass, which turns the bodies too), instead of the thesis's translation push before the
-  /// impulses. Off (the default): the thesis's method. README "validation" gives what it changes.
+  /// impulses. Off (the default): the thesis's method. docs/validation.md gives what it changes.
   bool thesisPositionPass = false;
   Real maxLinearSpeed = Real(400);      ///< m/s; a numerical guard, as Box2D 3's default
   /// Most a body turns in one step (rad), as Box2D 3's 0.25 pi: a numerical guard. Speculative

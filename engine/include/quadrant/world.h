@@ -30,8 +30,8 @@ namespace quadrant {
 
 namespace detail {
 /// The world's state behind a pointer that refuses to be followed once moved from: a moved-from
-/// World has no state, and every call on it throws quadrant::Error (it used to dereference null
-/// and abort). Assigning a World to it makes it usable again; destroying it is always fine.
+/// World has no state, and every call on it throws quadrant::Error (never a null dereference).
+/// Assigning a World to it makes it usable again; destroying it is always fine.
 template <class T>
 class LiveImpl {
  public:
@@ -123,7 +123,7 @@ class World {
   // Queries, on the bodies where they are now (after the last Step, SetTransform, CreateBody).
   // They run through a broad-phase structure of the world's type (WorldDef::broadPhase), rebuilt
   // from every body's current box at the first query after a change (O(bodies): about 40 ns per
-  // body of CPU on the 2-core VM here, 1.3 ms for 32000 circles, quadrant_queries'
+  // body of CPU on the 2-core VM, 1.3 ms for 32000 circles, quadrant_queries'
   // aabb_after_move; then each query reads only the cells or nodes it touches). Shapes are tested exactly. A body is reported
   // only if (its categoryBits & categoryMask) != 0. Queries are const but not safe to run
   // concurrently with each other or with any other call on the same World.

@@ -178,15 +178,15 @@ namespace {
 
 // CollidePolygons with the vertex counts kA, kB fixed at compile time (0: at run time). Box
 // pairs (4 and 4), the pyramid's and the stacks' only pairs, get fully unrolled loops: the same
-// operations in the same order, so the same manifold bit for bit. Base-100 pyramid: see the
-// commit that added it for the instruction counts.
+// operations in the same order, so the same manifold bit for bit. Base-100 pyramid, soft_step:
+// 43.0M -> 40.3M instructions a step (callgrind).
 #if QUADRANT_NARROW_SIMD
 // The four-vertex case of the searches below four lanes at a time (SSE2): lane i does the
 // scalar code's operations for face (or vertex) i in the same order, and _mm_min_ps is the
 // scalar `d < m ? d : m`, so the manifold is the same bit for bit (the state hashes did not
 // move). Why: box pairs are the pyramid's and the stacks' only pairs, and the 2 x 16 dot
 // products of the axis searches and the 8 vertex transforms were most of CollidePolygonsT<4, 4>
-// (base-100 pyramid: 797 instructions a pair; the commit that added this gives the after).
+// (base-100 pyramid, callgrind: 797 -> 500 instructions a pair with the four lanes).
 struct Four {
   __m128 x, y;
 };
@@ -518,7 +518,8 @@ namespace pairs_default {
 }  // namespace pairs_default
 
 #if QUADRANT_NARROW_SIMD && defined(__x86_64__) && defined(__GNUC__)
-// Box pairs eight at a time (box_batch.h). Base-100 pyramid: see the commit that added it.
+// Box pairs eight at a time (box_batch.h). Base-100 pyramid, 2-core VM: the narrow phase
+// 0.618 -> 0.322 ms a step at 1 thread, 0.345 -> 0.220 ms at 2.
 struct VexBoxes {
   static constexpr bool kBatch = true;  // eight at a time (CollideBoxBatch)
   [[gnu::target("avx"), gnu::always_inline]] Manifold operator()(const Polygon& a, const Transform& xfA, const Polygon& b,

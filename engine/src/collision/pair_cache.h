@@ -1,28 +1,22 @@
 // Pair cache: the broad phase's pairs of a resting scene reused from step to step.
 //
-// The broad phase (uniform grid, quad tree) rebuilds its structure from every box each step; on
-// the base-100 pyramid that is about a tenth of a one-thread step (perf: the grid's scan 6.8 %,
-// the box update 2.5 %), for pairs that do not change while the pile rests. The cache keeps a
-// fat box for every body (its box grown by kMargin on every side) and every pair whose fat boxes
-// overlap (found by the broad phase itself, over the fat boxes). While every body's box stays
-// inside its fat box, every pair whose boxes overlap is among those pairs, so a filter of them
-// with the boxes gives exactly the broad phase's pairs: the same set (the pairs' order differs,
-// and nothing after the broad phase depends on it: the contacts are sorted by their bodies).
-// When a box leaves its fat box, or a body's movable flag or the body count changes, the fat
-// boxes and pairs are rebuilt. Box2D does the same with its fat tree proxies (b2_aabbMargin);
-// here the reuse is all or nothing, which keeps it a wrapper around any broad phase.
+// The broad phase rebuilds its structure from every box each step, for pairs that do not change
+// while a pile rests (base-100 pyramid, one thread: the grid's scan 6.8 % of the step, the box
+// update 2.5 %, perf). The cache keeps a fat box for every body (its box grown by kMargin on
+// every side) and every pair whose fat boxes overlap (found by the broad phase itself, over the
+// fat boxes). While every box stays inside its fat box, filtering those pairs by the boxes gives
+// exactly the broad phase's pair set (in another order, on which nothing after the broad phase
+// depends: contacts are sorted by their bodies). When a box leaves its fat box, or a body's
+// movable flag or the body count changes, fat boxes and pairs are rebuilt. Box2D does the same
+// with its fat tree proxies (b2_aabbMargin); here the reuse is all or nothing, which keeps it a
+// wrapper around any broad phase. Same state hashes with and without it.
 //
-// Measured (issue #13): base-100 pyramid, one thread, 5 interleaved rounds of 60 steps against
-// a524d1a (load 2.8 from a helper's builds): the broad phase 0.256 -> 0.154 ms a step; at two
-// threads 0.149 -> 0.105 ms. With a margin of 0.1 m a body of the settling pyramid leaves its fat
-// box about once in 7 steps over the first 300 (one rebuild each time). Instructions
-// (tools/quadrant icount): pyramid_20_60 50.85M -> 47.99M, circle_stress_1000_60 37.66M -> 37.43M,
-// polygon_stress_1000_60 69.77M -> 69.55M; the same state hashes.
-//
-// Scenes in motion (the stress scenes) would rebuild every step and pay for the fat boxes' extra
-// pairs; after a rebuild that served fewer than kMinReuse steps the cache stands aside for 2, 4,
-// ... up to 64 steps (the plain broad phase runs), and for 64 at once when more than one body in
-// a hundred left its fat box, so such scenes pay for one try in 64 steps.
+// Base-100 pyramid on the 2-core VM: the broad phase 0.256 -> 0.154 ms a step at 1 thread,
+// 0.149 -> 0.105 ms at 2; at kMargin 0.1 m a settling body leaves its fat box about once in 7
+// steps. Scenes in motion would rebuild every step: after a rebuild that served fewer than
+// kMinReuse steps the cache stands aside for 2, 4, ... up to 64 steps (the plain broad phase
+// runs), and for 64 at once when more than one body in a hundred left its fat box.
+// docs/notes/pair_cache.md has the instruction counts.
 #pragma once
 
 #include <cstdint>

@@ -43,9 +43,8 @@ class UniformGrid final : public BroadPhase {
 
   // The update runs in Extents, chunk by chunk, just before the chunk's boxes are read: one
   // region for the whole broad phase instead of a parallel-for and then the region. Circle
-  // stress 16000 at 2 threads (pool forced parallel, SCHED_FIFO, 11 rounds alternated with the
-  // range sort alone, medians of the rounds' ratios): the broad phase -2.7 %, the step -1.1 %,
-  // near the noise here; 1 thread +0.33 % instructions on circle stress 1000 (icount).
+  // stress 16000 at 2 threads, 2-core VM: the broad phase -2.7 %, the step -1.1 % (near the
+  // noise there); 1 thread +0.33 % instructions on circle stress 1000 (icount).
   void UpdateAndFindPairs(std::span<const AABB> aabbs, std::span<const uint8_t> movable,
                           std::vector<CandidatePair>& out, StageRunner& run, BoxUpdate update) override {
     if (aabbs.size() < 2) {  // no region to run it in
@@ -156,13 +155,12 @@ class UniformGrid final : public BroadPhase {
   static constexpr int kPad = 4;  // sentinel keys (and empty boxes) after the sorted bodies
 
   // The step as one region of stages (StageRunner::Stages): layout, the sort of the bodies by
-  // cell, the pair scans. Each parallel-for of the former version (seven per step) cost a
-  // hand-over to the workers and a join; a region costs one hand-over, and a stage boundary only
-  // a wait for the stage's last chunk. One-item stages are the serial steps between them.
-  // Measured with the radix sort and the four-wide scan below, against main ef96acf, 9
-  // interleaved rounds of 60 steps, circle stress 16000 (load average 2.6 from other users'
-  // niced builds): the broad phase 0.817 -> 0.543 ms per step at 1 thread; polygon stress
-  // 16000 1.071 -> 0.797.
+  // cell, the pair scans. A parallel-for per phase (seven a step) would cost a hand-over to the
+  // workers and a join each; a region costs one hand-over, and a stage boundary only a wait for
+  // the stage's last chunk. One-item stages are the serial steps between them. With the radix
+  // sort and the four-wide scan below, against seven parallel-fors and a counting sort, 2-core
+  // VM, 1 thread: the broad phase 0.817 -> 0.543 ms a step on circle stress 16000, 1.071 ->
+  // 0.797 ms on polygon stress 16000.
   enum class Op : uint8_t {
     kExtents, kReduce, kCellMax, kGrid, kKeys, kHistogram, kOffsets, kScatter, kSplit, kRangeSort, kScan, kLarge
   };
@@ -175,11 +173,10 @@ class UniformGrid final : public BroadPhase {
     const int n = static_cast<int>(aabbs.size());
     // Split from a quarter of MinItems: a body costs the grid about 60 ns (tumbler 2025: 0.126 ms
     // a step), several times a body update, and below MinItems (2048) the tumbler, pyramid and
-    // stress scenes of 1000-2000 bodies ran the grid serially at 2 threads. Against d8d1065
-    // (9 interleaved rounds, results/amd-epyc-2c/vs_d8d1065_grid/): 2 threads, ms a step,
-    // tumbler 2025 0.722 -> 0.659, circles 2000 0.116 -> 0.098, polygons 2000 0.211 -> 0.183,
-    // circles 1024 0.061 -> 0.059; 1 thread within 1.6 %; the pyramids, whose pairs the pair
-    // cache serves, -0.8 to +7.6 % at 2 threads, none of it significant (p 0.04-0.49).
+    // stress scenes of 1000-2000 bodies ran the grid serially at 2 threads. Against the split at
+    // MinItems, 2 threads, amd-epyc-2c, ms a step: tumbler 2025 0.722 -> 0.659, circles 2000
+    // 0.116 -> 0.098, polygons 2000 0.211 -> 0.183; 1 thread within 1.6 %
+    // (docs/notes/uniform_grid.md has the rest).
     const bool parallel = n >= std::max(2, run.MinItems() / 4) && run.Workers() > 1;
     // Blocks of the sort and the scans: four per worker, so a thread that starts late leaves
     // little to wait on. The sorted order and the pairs do not depend on the block count.
@@ -456,17 +453,15 @@ class UniformGrid final : public BroadPhase {
   // their input, write each digit's slots from every block: on two threads nearly every cache
   // line of their outputs was written by both cores (16000 bodies, 256 digits, 8 blocks: runs
   // of about 8 slots), and the scan then read half its sorted arrays from the other core.
-  // Measured at 2 threads against 1 (circle stress 16000, work summed over the threads, ms per
-  // step, main 8c17203, 3 runs of 60 + 10 steps each): the scatter passes 0.088 -> 0.163 (with
-  // their histogram and offsets 0.10 -> 0.18), the scan 0.234 -> 0.299. Instead the keys are
-  // split into one range per worker, of about equal counts (from the keys' top bits counted in
-  // Keys), and each range is sorted on its own: its bodies gathered in index order from all the
-  // keys, then two radix passes of its own, into its own part of the sorted arrays. Every range
-  // is sorted stably and the ranges follow each other, so the order is the serial sort's. Two
-  // runs each at 2 threads (pool forced parallel, SCHED_FIFO, beside other sessions' niced
-  // builds), the same work summed: sort 0.148 / 0.184 -> 0.134 / 0.124 ms per step, scan
-  // 0.257 / 0.295 -> 0.253 / 0.245, the grid's region 0.310 / 0.365 -> 0.314 / 0.290 (the gather
-  // reads every key once per range; one thread keeps the serial sort).
+  // Circle stress 16000, work summed over the threads, ms a step, 1 -> 2 threads: the scatter
+  // passes 0.088 -> 0.163 (with their histogram and offsets 0.10 -> 0.18), the scan 0.234 ->
+  // 0.299. Instead the keys are split into one range per worker, of about equal counts (from the
+  // keys' top bits counted in Keys), and each range is sorted on its own: its bodies gathered in
+  // index order from all the keys, then two radix passes of its own, into its own part of the
+  // sorted arrays. Every range is sorted stably and the ranges follow each other, so the order
+  // is the serial sort's. At 2 threads, the same work summed, ms a step: sort 0.148-0.184 ->
+  // 0.124-0.134, scan 0.257-0.295 -> 0.245-0.253, the grid's region 0.310-0.365 -> 0.290-0.314
+  // (the gather reads every key once per range; one thread keeps the serial sort).
   void Split() {
     large_.clear();  // blocks are in index order, so the oversized bodies are too
     for (int b = 0; b < largePart_.Count(); ++b) large_.insert(large_.end(), largePart_[b].begin(), largePart_[b].end());

@@ -7,16 +7,8 @@
 // How a sleeping body leaves the pipeline: its velocity and inverse mass are set to 0 and its
 // `dynamic` flag cleared, so the broad phase pairs it only with awake dynamic bodies (never
 // with another sleeper or a static body), the solvers treat it as static and integration skips
-// it. Nothing else in the step needs a sleep test.
-//
-// Islands are rebuilt every step from this step's contacts (no persistent island graph): a
-// union-find over the contacts in their sorted order, serial, so the islands and every sleep
-// decision are the same for any thread count. An island is connected by every contact in the
-// list, speculative ones included (not only points at separation <= 0): the waking rule below
-// fires on any contact, so an island built from fewer contacts could fall asleep next to an
-// awake neighbour within speculative reach and be woken again at once, every step.
-// Static and kinematic bodies do not join islands (a pile on the ground is not one island with
-// every other pile on the ground); a moving kinematic body keeps the bodies it touches awake.
+// it. Nothing else in the step needs a sleep test. Islands are rebuilt every step from the
+// sorted contacts, serially (Update), so every sleep decision is the same at any thread count.
 //
 // Waking: a contact between an awake dynamic body and a sleeping one wakes the sleeper's whole
 // island in the same step (World::Impl::RunPipeline then finds the woken bodies' pairs and
@@ -58,6 +50,14 @@ int Islands::Find(int i) {
   return i;
 }
 
+// Islands are rebuilt every step from this step's contacts (no persistent island graph): a
+// union-find over the contacts in their sorted order, serial, so the islands and every sleep
+// decision are the same for any thread count. An island is connected by every contact in the
+// list, speculative ones included (not only points at separation <= 0): the waking rule (head
+// comment) fires on any contact, so an island built from fewer contacts could fall asleep next to an
+// awake neighbour within speculative reach and be woken again at once, every step.
+// Static and kinematic bodies do not join islands (a pile on the ground is not one island with
+// every other pile on the ground); a moving kinematic body keeps the bodies it touches awake.
 void Islands::Update(Bodies& bodies, std::span<const Contact> contacts, const WorldDef& def, Real dt) {
   changed_.clear();
   const int n = bodies.Count();

@@ -1,36 +1,26 @@
 // The Jacobi contact solve (SolverType::kJacobi): a velocity iteration whose arithmetic does not
 // depend on how the bodies are split among threads or processes.
 //
-// Why it exists: the pgs and soft_step solvers are Gauss-Seidel. Each row reads the velocities
-// that every earlier row of the iteration wrote, and the order of rows is the greedy colouring
-// of the global contact list (constraint_graph.h). Splitting the world among processes changes
-// which rows a process sees and the order it could solve them in, so their result cannot be
-// made independent of the process count without replaying the global order (a process waiting
-// for every earlier colour of its neighbours: one exchange per colour per iteration). The thesis
-// solver is a single sequential pass with the same dependence. This solver can be split:
+// Why: pgs and soft_step are Gauss-Seidel; each row reads the velocities every earlier row of the
+// iteration wrote, in the order of the global greedy colouring (constraint_graph.h). A process
+// holding part of the world sees other rows in another order, so their result cannot be made
+// independent of the process count without replaying the global order (one exchange per colour
+// per iteration). The thesis solver is one sequential pass with the same dependence.
 //
-// - every contact computes its impulse from the velocities at the start of the iteration
-//   (Jacobi), so a contact's result depends only on its two bodies, never on other contacts;
-// - a body's velocity change is the sum of its contacts' impulses, added in contact-key order
-//   (the pair of body ids): a process that holds every contact of a body adds the same numbers
-//   in the same order as one process does;
-// - plain Jacobi overshoots where a body has many contacts, so the effective masses are those of
-//   mass splitting (Tonge, English and Gamble 2012): a body with n contacts is seen by each of
-//   them as one of n copies of mass m / n, whose velocities are then averaged, which is the sum
-//   above. Linear momentum stays exact (every impulse is applied to both
-//   bodies with opposite signs);
-// - position errors are removed by a velocity bias (Baumgarte) in the normal rows instead of a
-//   Gauss-Seidel position pass, and restitution is a velocity bias as RestitutionPolicy::kBox2d's,
-//   also given to speculative points that close within the step (pairwise collisions, the pgs
-//   default, are sequential too).
+// How it splits:
+// - every contact's impulse comes from the velocities at the start of the iteration, so it
+//   depends only on its two bodies; a body's change is the sum of its contacts' impulses, added
+//   in contact-key order (the pair of body ids), the same numbers in the same order anywhere;
+// - mass splitting (Tonge, English and Gamble 2012) against plain Jacobi's overshoot: a body
+//   with n contacts is seen by each as one of n copies of mass m / n, whose velocities are then
+//   averaged (the sum above); every impulse acts on both bodies, so momentum stays exact;
+// - Baumgarte velocity bias in the normal rows instead of a position pass; restitution as
+//   RestitutionPolicy::kBox2d's bias (pairwise collisions, pgs's default, are sequential too),
+//   given also to speculative points that close within the step.
 //
-// What it costs (one process, base-10 pyramid, 300 steps, apex drift): Jacobi 0.089 m at 8
-// iterations, 0.030 at 16, 0.013 at 32, 0.006 at 64; pgs 0.013 m at 8. About four times the
-// iterations of pgs for the same hold.
-//
-// The distributed world (distributed_world.cpp) runs the same phases, exchanging the velocities
-// and contact counts of boundary bodies between them; the single-process World runs them back to
-// back (solver_jacobi.cpp). Both therefore produce the same bits.
+// Cost (one process, base-10 pyramid, 300 steps, apex drift): 0.089 m at 8 iterations, 0.030 at
+// 16, 0.013 at 32, 0.006 at 64; pgs 0.013 m at 8. The World runs the phases back to back
+// (solver_jacobi.cpp), the distributed world exchanges boundary bodies between them: same bits.
 #pragma once
 
 #include <algorithm>

@@ -281,7 +281,7 @@ namespace rows4 {
 // Base-100 pyramid, callgrind, instructions a row and pass (four-wide in AVX's encoding -> eight-wide):
 // soft solve 83 -> 48, first relax pass 84 -> 45, friction relax pass 72 -> 41, warm start 39 ->
 // 25 (with the stores below; docs/soft_step.md has the step). Eight-wide with AVX-512VL's 32 registers
-// (no spills) was 2.4 % faster on one thread in 7 interleaved rounds on a loaded machine: not kept.
+// (no spills) was 2.4 % faster on one thread, within a loaded machine's noise: not kept.
 //
 // The kernels are included again (soft_rows_kernels.inc) in namespace wide8 under
 // `#pragma GCC target("avx")`, so that they and the F8 operations are compiled for AVX while the

@@ -1,65 +1,25 @@
 // The thesis's solver (its section 4.3), kept as the baseline the study compares against.
 //
-// For each contact, in order and once: first separate the bodies along the normal, each by a
-// share of the penetration given by the masses, then apply one impulse with restitution and
-// friction at one point (the centroid of the touching manifold points, standing in for the
-// thesis's single Minkowski contact point). No iterations, no warm starting, no speculative
-// impulses: what the baseline costs and how it behaves on stacks is what the suite measures.
+// For each contact, in order and once: separate the bodies along the normal, each by its
+// inverse-mass share of the penetration, invM / (invMA + invMB) (the thesis writes m / (m + m0);
+// its intent, "a small pebble cannot move a giant rock", is that the lighter body moves more, and
+// a static body's invM is 0), then apply one impulse with restitution and friction at the
+// centroid of the touching points (standing in for the thesis's single Minkowski point). No
+// iterations, no warm starting, no speculative impulses.
 //
-// The thesis writes the separation share as m / (m + m0); the text's intent ("a small pebble
-// cannot move a giant rock") is that the lighter body moves more, so each body moves by its
-// inverse mass share, invM / (invMA + invMB), which also handles static bodies (invM = 0).
+// Bounded (issue #13): under gravity the pass runs from the lowest contact up with shock
+// propagation, a body moves at most maxLinearCorrection (0.2 m) in it, a pair touches up to
+// linearSlop (5 mm) apart, and contacts with static and kinematic bodies are pushed out once
+// more after the pass (ResolveAll, Resolve). A closed box of 2000 circles at area fraction 0.85,
+// 2000 steps: no body leaves, kinetic energy at most 1045 J of about 330 kJ potential, fastest
+// body 6.8 m/s (tests/engine/solver_thesis_test.cpp). The plain pass let that box explode.
 //
-// What changed since c70fd1b, and why (issue #13 item 4: every solver stays bounded). Until then
-// a dense closed box under gravity (2000 circles at area fraction 0.85, tests/engine/
-// solver_thesis_test.cpp) exploded: after 50 steps bodies were outside, after 2000 most of them,
-// falling at about 300 m/s. One pass in the contacts' key order never carried the pile's weight
-// (a contact between two bodies falling together sees no approach), the pile sank through
-// itself, and chains of full-depth pushes moved bodies through the 1 m walls. Now:
-// - Under gravity the pass runs from the lowest contact up, and between two movable bodies the
-//   lower one counts as immovable (shock propagation, Guendelman, Bridson and Fedkiw 2003), so one
-//   pass stops a pile from the ground up. A body is not sent up faster than its support moves
-//   up (sequential impulses against two slanted supports leave it rising, and the pass would hand
-//   that rise up the pile each step). Without gravity the order and the mass shares are as before.
-// - The depth pushed out is the narrow phase's less what earlier contacts of the pass have moved
-//   the pair apart, and under gravity a body moves at most maxLinearCorrection (0.2 m) in the pass.
-// - A contact counts as touching up to linearSlop (5 mm) of separation: a pair the push left
-//   exactly touching still gets its impulse next step.
-// - Contacts with static and kinematic bodies are pushed out once more after the pass, unlimited.
-// Measured on that box (2000 steps, sampled every 10): no body leaves, kinetic energy at most
-// 1045 J (of about 330 kJ potential energy above the floor) with no upward trend (589 J at the
-// end), fastest body 6.8 m/s.
-//
-// Switches that make it answer as Box2D 2.4.1 does (issue #17; all off by default, so the method
-// above stays the thesis's; README "validation" and results/amd-epyc-2c/validation_random.md):
-// thesisCoupledImpulse and thesisPointImpulses (below) and WorldDef::polygonSkin left one class of
-// the 2000-hit random campaign (tools/quadrant validate --random 2000 --seed 17) above 5 %:
-// polygon-polygon hits with restitution 0, p90 7.15 % from Box2D. Two choices made it, measured one
-// at a time on that class (239 hits):
-// - thesisPositionPass: the thesis pushes the pair apart before the impulse, by translation only,
-//   to exactly touching. Box2D removes the penetration after the positions are integrated, by
-//   position iterations at the points, which turn the bodies too, and only to linearSlop inside
-//   the skins. After a corner hit the two bodies then leave from different places and angles
-//   (hit 1956: 0.017 rad apart after the first step), so when the spinning mover comes round to
-//   the face again, 19 steps later, Box2D's second impact happens and the thesis's misses
-//   (48.7 % apart; 0.57 % with the position pass). Box2D's position pass instead of the push: the
-//   class's median 0.17 -> 0.02 %, p90 7.15 -> 4.84 %.
-// - thesisAccumulatedImpulse with thesisPasses 8: when the mover turns onto the face (a two-point
-//   manifold), a fresh impulse per point and pass can only push, so the first point keeps the whole
-//   impulse that stopped it alone, and the body turns about it; Box2D's accumulated and clamped
-//   total lets a later pass take part of it back once the second point carries load (hits 534,
-//   499, 1724: 42, 36, 33 % -> 0.6, 7.4, 0.02 % with the position pass). Alone (position push kept)
-//   7.15 -> 5.07 %; with the position pass 4.84 -> 2.70 %. Either half alone changes nothing: one
-//   pass accumulates nothing (the same bits on all 2000 hits), and more passes of fresh impulses
-//   find no approach left to stop (7.15 % at 8 passes). Warm starting the totals from the last
-//   step (tried by restoring the contact cache for this solver) left 2.70 % unchanged and is not offered.
-// With all of them the campaign's p90 is 0.64 % (0.75 % before), the class 2.70 %; what remains
-// there is the two-point hits where Box2D's block solver and friction-first order differ from one
-// coupled point at a time (pgs, which has both, is at 2.01 % on the class). With the impulses
-// accumulated over 8 passes the coupled solve is no longer needed (the separate formulas converge
-// too: 0.65 % over all hits, the class 2.70 %) but the impulse at each point is (at the centroid:
-// 0.94 %, the class 13.01 %): tools/quadrant validate --random 2000 --seed 17 --runs
-// quadrant:thesis+points+b2skin+b2pos+accum+passes8,quadrant:thesis+coupled+b2skin+b2pos+accum+passes8.
+// Box2D 2.4.1 switches (issue #17; all off by default, so the method stays the thesis's):
+// thesisPositionPass, thesisAccumulatedImpulse with thesisPasses, thesisCoupledImpulse,
+// thesisPointImpulses, WorldDef::polygonSkin. With all of them the 2000-hit random campaign's p90
+// difference to Box2D is 0.64 %, the worst class's (polygon-polygon, e = 0) 2.70 % (7.15 %
+// without the first two). docs/validation.md gives what each changes; docs/notes/thesis_solver.md
+// the measurements, the explosion and what was tried.
 #include <algorithm>
 #include <chrono>
 #include <cstdint>
@@ -293,8 +253,8 @@ class ThesisSolver final : public Solver {
       // moved bodies through a 1 m wall within one step (a contact found beyond the wall's middle
       // pushes the wrong way). Without gravity the push is not limited (the limit let one polygon
       // of the 3000-step polygon_stress soak leave its box, 0.25 m past the wall at step 1509,
-      // which c70fd1b kept in). The containment pass is never limited: the walls have the last
-      // word.
+      // which the unlimited push keeps in). The containment pass is never limited: the walls have
+      // the last word.
       auto push = [&](int body, Vec2 by) {
         Vec2 to = bodies.center[body] + by;
         const Vec2 d = to - start[body];

@@ -7,19 +7,15 @@
 // block (task_system.h), so the times are kept per block index, never per thread.
 //
 // Which clock: with more running threads than cores (TaskSystem::ThreadCount: the default pool
-// starts no more threads than cores, oneTBB's arena does), blocks are timed with the thread's
-// own CPU clock, so a worker that the OS preempts in favour of another of the pool is not charged for the
-// wait. That clock is a system call: 930 ns per read on the 2-core VMs here (steady_clock, read
-// in user space, 39 ns), and a step at 2 threads reads it about 190 times: 0.09 ms of a 1.3 ms
-// step of 16000 circles on the critical path. With no more threads than cores no worker waits
-// for another of the pool, so the wall clock measures the same work; it is used there. One
-// worker needs no measurement at all: its bound is 1.
-//
-// A timed block also contains part of the two clock reads around it; for the thread clock that
-// is about a microsecond, as much as a small serial section's whole work (a solver colour of
-// one constraint). The runner measures the cost of a read once (the least of 32 back-to-back
-// differences) and subtracts it from every block, so the bound describes the stages' work, not
-// the measuring.
+// starts no more threads than cores, oneTBB's arena does), the thread's own CPU clock, so a
+// worker preempted in favour of another of the pool is not charged for the wait. That clock is
+// a system call: 930 ns a read on the 2-core VMs (steady_clock, read in user space, 39 ns), and
+// a step at 2 threads reads it about 190 times: 0.09 ms of a 1.3 ms step of 16000 circles on the
+// critical path. With no more threads than cores no worker waits for another of the pool, so
+// the wall clock measures the same work and is used. One worker needs no measurement: bound 1.
+// A timed block also holds part of the two clock reads around it (for the thread clock about a
+// microsecond, a small serial section's whole work): the runner measures a read once (the least
+// of 32 back-to-back differences) and subtracts it from every block.
 #pragma once
 
 #include <time.h>
@@ -156,9 +152,9 @@ class StageRunner {
   /// the threads claim as they go, for a pass whose items write nothing another item reads and
   /// that needs no per-block output. Why: For's static blocks (one a worker) finish apart by
   /// whatever their items, or their cores, differ in speed, and on these shared VMs one core often
-  /// runs slower for a while. The soft step's per-body passes (base-100 pyramid, 2 threads, traced
-  /// with rdtsc, 4 alternated runs; with BuildRows' region, the same in both): 153, 146, 134, 107
-  /// -> 122, 108, 129, 110 us a step: the gain where a core ran slow, the quietest pair equal.
+  /// runs slower for a while. The soft step's per-body passes (base-100 pyramid, 2 threads, 2-core
+  /// VM, rdtsc; BuildRows' region the same in both): 107-153 us a step with static blocks,
+  /// 108-129 us claimed dynamically: the gain where a core ran slow, the quietest case equal.
   template <class Fn>
   void Dynamic(Stage stage, int count, int minParallel, int grain, Fn&& fn) {
     const TaskSystem::StagePlan plan[1] = {{count, grain}};
@@ -188,8 +184,8 @@ class StageRunner {
     // is there first.
     const int items = 4 * Workers(), blocks = items - 1;
     // One item a claim (runs = false): in a run of two the thread that took alone() would also
-    // hold a block the others could have run meanwhile (circle stress 16000, 2 threads: the solve
-    // stage 0.138 -> 0.155 ms a step with runs, 11 interleaved rounds).
+    // hold a block the others could have run meanwhile (circle stress 16000, 2 threads, 2-core VM:
+    // the solve stage 0.138 ms a step, 0.155 ms with runs).
     const TaskSystem::StagePlan plan{items, 1, false};  // one stage: no list to allocate every step
     chunkMs_.assign(items, 0.0);
     tasks_.ParallelStages(1, &plan, [&](int, int b, int e, int) {

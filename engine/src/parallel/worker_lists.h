@@ -6,8 +6,8 @@
 // line on every push_back, and the line moves between the cores each time (false sharing). The
 // narrow phase's per-worker contact lists were such a pair: base-100 pyramid at 2 threads, the
 // narrow phase took 0.93 ms of thread time against 0.64 ms on one thread, and 0.64 ms with the
-// lists apart (narrow phase 0.48 -> 0.33 ms a step, the step 1.89 -> 1.51 ms; quiet machine
-// apart from niced builds, quadrant_bench --scenes pyramid --counts 5050 --threads 1,2).
+// lists apart (narrow phase 0.48 -> 0.33 ms a step, the step 1.89 -> 1.51 ms; 2-core VM,
+// quadrant_bench --scenes pyramid --counts 5050 --threads 1,2).
 #pragma once
 
 #include <cstddef>
