@@ -63,8 +63,10 @@ class PgsSolver final : public Solver {
     // Every iteration's colours in one region (ForEachColor): the same order of passes.
     graph_.ForEachColor(run, [&](int b, int e) { SolveVelocities<kRotation, kFriction>(bodies, invDt, b, e); },
                  def.velocityIterations);
-    run.For(Stage::kSolve, m, run.MinHeavyItems(),
-            [&](int b, int e, int) { constraints_.StoreImpulses(ctx.contacts, b, e); });
+    const Real maxSpeed2 = def.maxLinearSpeed * def.maxLinearSpeed;
+    run.For(Stage::kSolve, m, run.MinHeavyItems(), [&](int b, int e, int) {
+      constraints_.StoreImpulsesWithinSpeedLimit(ctx.contacts, bodies, maxSpeed2, b, e);
+    });
     auto t2 = Clock::now();
 
     const bool correct = def.positionIterations > 0 && m > 0;
