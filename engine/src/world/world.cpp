@@ -16,7 +16,7 @@
 #include "collision/pair_cache.h"
 #include "collision/queries.h"
 #include "quadrant/task_system.h"
-#include "parallel/quadrants_scheme.h"
+#include "world/quadrants_scheme.h"
 #include "quadrant/world.h"
 #include "dynamics/solver.h"
 #include "parallel/stage_clock.h"

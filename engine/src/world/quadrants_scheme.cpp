@@ -1,5 +1,5 @@
 // The thesis's data-partitioned step; see quadrants_scheme.h for the scheme.
-#include "parallel/quadrants_scheme.h"
+#include "world/quadrants_scheme.h"
 
 #include <algorithm>
 
