@@ -4,7 +4,7 @@
 // phase and on 1 and 2 threads. Any non-finite position, angle or velocity fails.
 //
 // Two rules keep them finite, and these cases fail without them: soft_step does not warm-start a
-// contact over its mass-ratio limit whose light body lost its support (solver_soft_step.cpp,
+// contact over its mass-ratio limit whose light body lost its support (soft_step_rows.cpp,
 // LaneEnds::kCold; without it 66 of 300 worlds went non-finite), and pgs keeps no warm start for a
 // contact with a body over the speed limit (ContactConstraints::StoreImpulsesWithinSpeedLimit;
 // without it 2 of 300 overflowed, squeezed between static and kinematic bodies).

@@ -1,5 +1,5 @@
 // Restitution in the iterative solvers (restitution_policy.h, contact_constraints.h ApplyCollisions,
-// solver_soft_step.cpp ApplyBox2dRestitution): the bounce and the friction that goes with it, for
+// soft_step_restitution.cpp ApplyBox2dRestitution): the bounce and the friction that goes with it, for
 // both policies on pgs and soft_step, on single hits without gravity whose answers are known.
 #include <gtest/gtest.h>
 

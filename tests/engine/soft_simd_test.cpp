@@ -100,7 +100,7 @@ TEST(SoftSimdTest, AvxEncodingGivesTheSameStateAsSse2WithOverlapAndBounces) {
 }
 
 // Free bodies (no contact row) are moved over the whole step four at a time (MoveFour in
-// solver_soft_step.cpp) or one at a time (MoveFree) with the same bits: bodies in the air next to
+// soft_step_state.cpp) or one at a time (MoveFree) with the same bits: bodies in the air next to
 // pairs that touch (so groups of four mix free bodies with bodies in rows, and a static one),
 // spinning fast enough that some turn by 0.5 rad or more in a step, one faster than the speed
 // limit, with damping and with sleep, 1 and 3 threads; 83 bodies, so the last group is partial.

@@ -137,7 +137,7 @@ enum class RestitutionPolicy : uint8_t {
   /// simultaneously with friction and the other rows. soft_step: vn is captured before the step's
   /// sub-steps (before their gravity), and rigid rows with that target and friction act after the
   /// first sub-step's relax pass, the bodies moving as if they had from its start
-  /// (solver_soft_step.cpp). pgs and soft_step (World refuses it with thesis). docs/validation.md
+  /// (engine/src/dynamics/soft_step_restitution.cpp). pgs and soft_step (World refuses it with thesis). docs/validation.md
   /// gives what it changes against Box2D and the analytic answer.
   kBox2d,
 };

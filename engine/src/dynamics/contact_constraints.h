@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "dynamics/constraint_graph.h"
+#include "dynamics/contact_ends.h"
 #include "dynamics/integrate.h"
 #include "dynamics/restitution_policy.h"
 #include "dynamics/solver.h"
@@ -153,20 +154,8 @@ class ContactConstraints {
     {
       const Contact& contact = ctx.contacts[contactIndex];
       cc.contact = contactIndex;
-      cc.a = contact.a;
-      cc.b = contact.b;
-      cc.normal = contact.manifold.normal;
-      cc.friction = contact.friction;
+      const Real skin = CopyContactEnds(contact, bodies, *ctx.def, kRotation, cc);
       cc.restitution = contact.restitution;
-      cc.invMassA = bodies.inv[cc.a].invMass;
-      cc.invMassB = bodies.inv[cc.b].invMass;
-      cc.invIA = kRotation ? bodies.inv[cc.a].invInertia : Real(0);
-      cc.invIB = kRotation ? bodies.inv[cc.b].invInertia : Real(0);
-      cc.pointCount = contact.manifold.pointCount;
-      // Shapes are read only with a skin: the quadrants scheme's private body copies carry none.
-      const Real skin = ctx.def->polygonSkin > 0 ? PolygonSkin(*ctx.def, bodies.shape[cc.a].type == ShapeType::kPolygon,
-                                                               bodies.shape[cc.b].type == ShapeType::kPolygon)
-                                                 : Real(0);
       const Vec2 n = cc.normal;
       const Vec2 t = RightPerp(n);
       for (int k = 0; k < cc.pointCount; ++k) {

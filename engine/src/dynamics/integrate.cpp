@@ -48,9 +48,7 @@ void IntegratePositionsImpl(Bodies& bodies, const WorldDef& def, Real dt, Real s
       if (bodies.type[i] == BodyType::kStatic) continue;
     }
     BodyVelocity& bv = bodies.vel[i];
-    const Real speed2 = LengthSquared(bv.v);
-    if (speed2 > maxSpeed2) bv.v = (def.maxLinearSpeed / std::sqrt(speed2)) * bv.v;
-    bv.w = std::clamp(bv.w, -maxAngularSpeed, maxAngularSpeed);
+    LimitSpeeds(bv.v, bv.w, maxSpeed2, def.maxLinearSpeed, maxAngularSpeed);
     bodies.center[i] += dt * bv.v;
     // Most bodies of frictionless scenes never spin: skip the renormalisation for them.
     if (rotation && bv.w != 0) bodies.xf[i].q = IntegrateRot(bodies.xf[i].q, dt * bv.w);

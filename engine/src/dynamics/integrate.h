@@ -3,6 +3,9 @@
 // made runs unrepeatable; the suite needs fixed steps.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
+
 #include "world/world_internal.h"
 
 namespace quadrant {
@@ -23,6 +26,14 @@ void IntegratePositions(Bodies& bodies, const WorldDef& def, Real dt, Real stepD
 
 /// The same for bodies [begin, end), on the calling thread.
 void IntegratePositionsRange(Bodies& bodies, const WorldDef& def, Real dt, int begin, int end);
+
+/// The numerical guards of a position step (as in Box2D): the speed limited to maxSpeed
+/// (maxSpeed2 its square) and the angular speed to maxAngularSpeed.
+inline void LimitSpeeds(Vec2& v, Real& w, Real maxSpeed2, Real maxSpeed, Real maxAngularSpeed) {
+  const Real speed2 = LengthSquared(v);
+  if (speed2 > maxSpeed2) v = (maxSpeed / std::sqrt(speed2)) * v;
+  w = std::clamp(w, -maxAngularSpeed, maxAngularSpeed);
+}
 
 /// Recomputes the origin transform of body i from its centre of mass and rotation.
 inline void SyncTransform(Bodies& bodies, int i) {

@@ -27,6 +27,7 @@
 #include <span>
 #include <vector>
 
+#include "dynamics/contact_ends.h"
 #include "dynamics/integrate.h"
 #include "dynamics/restitution_policy.h"
 #include "world/world_internal.h"
@@ -51,20 +52,9 @@ class JacobiSolve {
     for (int c = 0; c < m; ++c) {
       const Contact& contact = contacts[c];
       Row& r = rows_[c];
-      r.a = contact.a;
-      r.b = contact.b;
-      ++counts_[r.a];
-      ++counts_[r.b];
-      r.normal = contact.manifold.normal;
-      r.friction = contact.friction;
-      r.invMassA = bodies.inv[r.a].invMass;
-      r.invMassB = bodies.inv[r.b].invMass;
-      r.invIA = rotation ? bodies.inv[r.a].invInertia : Real(0);
-      r.invIB = rotation ? bodies.inv[r.b].invInertia : Real(0);
-      r.pointCount = contact.manifold.pointCount;
-      const Real skin = def.polygonSkin > 0 ? PolygonSkin(def, bodies.shape[r.a].type == ShapeType::kPolygon,
-                                                          bodies.shape[r.b].type == ShapeType::kPolygon)
-                                            : Real(0);
+      ++counts_[contact.a];
+      ++counts_[contact.b];
+      const Real skin = CopyContactEnds(contact, bodies, def, rotation, r);
       for (int k = 0; k < r.pointCount; ++k) {
         const ManifoldPoint& mp = contact.manifold.points[k];
         Point& p = r.points[k];

@@ -10,7 +10,7 @@
 // above the threshold a touching point's row targets -e vn. Speculative points keep their
 // speculative row (Box2D has none: it lets the bodies overlap and bounces a step later).
 // soft_step applies the same targets in rigid rows after its first sub-step's relax pass
-// (solver_soft_step.cpp, ApplyBox2dRestitution): with the skin, friction in each of four relax
+// (soft_step_restitution.cpp, ApplyBox2dRestitution): with the skin, friction in each of four relax
 // passes (softFrictionEveryRelaxPass) its p90 difference to Box2D is 0.69 %, 0.05 % against the
 // analytic impact (same campaign).
 // Measured on the random campaign (results/amd-epyc-2c/validation_random.md, 2000 hits, seed 17):

@@ -264,7 +264,7 @@ namespace rows4 {
 }  // namespace rows4
 
 #if QUADRANT_SOFT_SIMD
-// The four-body integration in solver_soft_step.cpp turns its bodies as the position pass does.
+// The four-body integration in soft_step_state.cpp turns its bodies as the position pass does.
 [[gnu::always_inline]] inline void TurnBy(F4& c, F4& s, F4 a) { rows4::TurnBy(c, s, a); }
 #endif
 

@@ -1,0 +1,256 @@
+// The soft step solver, declared for its parts: sub-stepping with soft contacts and relaxation
+// (Box2D 3's family; Catto, "Solver2D", 2024). Contacts are found once a step; each of N sub-steps
+// of h = dt/N applies gravity, warm starts, solves the rows softly (penetration pushed out at a
+// bounded speed), integrates positions and relaxes (the same rows without the push-out bias).
+// Many small steps converge where many iterations of one step do not (Macklin et al. 2019, "Small
+// steps in physics simulation"), which stacks and large mass ratios need.
+//
+// The parts, one role each, all of them members of SoftStepSolver:
+//   solver_soft_step.cpp       the step as a list of stages, and how the passes are scheduled;
+//   soft_step_rows.cpp         the contact rows, eight to a group per colour (BuildRows);
+//   soft_step_state.cpp        the solver state of the bodies: load, sub-step integration, store;
+//   soft_step_restitution.cpp  Box2D-style restitution and the bounce shifts on the states.
+// The scheduling templates every part uses (ForEachGroup, BodyPass) are here, inline.
+//
+// Promises: the same bits on any thread count and any row width (one row, four with SSE2, eight
+// with AVX: WorldDef::softSimd, SoftSimdTest). Measured: base-100 pyramid, 1 thread, 38.9M
+// instructions a step, from 80.9M before issue #13 moved the sub-steps onto 32-byte states and
+// row groups (docs/soft_step.md, docs/notes/soft_step.md).
+#pragma once
+
+#include <algorithm>
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <numbers>
+#include <span>
+#include <utility>
+#include <vector>
+
+#include "dynamics/constraint_graph.h"
+#include "dynamics/contact_constraints.h"
+#include "dynamics/soft_rows.h"
+#include "dynamics/solver.h"
+
+namespace quadrant {
+
+// How a contact of two dynamic bodies meets WorldDef::softMassRatioLimit this step: not at all
+// (plain), with the light body's masses scaled (limited), or over the ratio with the light body
+// unsupported, so unscaled (cold). A cold contact is not warm-started: an impulse built with the
+// scaled masses of an earlier step, applied to the light body's own, throws it (random extreme
+// worlds went non-finite within 30 steps: 66 of 300; none without that warm start).
+enum class LaneEnds : uint8_t { kPlain, kLimited, kCold };
+
+// Soft constraint coefficients for a spring of `hertz` and damping ratio `zeta` over step h:
+// the bias velocity is biasRate * C, and massScale / impulseScale soften the impulse.
+struct Softness {
+  Real biasRate = 0;
+  Real massScale = 1;
+  Real impulseScale = 0;
+};
+
+inline Softness MakeSoftness(Real hertz, Real zeta, Real h) {
+  if (hertz <= 0) return {};
+  const Real omega = 2 * std::numbers::pi_v<Real> * hertz;
+  const Real a1 = 2 * zeta + h * omega;
+  const Real a2 = h * omega * a1;
+  const Real a3 = Real(1) / (Real(1) + a2);
+  return {omega / a1, a2 * a3, a3};
+}
+
+class SoftStepSolver final : public Solver {
+ public:
+  const char* Name() const override { return "soft_step"; }
+  void Step(StepContext& ctx) override;
+
+ private:
+  struct StepPlan;  // what one step's stages share (solver_soft_step.cpp)
+
+  // The step (solver_soft_step.cpp).
+  template <bool kRotation, bool kFriction>
+  void Run(StepContext& ctx);
+  template <bool kRotation, bool kFriction>
+  void SolveContacts(StepContext& ctx, const StepPlan& step, double& integrateMs);
+  template <bool kRotation, bool kFriction>
+  void SubStep(StepContext& ctx, const StepPlan& step, int sub, const SoftSolveParams& prm,
+               const SoftSolveParams& lastPrm);
+  template <bool kRotation, bool kFriction>
+  void RelaxPasses(StageRunner& run, const WorldDef& def, bool simd, const SoftSolveParams& firstPrm,
+                   const SoftSolveParams& prm, bool storeLast);
+  template <bool kRotation, bool kFriction, RelaxBias kRelax, bool kStore = false>
+  void RelaxPass(StageRunner& run, bool simd, const SoftSolveParams& prm);
+  void StoreLaneImpulses(const SoftRowGroup& g, int begin, int end);
+  template <bool kRotation>
+  void CorrectStatePositions(StageRunner& run, const WorldDef& def, bool simd);
+  void StoreRowImpulses(StageRunner& run);
+
+  // The rows (soft_step_rows.cpp).
+  template <bool kRotation, bool kLean>
+  void BuildRows(StepContext& ctx, const Softness& soft, const Softness& staticSoft, Real massLimit);
+  void FillLeanGroup(const StepContext& ctx, SoftRowGroup& g, int first, int colorEnd, const Softness& soft,
+                     const Softness& staticSoft, Real massLimit);
+  template <bool kRotation>
+  void FillLeanLane(const StepContext& ctx, SoftRowGroup& g, int lane, int c, const Softness& soft,
+                    const Softness& staticSoft, Real massLimit);
+  template <bool kRotation>
+  LaneEnds FillLaneEnds(SoftRowGroup& g, int lane, int c, const Contact& contact, const Softness& soft,
+                    const Softness& staticSoft, Real massLimit);
+  void NextStamp(int bodyCount, bool supported);
+
+  // The colouring's gather calls this for a contact with dynamic ends a and b (-1 for an end that
+  // is not dynamic): inRows_ = 1 for every dynamic body in a row (LoadStates), and with kSupported
+  // supported_ = stamp_ for a dynamic body touching a static, kinematic or sleeping one
+  // (WorldDef::softMassRatioLimit acts only on those). Threads may set one flag at once, always to
+  // the same value: relaxed atomic stores, no data race. The stamp changes every step, so
+  // supported_ needs no clearing. Inline: the colouring calls it for every contact.
+  template <bool kSupported>
+  void MarkRow(int a, int b) {
+    if (a >= 0) std::atomic_ref<uint8_t>(inRows_[a]).store(1, std::memory_order_relaxed);
+    if (b >= 0) std::atomic_ref<uint8_t>(inRows_[b]).store(1, std::memory_order_relaxed);
+    if constexpr (kSupported) {
+      if (a >= 0 && b < 0) std::atomic_ref<uint32_t>(supported_[a]).store(stamp_, std::memory_order_relaxed);
+      if (b >= 0 && a < 0) std::atomic_ref<uint32_t>(supported_[b]).store(stamp_, std::memory_order_relaxed);
+    }
+  }
+
+  // The bodies' solver states (soft_step_state.cpp).
+  void LoadFixedStates(StageRunner& run, const Bodies& bodies, bool sleep);
+  void LoadStates(StageRunner& run, const Bodies& bodies);
+  void IntegrateStateVelocities(StageRunner& run, const Bodies& bodies, const WorldDef& def, Real h, Real dampDt);
+  void IntegrateStatePositions(StageRunner& run, const Bodies& bodies, const WorldDef& def, Real h, Real stepDt);
+  void MoveFreeBodies(Bodies& bodies, const WorldDef& def, Real dt, int b, int e);
+  void StoreRowStates(StageRunner& run, Bodies& bodies, const WorldDef& def);
+
+  // Restitution (soft_step_restitution.cpp).
+  template <bool kRotation, bool kFriction>
+  void ApplyBox2dRestitution(StageRunner& run, const WorldDef& def, Real h);
+  void ApplyStateBounceShifts(int begin, int end);
+
+  // Scheduling (solver_soft_step.cpp; the templates here). A sub-step's passes are one region:
+  // between BeginRegion and EndRegion ForEachGroup and BodyPass queue their passes as stages,
+  // and EndRegion runs them as one job; outside a region they run at once.
+  void BeginRegion();
+  void EndRegion(StageRunner& run);
+  void PlanPassStages();
+
+  // fn(lanes, group, lane): lanes is a Real (one row: the given lane), an F4 (the four rows from
+  // `lane`) or an F8Avx (the group's eight rows; kLaneWidth says how many). One stage per colour
+  // (PlanPassStages); the overflow colour's rows may share bodies: one at a time, in order, on
+  // one thread.
+  template <class Fn>
+  void ForEachGroup(StageRunner& run, bool simd, Fn&& fn) {
+    if (collecting_) {
+      QueueGroups(simd, std::forward<Fn>(fn));
+      return;
+    }
+    stagePlan_.clear();
+    stageFirst_.clear();
+    for (const StagePart& part : passStages_) {
+      stagePlan_.push_back({part.count, part.grain});
+      stageFirst_.push_back(part.first);
+    }
+    const int overflow = groupStart_[ConstraintGraph::kColors];
+    run.Stages(Stage::kSolve, stagePlan_, std::max(1, run.MinHeavyItems() / kGroupRows), [&](int s, int b, int e) {
+      RunGroups(simd && stageFirst_[s] < overflow, fn, stageFirst_[s] + b, stageFirst_[s] + e);
+    });
+  }
+
+  // Groups [gb, ge) eight rows at a time with AVX where vex_, else four (fourWide: two calls a
+  // group), or row by row (the scalar path, and the overflow colour).
+  template <class Fn>
+  void RunGroups(bool fourWide, Fn& fn, int gb, int ge) {
+#if QUADRANT_SOFT_SIMD
+    if (fourWide) {
+      if (vex_) {
+        for (int gi = gb; gi < ge; ++gi) fn(F8Avx{}, groups_[gi], 0);
+      } else {
+        for (int gi = gb; gi < ge; ++gi) {
+          fn(F4{}, groups_[gi], 0);
+          fn(F4{}, groups_[gi], kLanes);
+        }
+      }
+      return;
+    }
+#else
+    (void)fourWide;
+#endif
+    for (int gi = gb; gi < ge; ++gi) {
+      for (int lane = 0; lane < kGroupRows; ++lane) fn(Real{}, groups_[gi], lane);
+    }
+  }
+
+  // ForEachGroup's pass queued in the region: a stage per colour over absolute group indices.
+  // fn is kept by value; what it refers to must live until EndRegion.
+  template <class Fn>
+  void QueueGroups(bool simd, Fn fn) {
+    const int overflow = groupStart_[ConstraintGraph::kColors];
+    const int pass = static_cast<int>(regionFns_.size());
+    regionFns_.emplace_back(
+        [this, simd, fn, overflow](int gb, int ge) mutable { RunGroups(simd && gb < overflow, fn, gb, ge); });
+    for (const StagePart& part : passStages_) {
+      regionPlan_.push_back({part.count, part.grain});
+      regionFirst_.push_back(part.first);
+      regionPass_.push_back(pass);
+    }
+  }
+
+  // A pass fn(begin, end, block) over the bodies in rows (active_): run now, or queued as one
+  // stage of the region. A chunk of kBodyGrain bodies is a few microseconds of integration.
+  static constexpr int kBodyGrain = 256;
+  template <class Fn>
+  void BodyPass(StageRunner& run, Fn fn) {
+    const int count = ActiveCount();
+    if (count <= 0) return;
+    if (!collecting_) {
+      run.For(Stage::kIntegrate, count, run.MinItems(), fn);
+      return;
+    }
+    regionPass_.push_back(static_cast<int>(regionFns_.size()));
+    regionFns_.emplace_back([fn](int b, int e) { fn(b, e, 0); });
+    regionPlan_.push_back({count, kBodyGrain});
+    regionFirst_.push_back(0);
+  }
+
+  int ActiveCount() const { return static_cast<int>(active_.size()); }
+
+  // A stage of a pass over the rows (PlanPassStages): groups [first, first + count) in chunks of
+  // `grain`.
+  struct StagePart {
+    int first, count, grain;
+  };
+
+  // A flag any thread may set during a pass (the relax pass's deep points, the position pass's
+  // moved rows), alone in its cache line and stored only while still false: as a local of the
+  // caller's frame, each store took that line, with the caller's other locals, from the other core.
+  struct alignas(64) SharedFlag {
+    std::atomic<bool> flag{false};
+  };
+  SharedFlag deep_, moved_;
+
+  static constexpr int kFlagPad = 8;
+  std::vector<uint8_t> inRows_;  // per body (+ kFlagPad of padding): integrated by the sub-steps
+  bool collecting_ = false;      // between BeginRegion and EndRegion
+  std::vector<TaskSystem::StagePlan> regionPlan_;
+  std::vector<int> regionFirst_, regionPass_;
+  std::vector<std::function<void(int, int)>> regionFns_;
+  std::vector<int> active_;          // the bodies with inRows_ set, ascending
+  std::vector<uint32_t> supported_;  // MarkRow: stamp_ for a supported body this step
+  uint32_t stamp_ = 0;
+  Real collisionShare_ = 1;  // a sub-step's share of the step's collision impulses (Run says why)
+  std::vector<SolverBody> states_;
+  std::vector<SoftRowGroup> groups_;
+  bool vex_ = false;  // the rows eight-wide with AVX, the integration four-wide in AVX's encoding
+  std::span<Contact> contacts_;           // this step's
+  const BodyInverseMass* inv_ = nullptr;  // this step's bodies'
+  std::vector<RelaxBiasRows> relaxBias_;  // per group: the relax passes' speculative bias (RelaxBias)
+  std::vector<int> groupStart_;           // per colour: its first group (and one past the last colour)
+  std::vector<StagePart> passStages_;     // PlanPassStages
+  std::vector<TaskSystem::StagePlan> stagePlan_;  // BuildRows' and ForEachGroup's stages
+  std::vector<int> stageFirst_;                   // the first group of each of those stages
+  std::vector<Vec2> center0_;                     // LoadStates: where the rows' bodies start
+  std::vector<Rot> rot0_;
+  ConstraintGraph graph_;
+  ContactConstraints constraints_;  // kept only with restitution (Run: lean)
+};
+
+}  // namespace quadrant
