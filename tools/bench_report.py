@@ -171,14 +171,7 @@ class Results:
         return [x for x in v.split(",") if x] if isinstance(v, str) else []
 
     def _cores(self):
-        for key in ("cores", "num_cpus"):
-            try:
-                v = int(self.context.get(key))
-                if v > 0:
-                    return v
-            except (TypeError, ValueError):
-                pass
-        return None
+        return gbench_json.context_cores(self.context)
 
     def beyond_engine(self, engine, threads):
         """True when the run's context says the engine uses fewer than `threads` threads."""
@@ -206,26 +199,16 @@ SPREAD_LIMIT = 0.5
 # others_cpu, over each repetition's setup, warm-up and timed steps). The load average during
 # the run is not the test: it counts the run's own threads, so every quiet 3- and 4-thread run
 # on 2 cores would exceed the cores.
-OTHERS_LIMIT = 0.5
+OTHERS_LIMIT = gbench_json.OTHERS_LIMIT  # the rule is gbench_json's, shared with compare.py
 
 
 def busy_count(results):
-    try:
-        return int(results.context.get("busy_processes", 0))
-    except (TypeError, ValueError):
-        return 0
+    return gbench_json.busy_processes(results.context)
 
 
 def run_flags(results):
     """Reasons (strings) that make the whole run suspect."""
-    reasons = []
-    try:
-        before = float(results.context.get("load_avg_before"))
-    except (TypeError, ValueError):
-        before = None
-    if before is not None and results.cores and before > results.cores:
-        reasons.append(f"load average {before:.2f} before the run, above the {results.cores} cores")
-    return reasons
+    return gbench_json.run_load_problems(results.context)
 
 
 def flags(results):
