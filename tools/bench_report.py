@@ -12,8 +12,10 @@ Usage (run with Debian's interpreter, /usr/bin/python3, which sees python3-matpl
         validates the JSON's structure; exits 1 with a message naming the first problems
 
 Noise: a figure whose repetitions spread by more than 50 %, or measured while other processes
-used the machine (see flags()), is marked **noisy** in the tables and listed, and the plots'
-footers name it: such figures are not results.
+used the machine (see flags()), is marked **noisy** in every table (speed-ups and Quadrant/peer
+ratios included) and listed; speedup.md opens with how many there are (and with the run's own
+flag, a load average above the cores before it), the plots ring them and their footers count
+them: such figures are not results.
 
 Figures: for every benchmark <scene>/<engine>/n:<N>/threads:<T> the MEDIAN steps per second
 over its repetitions, computed here from the per-repetition rows (Google Benchmark's own
@@ -319,14 +321,58 @@ def ctx(results, key, default="unknown"):
     return default if v in (None, "") else v
 
 
+# A speed-up this much above the measured bound cannot come from the partition: noise.
+ABOVE_BOUND = 1.2
+
+
+def speedup_cell(speedup, bound):
+    """"1.22x (bound 1.83)", "4.00x (work on 1 thread; noise)": the speed-up and, where measured,
+    the bound it is read against (see the reading guide above the tables)."""
+    cell = f"{speedup:.2f}x"
+    if not bound:
+        return cell
+    noise = speedup > bound * ABOVE_BOUND
+    if bound < 1.05:
+        return cell + (" (work on 1 thread; noise)" if noise else " (work on 1 thread)")
+    return cell + f" (bound {bound:.2f}" + ("; noise)" if noise else ")")
+
+
+def warning_lines(results, flagged, busy=None):
+    """The report's first lines: what makes its figures unquotable, before any figure."""
+    lines = []
+    whole = run_flags(results)
+    if busy_count(results):
+        lines.append(f"> **Busy machine run**: {busy_count(results)} busy loop(s) ran beside every benchmark; "
+                     "these figures measure a loaded machine on purpose.")
+    if whole:
+        lines.append(f"> **Warning: every figure below is flagged**: {'; '.join(whole)}. They are not "
+                     "results: re-run on a quiet machine before quoting any of them.")
+    if flagged:
+        total = len(results.stats)
+        lines.append(f"> **Warning: {len(flagged)} of {total} benchmark figures are noisy** (repetitions spread "
+                     f"by more than {100 * SPREAD_LIMIT:.0f} %, or other processes used more than {OTHERS_LIMIT} "
+                     "cores): marked (**noisy**) in every table, the speed-ups and ratios included, and listed "
+                     "under 'Flagged' below.")
+    if busy is not None:
+        busy_flagged = flags(busy)
+        if busy_flagged or run_flags(busy):
+            lines.append(f"> **Warning: the busy-machine table has {len(busy_flagged)} noisy figure(s)**"
+                         + (f" and {'; '.join(run_flags(busy))}" if run_flags(busy) else "") + ".")
+    # One paragraph each (consecutive '>' lines would run together).
+    return [part for line in lines for part in (line, "")]
+
+
 def markdown(results, source, busy=None):
     c = results.context
     flagged = flags(results)
+    whole = run_flags(results)
     cores = results.cores
     lines = []
     out = lines.append
     out("# Steps per second and thread speed-up")
     out("")
+    for line in warning_lines(results, flagged, busy):
+        out(line)
     out(f"- machine: {ctx(results, 'machine', ctx(results, 'host_name'))}")
     out(f"- CPU: {ctx(results, 'cpu_model')}, cores: {cores if cores else 'unknown'}")
     out(f"- compiler: {ctx(results, 'compiler')}; build type {ctx(results, 'build_type')}; "
@@ -353,11 +399,7 @@ def markdown(results, source, busy=None):
         "(oversubscribed): their speed-ups are not parallel scaling (Quadrant's pool starts no more "
         "threads than cores: there its 3- and 4-block partitions run on the 2 threads). '-' means the engine does not "
         "run that many threads; 'n/a' means not run (unsupported or missing). "
-        "'bound' is Quadrant's measured load-balance bound at that thread count: the time "
-        "of all its stages (thread CPU time when more threads run than cores, wall time per block otherwise) over their critical path (largest block of each parallel section, "
-        "or the larger of its largest chunk and its even share for a solver colour "
-        "plus every serial section), i.e. the speed-up its partition allows with a core per thread; "
-        "on this machine it backs the oversubscribed figures. `quadrant` runs the default "
+        "`quadrant` runs the default "
         "deterministic scheme (bit-identical for any thread count), `quadrant (quadrants)` the "
         "thesis's quadrant partition.")
     for e in results.engines:
@@ -370,6 +412,18 @@ def markdown(results, source, busy=None):
 
     def over(t):
         return cores is not None and t > cores
+
+    if any(s.get("bound") for k, s in results.stats.items() if k[3] > 1):
+        out("Reading the speed-ups: '(bound B)' beside a speed-up is Quadrant's load-balance bound, "
+            "measured in this run: the time of all its stages over their critical path (largest block "
+            "of each parallel section plus every serial section), i.e. the speed-up its partition allows "
+            "with a core per thread; it backs the oversubscribed figures. It is shown only where it was "
+            "measured (Quadrant, 2 threads or more). '(work on 1 thread)' means the bound was 1.00: "
+            "the steps ran on one thread (the task system runs a step alone on a busy machine, or the "
+            "sections were too small to split), so that speed-up is not parallelism. A speed-up more "
+            f"than {100 * (ABOVE_BOUND - 1):.0f} % above its bound is marked 'noise': the partition "
+            "cannot give it, so one of the two runs was disturbed.")
+        out("")
 
     for scene in results.scenes:
         noun = SCENE_NOUNS.get(scene, "bodies")
@@ -401,11 +455,11 @@ def markdown(results, source, busy=None):
                         continue
                     s = results.get(scene, e, n, t)
                     if s and base:
-                        cell = f"{s['sps'] / base['sps']:.2f}x"
-                        if s.get("bound"):
-                            cell += f" (bound {s['bound']:.2f})"
+                        cell = speedup_cell(s["sps"] / base["sps"], s.get("bound"))
                         if over(t):
                             cell += " (oversubscribed)"
+                        if (scene, e, n, t) in flagged or (scene, e, n, 1) in flagged:
+                            cell += " (**noisy**)"
                     else:
                         cell = "-" if results.beyond_engine(e, t) else "n/a"
                     row.append(cell)
@@ -420,7 +474,10 @@ def markdown(results, source, busy=None):
         for q in quadrants:
             out(f"## {engine_title(q)} (1 thread) / peer (1 thread), steps-per-second ratio")
             out("")
-            out("Above 1: Quadrant steps faster than the peer.")
+            out("Above 1: Quadrant steps faster than the peer. A ratio of two figures either of which is "
+                "flagged is marked (**noisy**): not a result to quote.")
+            if whole:
+                out(f"**Every ratio here is flagged**: {'; '.join(whole)}.")
             out("")
             for scene in results.scenes:
                 out(f"### {scene}")
@@ -432,7 +489,9 @@ def markdown(results, source, busy=None):
                     cells = []
                     for p in peers:
                         ps = results.get(scene, p, n, 1)
-                        cells.append(f"{qs['sps'] / ps['sps']:.2f}" if qs and ps else "n/a")
+                        noisy = {(scene, q, n, 1), (scene, p, n, 1)} & set(flagged)
+                        cells.append(f"{qs['sps'] / ps['sps']:.2f}" + (" (**noisy**)" if noisy else "")
+                                     if qs and ps else "n/a")
                     out(f"| {n} | " + " | ".join(cells) + " |")
                 out("")
             # Best thread count within the cores, each engine at its best.
@@ -445,14 +504,17 @@ def markdown(results, source, busy=None):
                     out("|---:|" + "---:|" * len(peers))
                     for n in results.counts(scene):
                         def best(e):
-                            vals = [results.get(scene, e, n, t) for t in usable]
-                            vals = [v["sps"] for v in vals if v]
-                            return max(vals) if vals else None
-                        qb = best(q)
+                            """(steps/s, key) of the engine's best thread count, or (None, None)."""
+                            vals = [(results.get(scene, e, n, t), (scene, e, n, t)) for t in usable]
+                            vals = [(v["sps"], k) for v, k in vals if v]
+                            return max(vals) if vals else (None, None)
+                        qb, qk = best(q)
                         cells = []
                         for p in peers:
-                            pb = best(p)
-                            cells.append(f"{qb / pb:.2f}" if qb and pb else "n/a")
+                            pb, pk = best(p)
+                            noisy = {qk, pk} & set(flagged)
+                            cells.append(f"{qb / pb:.2f}" + (" (**noisy**)" if noisy else "")
+                                         if qb and pb else "n/a")
                         out(f"| {n} | " + " | ".join(cells) + " |")
                     out("")
 
