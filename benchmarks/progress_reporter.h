@@ -1,8 +1,12 @@
-// What quadrant_bench prints while it runs (issue 16): one short header and one line per
-// finished run with its result and an ETA, instead of Google Benchmark's console output (a
-// context dump with 5,000-character lines, the library's DEBUG warning unexplained, and a
-// 300-column table). Everything it leaves out is in the JSON (--benchmark_out), which Google
-// Benchmark writes through its own file reporter, untouched by this one.
+// What quadrant_bench prints while it runs (issue 16): one short header (ProgressReporter) and
+// one line per finished run with its result and an ETA (Progress), instead of Google Benchmark's
+// console output (a context dump with 5,000-character lines, the library's DEBUG warning
+// unexplained, and a 300-column table). Everything it leaves out is in the JSON
+// (--benchmark_out), which Google Benchmark writes through its own file reporter, untouched here.
+//
+// The run lines come from the suite's benchmark function as each repetition ends, not from
+// ReportRuns: Google Benchmark reports a benchmark only once its last repetition is done, so
+// under random interleaving most of a run went by before its first report (issue #29 item 3).
 #pragma once
 
 #include <benchmark/benchmark.h>
@@ -13,6 +17,8 @@
 #include <sstream>
 #include <string>
 #include <vector>
+
+#include "eta.h"
 
 namespace quadrant::bench {
 
@@ -31,7 +37,6 @@ class ProgressReporter : public benchmark::BenchmarkReporter {
   ProgressReporter(int total, std::string buildType) : total_(total), buildType_(std::move(buildType)) {}
 
   bool ReportContext(const Context& context) override {
-    start_ = std::chrono::steady_clock::now();
     const auto& cpu = context.cpu_info;
     std::string load;
     for (double l : cpu.load_avg) load += fmt::format("{}{:.2f}", load.empty() ? "" : " ", l);
@@ -51,33 +56,44 @@ class ProgressReporter : public benchmark::BenchmarkReporter {
     return true;
   }
 
-  void ReportRuns(const std::vector<Run>& runs) override {
-    for (const Run& run : runs) {
-      if (run.run_type == Run::RT_Aggregate) continue;  // medians, means: in the JSON
-      ++done_;
-      std::string result;
-      if (run.error_occurred) {
-        result = "ERROR " + run.error_message;
-      } else {
-        const auto ms = run.counters.find("ms_per_step");
-        result = ms != run.counters.end() ? fmt::format("{:.4g} ms/step", ms->second.value) : "no ms_per_step";
-      }
-      const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  /// Nothing: Progress prints a line per run as it ends (see the header comment).
+  void ReportRuns(const std::vector<Run>&) override {}
+
+ private:
+  int total_ = 0;
+  std::string buildType_;
+};
+
+/// One line per finished run on stderr: "[k/total] name: result (elapsed, ETA ...)", the ETA from
+/// the work the remaining runs imply (EtaModel, eta.h).
+class Progress {
+ public:
+  /// Adds `repetitions` runs of `run` to the plan (every registered benchmark, unless a filter
+  /// makes the total unknown: then Known(false), and lines carry no total or ETA).
+  void Plan(const RunSpec& run, int repetitions) { eta_.Plan(run, repetitions); }
+  void Known(bool known) { known_ = known; }
+  /// The clock of "elapsed" starts here (after registration, before the first run).
+  void Start() { start_ = std::chrono::steady_clock::now(); }
+
+  /// A run of `run` ended after `seconds` (setup, warm-up and timed steps) with `result`.
+  void Finished(const RunSpec& run, double seconds, const std::string& result) {
+    eta_.Finished(run, seconds);
+    const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+    const int done = eta_.Done(), total = eta_.Total();
+    if (known_ && total > 0) {
       std::string eta;
-      if (total_ > 0 && done_ < total_) eta = ", ETA " + Duration(elapsed / done_ * (total_ - done_));
-      if (total_ > 0)
-        std::fprintf(stderr, "[%d/%d] %s: %s (%s elapsed%s)\n", done_, total_, run.run_name.function_name.c_str(),
-                     result.c_str(), Duration(elapsed).c_str(), eta.c_str());
-      else
-        std::fprintf(stderr, "[%d] %s: %s\n", done_, run.run_name.function_name.c_str(), result.c_str());
+      if (done < total) eta = ", ETA " + Duration(std::max(0.0, eta_.RemainingSeconds()));
+      std::fprintf(stderr, "[%d/%d] %s: %s (%s elapsed%s)\n", done, total, run.Name().c_str(), result.c_str(),
+                   Duration(elapsed).c_str(), eta.c_str());
+    } else {
+      std::fprintf(stderr, "[%d] %s: %s\n", done, run.Name().c_str(), result.c_str());
     }
     std::fflush(stderr);
   }
 
  private:
-  int total_ = 0;
-  int done_ = 0;
-  std::string buildType_;
+  EtaModel eta_;
+  bool known_ = true;
   std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
 };
 

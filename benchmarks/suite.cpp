@@ -354,7 +354,13 @@ struct Job {
   std::string name;
 };
 
-void RunJob(benchmark::State& state, const Job& job) {
+quadrant::bench::RunSpec SpecOf(const Job& job) {
+  return {job.scene, job.engine, job.count, job.threads, job.steps, job.warmup};
+}
+
+/// One repetition of a job; returns what the progress line says of it ("7.1 ms/step", or the
+/// error).
+std::string RunJob(benchmark::State& state, const Job& job) {
   LoadProbe load;  // over the whole benchmark (setup, warm-up, timed steps): long enough to count
   load.Begin();
   // Setup, untimed, repeated for every repetition so that repetitions are independent.
@@ -367,8 +373,9 @@ void RunJob(benchmark::State& state, const Job& job) {
     adapter->Load(scene, job.threads);
     for (int i = 0; i < job.warmup; ++i) adapter->Step();
   } catch (const std::exception& e) {
-    state.SkipWithError(fmt::format("setup failed: {}", e.what()).c_str());
-    return;
+    const std::string error = fmt::format("setup failed: {}", e.what());
+    state.SkipWithError(error.c_str());
+    return "ERROR " + error;
   }
   const double memoryMb = memory.RssMb();
   const double heapMb = memory.HeapMb();
@@ -377,18 +384,20 @@ void RunJob(benchmark::State& state, const Job& job) {
   // as a plain counter (Google Benchmark prints an inverted rate with an "s" suffix, which
   // would mislabel milliseconds); it matches real_time / steps.
   double elapsedMs = 0;
+  std::string stepError;
   const auto stagesBefore = adapter->StageTotals();
   for (auto _ : state) {
     const auto t0 = std::chrono::steady_clock::now();
     try {
       for (int i = 0; i < job.steps; ++i) adapter->Step();
     } catch (const std::exception& e) {
-      state.SkipWithError(fmt::format("step failed: {}", e.what()).c_str());
+      stepError = fmt::format("step failed: {}", e.what());
+      state.SkipWithError(stepError.c_str());
       break;
     }
     elapsedMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   }
-  if (state.error_occurred()) return;
+  if (state.error_occurred()) return "ERROR " + stepError;
   const double othersCores = load.OthersCores();
 
   using benchmark::Counter;
@@ -434,7 +443,11 @@ void RunJob(benchmark::State& state, const Job& job) {
     state.counters["balance_bound"] = Counter(1.0);
   }
   state.SetLabel(fmt::format("{:016x}", adapter->StateHash()));
+  return fmt::format("{:.4g} ms/step", elapsedMs / double(job.steps));
 }
+
+// The progress lines: one per repetition as it ends, with the ETA (progress_reporter.h, eta.h).
+quadrant::bench::Progress progress;
 
 }  // namespace
 
@@ -539,12 +552,21 @@ int main(int argc, char** argv) {
               ++unsupportedReasons[reason];
               continue;
             }
-            benchmark::RegisterBenchmark(
-                job.name.c_str(), [job](benchmark::State& state) { RunJob(state, job); })
+            benchmark::RegisterBenchmark(job.name.c_str(),
+                                         [job](benchmark::State& state) {
+                                           const auto t0 = std::chrono::steady_clock::now();
+                                           const std::string result = RunJob(state, job);
+                                           progress.Finished(SpecOf(job),
+                                                             std::chrono::duration<double>(
+                                                                 std::chrono::steady_clock::now() - t0)
+                                                                 .count(),
+                                                             result);
+                                         })
                 ->Iterations(1)
                 ->UseRealTime()
                 ->Unit(benchmark::kMillisecond);
             ++registered;
+            progress.Plan(SpecOf(job), repetitions);
           }
         }
       }
@@ -608,10 +630,13 @@ int main(int argc, char** argv) {
                  unsupported.size(), unsupportedSummary.c_str());
     return 2;
   }
-  // Progress on stderr, one line per finished run with an ETA (progress_reporter.h); the JSON
-  // file reporter (--benchmark_out) is Google Benchmark's own.
-  quadrant::bench::ProgressReporter progress(filtered ? 0 : registered * repetitions, QUADRANT_BUILD_TYPE);
-  benchmark::RunSpecifiedBenchmarks(&progress);
+  // Progress on stderr: the header here, one line per finished run with an ETA from the
+  // benchmark function (Progress, progress_reporter.h); the JSON file reporter (--benchmark_out)
+  // is Google Benchmark's own.
+  progress.Known(!filtered);
+  progress.Start();
+  quadrant::bench::ProgressReporter header(filtered ? 0 : registered * repetitions, QUADRANT_BUILD_TYPE);
+  benchmark::RunSpecifiedBenchmarks(&header);
   benchmark::Shutdown();
   return errors.empty() ? 0 : 1;
 }

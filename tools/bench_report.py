@@ -12,8 +12,10 @@ Usage (run with Debian's interpreter, /usr/bin/python3, which sees python3-matpl
         validates the JSON's structure; exits 1 with a message naming the first problems
 
 Noise: a figure whose repetitions spread by more than 50 %, or measured while other processes
-used the machine (see flags()), is marked **noisy** in the tables and listed, and the plots'
-footers name it: such figures are not results.
+used the machine (see flags()), is marked **noisy** in every table (speed-ups and Quadrant/peer
+ratios included) and listed; speedup.md opens with how many there are (and with the run's own
+flag, a load average above the cores before it), the plots ring them and their footers count
+them: such figures are not results.
 
 Figures: for every benchmark <scene>/<engine>/n:<N>/threads:<T> the MEDIAN steps per second
 over its repetitions, computed here from the per-repetition rows (Google Benchmark's own
@@ -171,14 +173,7 @@ class Results:
         return [x for x in v.split(",") if x] if isinstance(v, str) else []
 
     def _cores(self):
-        for key in ("cores", "num_cpus"):
-            try:
-                v = int(self.context.get(key))
-                if v > 0:
-                    return v
-            except (TypeError, ValueError):
-                pass
-        return None
+        return gbench_json.context_cores(self.context)
 
     def beyond_engine(self, engine, threads):
         """True when the run's context says the engine uses fewer than `threads` threads."""
@@ -206,26 +201,16 @@ SPREAD_LIMIT = 0.5
 # others_cpu, over each repetition's setup, warm-up and timed steps). The load average during
 # the run is not the test: it counts the run's own threads, so every quiet 3- and 4-thread run
 # on 2 cores would exceed the cores.
-OTHERS_LIMIT = 0.5
+OTHERS_LIMIT = gbench_json.OTHERS_LIMIT  # the rule is gbench_json's, shared with compare.py
 
 
 def busy_count(results):
-    try:
-        return int(results.context.get("busy_processes", 0))
-    except (TypeError, ValueError):
-        return 0
+    return gbench_json.busy_processes(results.context)
 
 
 def run_flags(results):
     """Reasons (strings) that make the whole run suspect."""
-    reasons = []
-    try:
-        before = float(results.context.get("load_avg_before"))
-    except (TypeError, ValueError):
-        before = None
-    if before is not None and results.cores and before > results.cores:
-        reasons.append(f"load average {before:.2f} before the run, above the {results.cores} cores")
-    return reasons
+    return gbench_json.run_load_problems(results.context)
 
 
 def flags(results):
@@ -336,14 +321,58 @@ def ctx(results, key, default="unknown"):
     return default if v in (None, "") else v
 
 
+# A speed-up this much above the measured bound cannot come from the partition: noise.
+ABOVE_BOUND = 1.2
+
+
+def speedup_cell(speedup, bound):
+    """"1.22x (bound 1.83)", "4.00x (work on 1 thread; noise)": the speed-up and, where measured,
+    the bound it is read against (see the reading guide above the tables)."""
+    cell = f"{speedup:.2f}x"
+    if not bound:
+        return cell
+    noise = speedup > bound * ABOVE_BOUND
+    if bound < 1.05:
+        return cell + (" (work on 1 thread; noise)" if noise else " (work on 1 thread)")
+    return cell + f" (bound {bound:.2f}" + ("; noise)" if noise else ")")
+
+
+def warning_lines(results, flagged, busy=None):
+    """The report's first lines: what makes its figures unquotable, before any figure."""
+    lines = []
+    whole = run_flags(results)
+    if busy_count(results):
+        lines.append(f"> **Busy machine run**: {busy_count(results)} busy loop(s) ran beside every benchmark; "
+                     "these figures measure a loaded machine on purpose.")
+    if whole:
+        lines.append(f"> **Warning: every figure below is flagged**: {'; '.join(whole)}. They are not "
+                     "results: re-run on a quiet machine before quoting any of them.")
+    if flagged:
+        total = len(results.stats)
+        lines.append(f"> **Warning: {len(flagged)} of {total} benchmark figures are noisy** (repetitions spread "
+                     f"by more than {100 * SPREAD_LIMIT:.0f} %, or other processes used more than {OTHERS_LIMIT} "
+                     "cores): marked (**noisy**) in every table, the speed-ups and ratios included, and listed "
+                     "under 'Flagged' below.")
+    if busy is not None:
+        busy_flagged = flags(busy)
+        if busy_flagged or run_flags(busy):
+            lines.append(f"> **Warning: the busy-machine table has {len(busy_flagged)} noisy figure(s)**"
+                         + (f" and {'; '.join(run_flags(busy))}" if run_flags(busy) else "") + ".")
+    # One paragraph each (consecutive '>' lines would run together).
+    return [part for line in lines for part in (line, "")]
+
+
 def markdown(results, source, busy=None):
     c = results.context
     flagged = flags(results)
+    whole = run_flags(results)
     cores = results.cores
     lines = []
     out = lines.append
     out("# Steps per second and thread speed-up")
     out("")
+    for line in warning_lines(results, flagged, busy):
+        out(line)
     out(f"- machine: {ctx(results, 'machine', ctx(results, 'host_name'))}")
     out(f"- CPU: {ctx(results, 'cpu_model')}, cores: {cores if cores else 'unknown'}")
     out(f"- compiler: {ctx(results, 'compiler')}; build type {ctx(results, 'build_type')}; "
@@ -370,11 +399,7 @@ def markdown(results, source, busy=None):
         "(oversubscribed): their speed-ups are not parallel scaling (Quadrant's pool starts no more "
         "threads than cores: there its 3- and 4-block partitions run on the 2 threads). '-' means the engine does not "
         "run that many threads; 'n/a' means not run (unsupported or missing). "
-        "'bound' is Quadrant's measured load-balance bound at that thread count: the time "
-        "of all its stages (thread CPU time when more threads run than cores, wall time per block otherwise) over their critical path (largest block of each parallel section, "
-        "or the larger of its largest chunk and its even share for a solver colour "
-        "plus every serial section), i.e. the speed-up its partition allows with a core per thread; "
-        "on this machine it backs the oversubscribed figures. `quadrant` runs the default "
+        "`quadrant` runs the default "
         "deterministic scheme (bit-identical for any thread count), `quadrant (quadrants)` the "
         "thesis's quadrant partition.")
     for e in results.engines:
@@ -387,6 +412,18 @@ def markdown(results, source, busy=None):
 
     def over(t):
         return cores is not None and t > cores
+
+    if any(s.get("bound") for k, s in results.stats.items() if k[3] > 1):
+        out("Reading the speed-ups: '(bound B)' beside a speed-up is Quadrant's load-balance bound, "
+            "measured in this run: the time of all its stages over their critical path (largest block "
+            "of each parallel section plus every serial section), i.e. the speed-up its partition allows "
+            "with a core per thread; it backs the oversubscribed figures. It is shown only where it was "
+            "measured (Quadrant, 2 threads or more). '(work on 1 thread)' means the bound was 1.00: "
+            "the steps ran on one thread (the task system runs a step alone on a busy machine, or the "
+            "sections were too small to split), so that speed-up is not parallelism. A speed-up more "
+            f"than {100 * (ABOVE_BOUND - 1):.0f} % above its bound is marked 'noise': the partition "
+            "cannot give it, so one of the two runs was disturbed.")
+        out("")
 
     for scene in results.scenes:
         noun = SCENE_NOUNS.get(scene, "bodies")
@@ -418,11 +455,11 @@ def markdown(results, source, busy=None):
                         continue
                     s = results.get(scene, e, n, t)
                     if s and base:
-                        cell = f"{s['sps'] / base['sps']:.2f}x"
-                        if s.get("bound"):
-                            cell += f" (bound {s['bound']:.2f})"
+                        cell = speedup_cell(s["sps"] / base["sps"], s.get("bound"))
                         if over(t):
                             cell += " (oversubscribed)"
+                        if (scene, e, n, t) in flagged or (scene, e, n, 1) in flagged:
+                            cell += " (**noisy**)"
                     else:
                         cell = "-" if results.beyond_engine(e, t) else "n/a"
                     row.append(cell)
@@ -437,7 +474,10 @@ def markdown(results, source, busy=None):
         for q in quadrants:
             out(f"## {engine_title(q)} (1 thread) / peer (1 thread), steps-per-second ratio")
             out("")
-            out("Above 1: Quadrant steps faster than the peer.")
+            out("Above 1: Quadrant steps faster than the peer. A ratio of two figures either of which is "
+                "flagged is marked (**noisy**): not a result to quote.")
+            if whole:
+                out(f"**Every ratio here is flagged**: {'; '.join(whole)}.")
             out("")
             for scene in results.scenes:
                 out(f"### {scene}")
@@ -449,7 +489,9 @@ def markdown(results, source, busy=None):
                     cells = []
                     for p in peers:
                         ps = results.get(scene, p, n, 1)
-                        cells.append(f"{qs['sps'] / ps['sps']:.2f}" if qs and ps else "n/a")
+                        noisy = {(scene, q, n, 1), (scene, p, n, 1)} & set(flagged)
+                        cells.append(f"{qs['sps'] / ps['sps']:.2f}" + (" (**noisy**)" if noisy else "")
+                                     if qs and ps else "n/a")
                     out(f"| {n} | " + " | ".join(cells) + " |")
                 out("")
             # Best thread count within the cores, each engine at its best.
@@ -462,14 +504,17 @@ def markdown(results, source, busy=None):
                     out("|---:|" + "---:|" * len(peers))
                     for n in results.counts(scene):
                         def best(e):
-                            vals = [results.get(scene, e, n, t) for t in usable]
-                            vals = [v["sps"] for v in vals if v]
-                            return max(vals) if vals else None
-                        qb = best(q)
+                            """(steps/s, key) of the engine's best thread count, or (None, None)."""
+                            vals = [(results.get(scene, e, n, t), (scene, e, n, t)) for t in usable]
+                            vals = [(v["sps"], k) for v, k in vals if v]
+                            return max(vals) if vals else (None, None)
+                        qb, qk = best(q)
                         cells = []
                         for p in peers:
-                            pb = best(p)
-                            cells.append(f"{qb / pb:.2f}" if qb and pb else "n/a")
+                            pb, pk = best(p)
+                            noisy = {qk, pk} & set(flagged)
+                            cells.append(f"{qb / pb:.2f}" + (" (**noisy**)" if noisy else "")
+                                         if qb and pb else "n/a")
                         out(f"| {n} | " + " | ".join(cells) + " |")
                     out("")
 
@@ -533,114 +578,203 @@ def markdown(results, source, busy=None):
 
 # ---- Plots -----------------------------------------------------------------------------------
 
-def plot_footer(results, engines, scene=None):
-    """What the figure shows and where it comes from; notes only for the engines drawn; the
-    noise flags of the run and of the scene's points."""
-    notes = []
-    if any(plot_style.canonical(e) == "bullet" for e in engines):
-        notes.append("Bullet serial (Debian builds it without BT_THREADSAFE)")
-    if any(plot_style.canonical(e) == "box2d" for e in engines):
-        notes.append("Box2D 2.4.1 single-threaded")
+# A figure per scene: one panel per thread count (small multiples: with 1-4 threads x 5 engines
+# x min-max bands in one axes the lines tangled), one legend above the panels, flagged points
+# ringed with one legend entry, and a one-line footer in a margin of its own below the axis title
+# (it used to list every flagged point, 51 on the circles plot, over the axis numbers and title).
+# layout_problems() checks that no text overlaps another; tests/tools/plot_layout_test.py runs it.
+
+FOOTER_FONTSIZE = 7
+
+
+def plot_footer(results, scene=None):
+    """One line: where the figure comes from, and what is flagged (the list is in speedup.md)."""
     reps = sorted({st["reps"] for st in results.stats.values()})
     busy = busy_count(results)
-    busy_note = (f"BUSY MACHINE: {busy} busy loop{'s' if busy != 1 else ''} of the run's own beside every benchmark. "
-                 if busy else "")
-    return (busy_note + f"Median steps per second over {'/'.join(map(str, reps)) or '?'} repetitions per point, band: min-max; "
-            f"engines: {', '.join(engines)}. "
-            f"Machine {ctx(results, 'machine', ctx(results, 'host_name'))} ({ctx(results, 'cpu_model')}, "
-            f"{results.cores or '?'} cores); commit {ctx(results, 'commit')}; {ctx(results, 'steps')} steps "
-            f"after {ctx(results, 'warmup')} warm-up; {ctx(results, 'date')}."
-            + (" " + "; ".join(notes) + "." if notes else "")
-            + flag_footer(results, scene))
+    parts = [f"{ctx(results, 'machine', ctx(results, 'host_name'))} ({ctx(results, 'cpu_model')}, "
+             f"{results.cores or '?'} cores)", f"commit {ctx(results, 'commit')}", str(ctx(results, "date"))[:10],
+             f"{ctx(results, 'steps')} steps after {ctx(results, 'warmup')} warm-up",
+             f"median of {'/'.join(map(str, reps)) or '?'} repetitions"]
+    if busy:
+        parts.append(f"BUSY: {busy} busy loop{'s' if busy != 1 else ''} beside the run")
+    flagged = flag_summary(results, scene)
+    if flagged:
+        parts.append("FLAGGED: " + flagged + "; see speedup.md")
+    return "  \u00b7  ".join(parts)
 
 
-def flag_footer(results, scene):
-    noisy = sorted(k for k in flags(results) if scene is None or k[0] == scene)
-    whole = run_flags(results)
-    if not whole and not noisy:
-        return ""
-    parts = list(whole)
+def flag_summary(results, scene):
+    """"12 noisy points (ringed), load 5.63 before the run > 2 cores", or ""."""
+    noisy = [k for k in flags(results) if scene is None or k[0] == scene]
+    parts = []
     if noisy:
-        parts.append(f"{len(noisy)} noisy point(s) (spread > {100 * SPREAD_LIMIT:.0f} % or other load): "
-                     + ", ".join(f"{k[1]} n={k[2]} {k[3]}T" for k in noisy))
-    return " FLAGGED: " + "; ".join(parts) + "; see speedup.md."
+        parts.append(f"{len(noisy)} noisy point{'s' if len(noisy) != 1 else ''} (ringed)")
+    try:
+        before = float(results.context.get("load_avg_before"))
+    except (TypeError, ValueError):
+        before = None
+    if run_flags(results) and before is not None:
+        parts.append(f"load {before:.2f} before the run > {results.cores} cores")
+    return ", ".join(parts)
+
+
+def panel_grid(n):
+    """(rows, columns) of the small multiples for n thread counts."""
+    if n <= 3:
+        return 1, n
+    if n == 4:
+        return 2, 2
+    return (n + 2) // 3, 3
+
+
+def layout_problems(fig):
+    """Pairs of texts or boxes of a drawn figure that overlap, or that leave the figure: the
+    suptitle, legends, axes (with their tick labels and titles), axis labels and footer."""
+    renderer = fig.canvas.get_renderer()
+    boxes = []
+    for i, ax in enumerate(fig.axes):
+        if ax.get_visible():
+            boxes.append((f"panel {i + 1}", ax.get_tightbbox(renderer)))
+    for legend in fig.legends:
+        boxes.append(("legend", legend.get_window_extent(renderer)))
+    for text in fig.texts:  # the suptitle, supxlabel, supylabel and footer among them
+        if text.get_text():
+            boxes.append((f"text {text.get_text()[:30]!r}", text.get_window_extent(renderer)))
+    problems = []
+    fig_box = fig.bbox
+    for name, box in boxes:
+        if box.x0 < fig_box.x0 - 1 or box.y0 < fig_box.y0 - 1 or box.x1 > fig_box.x1 + 1 or box.y1 > fig_box.y1 + 1:
+            problems.append(f"{name} leaves the figure")
+    for i in range(len(boxes)):
+        for j in range(i + 1, len(boxes)):
+            (a, ba), (b, bb) = boxes[i], boxes[j]
+            if a.startswith("panel") and b.startswith("panel"):
+                continue  # shared axes: neighbours' boxes touch by design
+            if ba.overlaps(bb):
+                problems.append(f"{a} overlaps {b}")
+    return problems
 
 
 def plot_scene(results, scene, path):
+    """Draws fps_<scene>.png; returns layout_problems() of the figure (empty when it is clean)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.ticker import FixedLocator, FuncFormatter, LogLocator, NullFormatter
 
-    fig, ax = plt.subplots(figsize=(9, 6.2), dpi=110)
-    drawn_engines, drawn_threads = [], []
-    for e in results.engines:
-        colour, marker, _ = plot_style.style(e)
-        for t in results.threads:
-            stats = [(n, results.get(scene, e, n, t)) for n in results.counts(scene)]
+    flagged = flags(results)
+    threads = [t for t in results.threads if any(results.get(scene, e, n, t) for e in results.engines
+                                                  for n in results.counts(scene))] or [1]
+    rows, cols = panel_grid(len(threads))
+    # Margins in inches, so the footer and legend keep their room whatever the panel count.
+    width = 4.2 * cols + 1.0
+    # The legend: the engines drawn, the band and (if any) the noisy ring, in rows of legend_cols.
+    legend_cols = 4 if width >= 10 else 3
+    legend_entries = len([e for e in results.engines if any(results.get(scene, e, n, t)
+                                                              for n in results.counts(scene) for t in threads)])
+    legend_entries += 1 + any(k[0] == scene for k in flagged)
+    legend_rows = -(-legend_entries // legend_cols)
+    top_in, bottom_in, left_in, right_in = 0.72 + 0.16 * legend_rows, 0.8, 0.95, 0.2
+    height = 3.2 * rows + top_in + bottom_in
+    fig, axes = plt.subplots(rows, cols, figsize=(width, height), dpi=110, sharex=True, sharey=True,
+                             squeeze=False)
+    fig.subplots_adjust(left=left_in / width, right=1 - right_in / width, bottom=bottom_in / height,
+                        top=1 - top_in / height, wspace=0.08, hspace=0.22)
+    counts = results.counts(scene)
+    drawn_engines, any_flag = [], False
+    for idx, ax in enumerate(axes.flat):
+        if idx >= len(threads):
+            ax.set_visible(False)
+            continue
+        t = threads[idx]
+        over = results.cores is not None and t > results.cores
+        not_here = []
+        for e in results.engines:
+            colour, marker, _ = plot_style.style(e)
+            stats = [(n, results.get(scene, e, n, t)) for n in counts]
             stats = [(n, st) for n, st in stats if st]
             if not stats:
+                if any(results.get(scene, e, n, 1) for n in counts):
+                    not_here.append(e)
                 continue
             xs = [n for n, _ in stats]
-            over = results.cores is not None and t > results.cores
-            alpha = 0.55 if over else 1.0
-            ax.plot(xs, [st["sps"] for _, st in stats], marker=marker, linestyle=plot_style.thread_style(t),
-                    color=colour, markersize=4.5, linewidth=1.4, alpha=alpha)
-            # The spread over repetitions: min to max steps per second.
+            ax.plot(xs, [st["sps"] for _, st in stats], marker=marker, color=colour, markersize=4.5,
+                    linewidth=1.4)
             if any(st["reps"] > 1 for _, st in stats):
                 ax.fill_between(xs, [st["min"] for _, st in stats], [st["max"] for _, st in stats],
-                                color=colour, alpha=0.12 * alpha, linewidth=0)
+                                color=colour, alpha=0.12, linewidth=0)
+            noisy = [(n, st["sps"]) for n, st in stats if (scene, e, n, t) in flagged]
+            if noisy:
+                any_flag = True
+                ax.scatter([n for n, _ in noisy], [v for _, v in noisy], s=110, facecolors="none",
+                           edgecolors="black", linewidths=1.1, zorder=5)
             if e not in drawn_engines:
                 drawn_engines.append(e)
-            if t not in drawn_threads:
-                drawn_threads.append(t)
-    ax.set_xscale("log")
-    ax.set_yscale("log")
+        title = f"{t} thread{'s' if t != 1 else ''}"
+        if over:
+            title += f" (oversubscribed: {results.cores} cores)"
+        ax.set_title(title, fontsize=9.5)
+        if not_here:
+            ax.text(0.02, 0.02, "not run at " + title.split(" (")[0] + ": "
+                    + ", ".join(plot_style.style(e)[2].split(" (")[0] for e in not_here),
+                    transform=ax.transAxes, fontsize=7, color="dimgray", ha="left", va="bottom")
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.grid(True, which="major", linestyle="-", alpha=0.4)
+        ax.grid(True, which="minor", linestyle=":", alpha=0.25)
+        ax.tick_params(labelsize=8)
+    ax0 = axes.flat[0]
+    # Labels at 1, 2 and 5 per decade: a plot spanning less than a decade still gets several.
+    ax0.yaxis.set_major_locator(LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
+    ax0.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+    ax0.yaxis.set_minor_formatter(NullFormatter())
+    if counts:
+        ax0.xaxis.set_major_locator(FixedLocator(counts))
+        ax0.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+        ax0.xaxis.set_minor_locator(FixedLocator([]))
+        ax0.xaxis.set_minor_formatter(NullFormatter())
+        if len(counts) == 1:
+            ax0.set_xlim(counts[0] / 1.5, counts[0] * 1.5)
+        else:
+            ax0.set_xlim(counts[0] / 1.15, counts[-1] * 1.15)
     noun = SCENE_NOUNS.get(scene, "bodies")
     title = f"Steps per second vs number of {noun}"
     fig_ref = THESIS_FIGURES.get(scene)
-    busy = busy_count(results)
     title += f" ({scene}; cf. thesis {fig_ref})" if fig_ref else f" ({scene})"
+    busy = busy_count(results)
     if busy:
-        title += f"\nbusy machine: {busy} busy process{'es' if busy != 1 else ''} beside the run"
-    ax.set_title(title)
-    ax.set_xlabel(f"number of {noun} (N)")
-    ax.set_ylabel("steps per second (median over repetitions, band: min-max)")
-    ax.grid(True, which="major", linestyle="-", alpha=0.4)
-    ax.grid(True, which="minor", linestyle=":", alpha=0.25)
-    from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
-
-    # Labels at 1, 2 and 5 per decade: a plot spanning less than a decade still gets several.
-    ax.yaxis.set_major_locator(LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
-    ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
-    ax.yaxis.set_minor_formatter(NullFormatter())
-    counts = results.counts(scene)
-    if counts:
-        from matplotlib.ticker import FixedLocator
-
-        ax.xaxis.set_major_locator(FixedLocator(counts))
-        ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
-        ax.xaxis.set_minor_formatter(NullFormatter())
+        title += f"; BUSY MACHINE: {busy} busy process{'es' if busy != 1 else ''} beside the run"
+    fig.suptitle(title, fontsize=11, y=1 - 0.1 / height, va="top")
+    fig.supxlabel(f"number of {noun} (N)", fontsize=9, y=0.28 / height, va="bottom")
+    fig.supylabel("steps per second (median over repetitions)", fontsize=9, x=0.08 / width, ha="left")
+    handles = [plt.Line2D([], [], color=plot_style.style(e)[0], marker=plot_style.style(e)[1],
+                          linestyle="-", label=plot_style.style(e)[2]) for e in drawn_engines]
+    handles.append(matplotlib.patches.Patch(color="gray", alpha=0.25, label="min-max over repetitions"))
+    if any_flag:
+        handles.append(plt.Line2D([], [], marker="o", markersize=9, markerfacecolor="none",
+                                  markeredgecolor="black", linestyle="none",
+                                  label="noisy (spread > 50 % or other load; speedup.md)"))
     if drawn_engines:
-        # Two small legends instead of one entry per line: colour = engine, line style = threads.
-        engine_handles = [plt.Line2D([], [], color=plot_style.style(e)[0], marker=plot_style.style(e)[1],
-                                     linestyle="-", label=plot_style.style(e)[2]) for e in drawn_engines]
-        thread_handles = []
-        for t in sorted(drawn_threads):
-            over = results.cores is not None and t > results.cores
-            thread_handles.append(plt.Line2D([], [], color="black", linestyle=plot_style.thread_style(t),
-                                             alpha=0.55 if over else 1.0,
-                                             label=f"{t} thread{'s' if t > 1 else ''}"
-                                                   + (" (oversubscribed)" if over else "")))
-        first = ax.legend(handles=engine_handles, fontsize=8, loc="lower left", title="engine", title_fontsize=8)
-        ax.add_artist(first)
-        ax.legend(handles=thread_handles, fontsize=8, loc="upper right", title="engine threads", title_fontsize=8)
+        fig.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, 1 - 0.42 / height),
+                   ncol=legend_cols, fontsize=7.5, frameon=False,
+                   columnspacing=1.2, handlelength=2.0)
     else:
-        ax.text(0.5, 0.5, "no data", transform=ax.transAxes, ha="center")
-    fig.text(0.01, 0.01, plot_footer(results, drawn_engines, scene), fontsize=6.5, ha="left", va="bottom", wrap=True)
-    fig.tight_layout(rect=(0, 0.05, 1, 1))
+        ax0.text(0.5, 0.5, "no data", transform=ax0.transAxes, ha="center")
+    footer = fig.text(0.5 * left_in / width, 0.08 / height, plot_footer(results, scene),
+                      fontsize=FOOTER_FONTSIZE, ha="left", va="bottom",
+                      color="black" if flag_summary(results, scene) else "dimgray")
+    # One line that fits: smaller type for a long one rather than a second line over the axes.
+    fig.canvas.draw()
+    room = fig.bbox.width * (1 - left_in / width)
+    wide = footer.get_window_extent(fig.canvas.get_renderer()).width
+    if wide > room:
+        footer.set_fontsize(max(5.0, FOOTER_FONTSIZE * room / wide * 0.98))
+    fig.canvas.draw()
+    problems = layout_problems(fig)
     fig.savefig(path)
     plt.close(fig)
+    return problems
 
 
 # ---- Main ------------------------------------------------------------------------------------
@@ -693,7 +827,8 @@ def main(argv):
     written = [os.path.join(out_dir, "speedup.md")]
     for scene in results.scenes:
         path = os.path.join(out_dir, f"fps_{scene}.png")
-        plot_scene(results, scene, path)
+        for problem in plot_scene(results, scene, path):
+            print(f"bench_report: warning: {os.path.basename(path)}: {problem}", file=sys.stderr)
         written.append(path)
     if not args.quiet:
         print(text)

@@ -133,3 +133,56 @@ def ms_per_step(row):
     if unit is None or not isinstance(real, (int, float)) or not isinstance(steps, (int, float)) or steps <= 0:
         return None
     return real * unit * 1e3 / steps
+
+
+# ---- Machine load ------------------------------------------------------------------------------
+# Whether a run's timings were taken on a loaded machine: the one rule, used by bench_report.py
+# (noise flags) and compare.py (no verdict from a loaded side, issue #29 item 4).
+
+# Other processes using more than this many cores during a repetition (beyond the run's own
+# --busy loops) make that benchmark's figures suspect (counter others_cpu: CPU time of every
+# process but the suite's, over the repetition's setup, warm-up and timed steps).
+OTHERS_LIMIT = 0.5
+
+
+def context_cores(context):
+    """The machine's core count from a context ("cores", else "num_cpus"), or None."""
+    for key in ("cores", "num_cpus"):
+        try:
+            v = int((context or {}).get(key))
+            if v > 0:
+                return v
+        except (TypeError, ValueError):
+            pass
+    return None
+
+
+def busy_processes(context):
+    """The run's own busy loops (tools/quadrant bench --busy K), 0 if none or unknown."""
+    try:
+        return int((context or {}).get("busy_processes", 0))
+    except (TypeError, ValueError):
+        return 0
+
+
+def run_load_problems(context):
+    """Reasons (strings) why a whole run was loaded: the 1-minute load average before it started
+    (context load_avg_before, read by tools/quadrant before any busy loop) above the core count.
+    The load average during the run is not the test: it counts the run's own threads."""
+    try:
+        before = float((context or {}).get("load_avg_before"))
+    except (TypeError, ValueError):
+        return []
+    cores = context_cores(context)
+    if cores and before > cores:
+        return [f"load average {before:.2f} before the run, above the {cores} cores"]
+    return []
+
+
+def others_cpu_excess(row, busy=0):
+    """Cores' worth of CPU other processes used during the row's repetition beyond the run's own
+    busy loops, or None where the row does not say (counter others_cpu)."""
+    v = row.get("others_cpu")
+    if not isinstance(v, (int, float)):
+        return None
+    return float(v) - busy

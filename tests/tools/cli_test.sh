@@ -199,5 +199,126 @@ program_parsers
 [[ "$(snapshot)" == "$BEFORE" ]] || fail "the programs' refusals changed the output directory"
 # ---- end of the benchmark programs' parser -----------------------------------------------------
 
+# ---- The first hour (issue #29 items 7 and 8) ------------------------------------------------------
+# Bad invocations that used to cost a build or print a page: each is one line naming the option
+# and what it accepts, exit 2, and nothing built (a cmake that records being called is first on
+# PATH); each command's --help is its own; the driver's static lists agree with the built
+# programs; Chipmunk's debug-build noise is one summary line.
+first_hour() {
+  local fake="$WORK/fake-cmake" marker="$WORK/cmake-called"
+  mkdir -p "$fake"
+  printf '#!/bin/sh\necho "$*" >>"%s"\nexit 99\n' "$marker" >"$fake/cmake"
+  chmod +x "$fake/cmake"
+  local path="$fake:$PATH"
+  nobuild() { PATH="$path" "$@"; }
+
+  expect_refusal "--seed '-1' is not an integer in [0, 2147483647]" nobuild "$DRIVER" validate --seed -1
+  expect_refusal "build: unknown preset 'nope' (accepted: release, debug" nobuild "$DRIVER" build nope
+  expect_refusal "test: unknown preset 'nope' (accepted: release, debug" nobuild "$DRIVER" test --preset nope
+  expect_refusal "unknown quadrant variant 'bogus' in 'quadrant:bogus' (accepted: tokens joined by '+': thesis" \
+    nobuild "$DRIVER" bench --engines quadrant:bogus
+  expect_refusal "unknown quadrant variant 'bogus'" nobuild "$DRIVER" hardcases --peers quadrant:soft_step+bogus
+  expect_refusal "unknown quadrant variant 'bogus'" nobuild "$DRIVER" validate --random 5 --runs quadrant:bogus
+  expect_refusal "--runs: 'box2d' is not quadrant:<variant>" nobuild "$DRIVER" validate --random 5 --runs box2d
+  expect_refusal "--cases: unknown case 'nosuch' (accepted: vertical_stack," nobuild "$DRIVER" hardcases --cases nosuch
+  expect_refusal "--cases: unknown case 'nosuch' (accepted: head_on_1to1_e0," nobuild "$DRIVER" validate --cases nosuch
+  expect_refusal "--scenes: unknown scene 'nosuch' (accepted: circle_stress," nobuild "$DRIVER" bench --scenes nosuch
+  expect_refusal "nothing to run" nobuild "$DRIVER" bench --engines box2d --threads 2
+  expect_refusal "nothing to run" nobuild "$DRIVER" bench --engines box2d,bullet,chipmunk --threads 3,4
+  expect_refusal "bullet runs no tumbler" nobuild "$DRIVER" bench --engines bullet --scenes tumbler
+  expect_refusal "unknown option '--peers'" nobuild "$DRIVER" validate --peers box2d
+  [[ ! -e "$marker" ]] || fail "a refusal ran cmake: $(cat "$marker")"
+
+  # --help: the command's own options, on stdout, exit 0, not the whole 116-line text.
+  local cmd want status lines
+  for cmd in hardcases validate compare build test figure13 icount accuracy effects results-index bench; do
+    status=0
+    nobuild "$DRIVER" "$cmd" --help >"$WORK/stdout" 2>"$WORK/stderr" || status=$?
+    lines="$(wc -l <"$WORK/stdout")"
+    ((status == 0)) || fail "$cmd --help: exit $status"
+    [[ ! -s "$WORK/stderr" ]] || fail "$cmd --help: printed on stderr: $(head -c 300 "$WORK/stderr")"
+    grep -q "^usage: tools/quadrant $cmd " "$WORK/stdout" || fail "$cmd --help: no usage line"
+    grep -qE "^  $cmd( |$)" "$WORK/stdout" || fail "$cmd --help: not its own section"
+    for other in hardcases validate compare icount figure13; do
+      [[ "$other" == "$cmd" ]] || ! grep -qE "^  $other " "$WORK/stdout" || fail "$cmd --help shows $other's section"
+    done
+    case "$cmd" in
+      hardcases) want="--soak-steps --peers --cases"; ((lines < 60)) || fail "hardcases --help: $lines lines" ;;
+      validate) want="--random --seed --runs --cases"; ((lines < 30)) || fail "validate --help: $lines lines" ;;
+      compare) want="--min-repetitions --allow-load --all --threshold"; ((lines < 40)) || fail "compare --help: $lines lines" ;;
+      bench) want="--engines --repetitions --busy"; ((lines < 116)) || fail "bench --help: $lines lines" ;;
+      *) want=""; ((lines < 20)) || fail "$cmd --help: $lines lines" ;;
+    esac
+    for option in $want; do grep -qF -- "$option" "$WORK/stdout" || fail "$cmd --help does not list $option"; done
+    echo "ok: $cmd --help ($lines lines)"
+  done
+  grep -q "quadrant:quadrants" <(nobuild "$DRIVER" bench --help) ||
+    fail "bench --help does not say that the default engines include quadrant:quadrants"
+  [[ ! -e "$marker" ]] || fail "a --help ran cmake: $(cat "$marker")"
+
+  # The static lists the driver checks before a build, against the built programs.
+  # (read into DRIVER_<name>: HARDCASES is this script's path of quadrant_hardcases)
+  local DRIVER_SCENES DRIVER_VARIANT_TOKENS DRIVER_HARDCASES DRIVER_VALIDATION_CASES
+  eval "$(sed -n '/^SCENES=(/,/)$/p; /^VARIANT_TOKENS=(/,/)$/p; /^HARDCASES=(/,/)$/p; /^VALIDATION_CASES=(/,/)$/p' "$DRIVER" |
+          sed 's/^\([A-Z_]*\)=(/DRIVER_\1=(/')"
+  eval "$(grep -E '^declare -A (ENGINE_MAX_THREADS|ENGINE_REFUSES_SCENE)=' "$DRIVER" | sed 's/^declare -A /local -A DRIVER_/')"
+  local known
+  known="$("$BENCH" --list | sed -n 's/^scene: //p' | paste -sd' ')"
+  [[ "$known" == "${DRIVER_SCENES[*]}" ]] || fail "tools/quadrant SCENES ('${DRIVER_SCENES[*]}') differ from quadrant_bench --list ('$known')"
+  known="$("$BENCH" --engines quadrant:bogus 2>&1 | sed -n 's/.*(known: \([^)]*\)).*/\1/p' | sed 's/, / /g')"
+  [[ "$known" == "${DRIVER_VARIANT_TOKENS[*]}" ]] || fail "tools/quadrant VARIANT_TOKENS ('${DRIVER_VARIANT_TOKENS[*]}') differ from the adapter's ('$known')"
+  known="$("$HARDCASES" --help | sed -n 's/.*--cases a,b .*cases from \(.*\) (default all)$/\1/p' | sed 's/, / /g')"
+  [[ "$known" == "${DRIVER_HARDCASES[*]}" ]] || fail "tools/quadrant HARDCASES differ from quadrant_hardcases --help ('$known')"
+  known="$("$VALIDATE" --help | sed -n 's/.*--cases a,b .*cases from \(.*\) (default all)$/\1/p' | sed 's/, / /g')"
+  [[ "$known" == "${DRIVER_VALIDATION_CASES[*]}" ]] || fail "tools/quadrant VALIDATION_CASES differ from quadrant_validate --help ('$known')"
+  local engine most
+  for engine in "${!DRIVER_ENGINE_MAX_THREADS[@]}"; do
+    most="${DRIVER_ENGINE_MAX_THREADS[$engine]}"
+    "$BENCH" --engines "$engine" --scenes circle_stress --counts 10 --threads "$most" --benchmark_list_tests=true \
+      >/dev/null 2>&1 || fail "quadrant_bench does not run $engine at $most threads (ENGINE_MAX_THREADS)"
+    ((most >= 64)) && continue
+    grep -q "nothing to run" <<<"$("$BENCH" --engines "$engine" --scenes circle_stress --counts 10 --threads "$((most + 1))" 2>&1)" ||
+      fail "quadrant_bench runs $engine at $((most + 1)) threads (ENGINE_MAX_THREADS says $most)"
+  done
+  for engine in "${!DRIVER_ENGINE_REFUSES_SCENE[@]}"; do
+    grep -q "nothing to run" <<<"$("$BENCH" --engines "$engine" --scenes "${DRIVER_ENGINE_REFUSES_SCENE[$engine]}" --counts 10 --threads 1 2>&1)" ||
+      fail "quadrant_bench runs $engine on ${DRIVER_ENGINE_REFUSES_SCENE[$engine]} (ENGINE_REFUSES_SCENE)"
+  done
+  echo "ok: the driver's scenes, variant tokens, case names and engine limits match the programs'"
+
+  # Chipmunk's banner (stdout) and 3-line warnings (stderr) are one summary line; its errors and
+  # everything else pass.
+  local bins="$WORK/fake-bin" out="$WORK/filtered"
+  mkdir -p "$bins"
+  cat >"$bins/quadrant_hardcases" <<'SH'
+#!/bin/sh
+out="$2"
+echo "Initializing cpSpace - Chipmunk v7.0.3 (Debug Enabled)"
+echo "Compile with -DNDEBUG defined to disable debug mode and runtime assertion checks"
+for i in 1 2 3; do
+  printf 'Chipmunk warning: High EPA iterations: 3%s\n\tFailed condition: iteration < WARN_EPA_ITERATIONS\n\tSource:/build/chipmunk/src/cpCollision.c:340\n' "$i" >&2
+done
+printf 'Chipmunk warning: High GJK->EPA iterations: 9\n\tFailed condition: x\n\tSource:y.c:1\n' >&2
+echo "the report's own line" >&2
+echo "# Hard cases"
+printf 'Aborting due to Chipmunk error: kept\n\tFailed condition: kept too\n' >&2
+mkdir -p "$out" && echo '{}' >"$out/hardcases.json" && echo "# Hard cases" >"$out/hardcases.md"
+SH
+  chmod +x "$bins/quadrant_hardcases"
+  status=0
+  QUADRANT_BIN_DIR="$bins" "$DRIVER" hardcases --out "$out" >"$WORK/stdout" 2>"$WORK/stderr" || status=$?
+  ((status == 0)) || fail "hardcases through the filter: exit $status: $(cat "$WORK/stderr")"
+  ! grep -qE "Chipmunk warning|Failed condition: iteration|^Initializing cpSpace|Compile with -DNDEBUG" "$WORK/stdout" "$WORK/stderr" ||
+    fail "Chipmunk's noise reached the log: $(cat "$WORK/stdout" "$WORK/stderr")"
+  [[ "$(grep -c "Chipmunk (Debian's debug build) printed 4 warning(s) from inside its steps (3 x High EPA iterations, 1 x High GJK->EPA iterations; 3 lines each)" "$WORK/stderr")" == 1 ]] ||
+    fail "no one summary line for Chipmunk's warnings: $(cat "$WORK/stderr")"
+  grep -q "the report's own line" "$WORK/stderr" && grep -q "^# Hard cases" "$WORK/stdout" &&
+    grep -q "Aborting due to Chipmunk error: kept" "$WORK/stderr" && grep -q "Failed condition: kept too" "$WORK/stderr" ||
+    fail "the filter dropped other output: $(cat "$WORK/stdout" "$WORK/stderr")"
+  echo "ok: Chipmunk's banner and warnings are one line: $(grep Chipmunk "$WORK/stderr" | head -1)"
+}
+first_hour
+# ---- end of the first hour ------------------------------------------------------------------------
+
 ((failures == 0)) || { echo "$failures failure(s)"; exit 1; }
 echo "all command-line refusals are one line, exit 2, outputs untouched"

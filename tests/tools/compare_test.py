@@ -98,7 +98,7 @@ SUFFIX = "/iterations:1/real_time"
 STEPS = 60
 
 
-def bench_rows(name, ms_values, counters=True, suffix=SUFFIX):
+def bench_rows(name, ms_values, counters=True, suffix=SUFFIX, **extra):
     """Per-repetition rows as quadrant_bench writes them, plus aggregate rows whose values are
     deliberately absurd: a tool that reads them instead of the repetitions gets wrong verdicts."""
     full = name + suffix
@@ -110,6 +110,7 @@ def bench_rows(name, ms_values, counters=True, suffix=SUFFIX):
                "time_unit": "ms"}
         if counters:
             row.update({"ms_per_step": ms, "steps_per_second": 1000.0 / ms, "steps": STEPS})
+        row.update(extra)
         rows.append(row)
     for agg in ("mean", "median", "stddev", "cv"):
         rows.append({"name": f"{full}_{agg}", "run_name": full, "run_type": "aggregate",
@@ -131,11 +132,11 @@ def noisy(rng, center, n, noise):
     return out
 
 
-def gbench(rows, commit="abc1234"):
-    return {"context": {"date": "2024-01-01T00:00:00+00:00", "commit": commit,
-                        "machine": "test-machine", "compiler": "GCC 12.2.0",
-                        "library_build_type": "release"},
-            "benchmarks": rows}
+def gbench(rows, commit="abc1234", **context):
+    ctx = {"date": "2024-01-01T00:00:00+00:00", "commit": commit, "machine": "test-machine",
+           "compiler": "GCC 12.2.0", "library_build_type": "release"}
+    ctx.update(context)
+    return {"context": ctx, "benchmarks": rows}
 
 
 class CompareCommandTest(unittest.TestCase):
@@ -242,11 +243,80 @@ class CompareCommandTest(unittest.TestCase):
         n = self.write("new.json", gbench(bench_rows(name, noisy(rng, 3.0, 6, 0.01))))
         code, out, err = self.run_compare(b, n)
         self.assertEqual(code, 3, out + err)  # inconclusive: its own status, not "unchanged"
-        self.assertEqual(self.verdict(out, name), "inconclusive (too few repetitions)", out)
         self.assertIn("INCONCLUSIVE", out)
+        self.assertIn("a verdict needs 9 repetitions per side, BASE has 6 and NEW 6", out)
+        self.assertNotIn(f"| {name} ", out)  # not tested: in the summary line, not the table
+        code, out, err = self.run_compare(b, n, "--all")
+        self.assertEqual(code, 3, out + err)
+        self.assertEqual(self.verdict(out, name), "inconclusive (too few repetitions)", out)
         code, out, err = self.run_compare(b, n, "--min-repetitions", "6")
         self.assertEqual(code, 1, out + err)
         self.assertEqual(self.verdict(out, name), "slower", out)
+
+    def test_many_untested_benchmarks_are_one_short_line(self):
+        # The issue: a default bench (3 repetitions) against the committed one gave 158
+        # "inconclusive" rows ending in one 6,776-character line.
+        rng = random.Random(17)
+        base, new = [], []
+        for k in range(158):
+            name = f"circle_stress/engine{k}/n:1000/threads:1"
+            base += bench_rows(name, noisy(rng, 2.0, 3, 0.05))
+            new += bench_rows(name, noisy(rng, 2.0, 3, 0.05))
+        code, out, err = self.run_compare(self.write("base.json", gbench(base)),
+                                          self.write("new.json", gbench(new)))
+        self.assertEqual(code, 3, out + err)
+        self.assertNotIn("| circle_stress/", out)
+        summary = [line for line in out.splitlines() if line.startswith("Not tested (158 benchmarks")]
+        self.assertEqual(len(summary), 1, out)
+        self.assertIn("a verdict needs 9 repetitions per side, BASE has 3 and NEW 3", summary[0])
+        self.assertIn("--repetitions 9", summary[0])
+        self.assertLess(max(len(line) for line in out.splitlines()), 400, out)
+        self.assertLess(len(out.splitlines()), 12, out)
+
+    def loaded_pair(self, new_context, new_extra, faster=0.75):
+        """Four benchmarks, 9 repetitions each: BASE quiet, NEW `faster` times with NEW's
+        context and row counters as given."""
+        rng = random.Random(23)
+        base, new = [], []
+        for n in (1000, 2000, 4000, 8000):
+            name = f"circle_stress/quadrant/n:{n}/threads:1"
+            base += bench_rows(name, noisy(rng, n / 500, 9, 0.03), others_cpu=0.05)
+            new += bench_rows(name, noisy(rng, faster * n / 500, 9, 0.03), **new_extra)
+        quiet = {"cores": "2", "load_avg_before": "0.30", "busy_processes": "0"}
+        return (self.write("base.json", gbench(base, **quiet)),
+                self.write("new.json", gbench(new, **{**quiet, **new_context})))
+
+    def test_loaded_side_gives_no_faster_verdict(self):
+        # The issue: bench --baseline then bench --compare of the same binary at load 5.2 said
+        # all 4 benchmarks were 14-39 % faster (p down to 4e-5) and exited 0.
+        b, n = self.loaded_pair({"load_avg_before": "5.20"}, {"others_cpu": 0.1})
+        code, out, err = self.run_compare(b, n)
+        self.assertEqual(code, 4, out + err)  # inconclusive (loaded), not 0
+        for k in (1000, 2000, 4000, 8000):
+            self.assertEqual(self.verdict(out, f"circle_stress/quadrant/n:{k}/threads:1"),
+                             "inconclusive (loaded; looked faster)", out)
+        self.assertNotIn("**faster**", out)
+        self.assertNotIn("Faster (", out)
+        self.assertIn("NEW ran loaded", out)
+        self.assertIn("load average 5.20 before the run, above the 2 cores", out)
+        self.assertIn("INCONCLUSIVE (loaded) (4)", out)
+        # Asked for (both sides under the same load): the verdict, marked.
+        code, out, err = self.run_compare(b, n, "--allow-load")
+        self.assertEqual(code, 0, out + err)
+        self.assertEqual(self.verdict(out, "circle_stress/quadrant/n:1000/threads:1"), "faster (loaded)", out)
+
+    def test_other_processes_during_repetitions_withhold_the_verdict(self):
+        # A quiet start, then a neighbour's compiler: others_cpu on NEW's repetitions.
+        b, n = self.loaded_pair({}, {"others_cpu": 1.4}, faster=1.3)
+        code, out, err = self.run_compare(b, n)
+        self.assertEqual(code, 4, out + err)
+        self.assertEqual(self.verdict(out, "circle_stress/quadrant/n:1000/threads:1"),
+                         "inconclusive (loaded; looked slower)", out)
+        self.assertNotIn("SLOWER", out)
+        # The run's own busy loops (bench --busy 1) are not someone else's load.
+        b, n = self.loaded_pair({"busy_processes": "1"}, {"others_cpu": 1.3}, faster=1.0)
+        code, out, err = self.run_compare(b, n)
+        self.assertEqual(code, 0, out + err)
 
     def test_directories_suffixes_real_time_and_one_sided_benchmarks(self):
         rng = random.Random(13)
@@ -266,8 +336,8 @@ class CompareCommandTest(unittest.TestCase):
         self.assertEqual(code, 1, out + err)
         self.assertEqual(self.verdict(out, shared + " (real_time)"), "slower", out)
         self.assertIn("| 10/10 |", out)
-        self.assertIn("Only in BASE (not compared): circle_stress/box2d/n:2000/threads:1", out)
-        self.assertIn("Only in NEW (not compared): circle_stress/chipmunk/n:2000/threads:1", out)
+        self.assertIn("Only in BASE (not compared) (1): circle_stress/box2d/n:2000/threads:1", out)
+        self.assertIn("Only in NEW (not compared) (1): circle_stress/chipmunk/n:2000/threads:1", out)
 
     def test_bad_input_exits_2_with_a_message(self):
         name = "circle_stress/quadrant/n:1000/threads:1"
