@@ -24,12 +24,9 @@
 // has one that gives a base-N pyramid; until then a base-N pyramid of 1 m boxes on a static
 // ground is built here (key pyramid_builtin_<N>_<S>, so counts of the two never get mixed up).
 //
-// QUADRANT_ICOUNT_INJECT_EXTRA_WORK (CMake option, default OFF) compiles extra work into every
-// step (one more pass over the bodies: read them all back and sum their kinetic energy): the
-// icount test builds it to prove that tools/icount.py --check catches an engine that does more
-// work. Measured: +59 % instructions on circle_stress, +125 % on polygon_stress (the mass of
-// a polygon is recomputed) and +11 % on the base-20 pyramid (more work per body per step), all
-// well above the 2 % tolerance.
+// QUADRANT_ICOUNT_INJECT_EXTRA_WORK (CMake option, default OFF) compiles one more pass over the
+// bodies into every step, so that the icount test proves --check catches more work (+11 % to
+// +125 % instructions on the three scenes, well above the 2 % tolerance).
 #include <valgrind/callgrind.h>
 
 #include <algorithm>

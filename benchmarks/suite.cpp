@@ -14,28 +14,18 @@
 // holds the commit, compiler, flags, machine, settings, scene descriptions, engine notes and
 // the combinations that were not run (and why).
 //
-// Per benchmark: real_time (the timed steps), counters steps_per_second (steps / real time),
-// ms_per_step, bodies, contacts (touching manifolds after the last step), engine_threads,
-// steps, warmup, memory_mb (peak RSS growth while making, loading and warming up the adapter)
-// heap_mb (malloc bytes still held after warm-up), others_cpu (cores' worth of CPU other
-// processes used during the benchmark, if it lasted 0.25 s or more) and load_avg (1-minute
-// load average after it); label = final state hash (16 hex digits).
+// Per benchmark: real_time (the timed steps), counters (steps_per_second, ms_per_step, bodies,
+// contacts, engine_threads, steps, warmup, memory_mb, heap_mb, others_cpu: cores' worth of CPU
+// other processes used, load_avg), label = final state hash (16 hex digits); the benchmark
+// function's counters say what each is.
 //
 // N is the scene's dynamic bodies as built: a count the scene rounds (pyramid to a whole base,
 // many_pyramids to a multiple of 55) is named and reported as the count that ran (issue #29).
 //
-// Own flags (declared in ParseOwnFlags, cli_args.h; parsed and removed before Google Benchmark
-// sees the command line; --help lists them with their defaults):
-//   --scenes a,b      scenes to run            (default: DefaultBenchScenes(), sparse and dense)
-//   --engines a,b     engines to run           (default: every adapter)
-//   --counts 1000,... body counts, every scene (default: each scene's DefaultBenchCounts)
-//   --threads 1,2,... engine thread counts     (default 1,2,3,4)
-//   --steps S         timed steps              (default 120)
-//   --warmup W        untimed steps before timing (default 30)
-//   --seed X          scene seed               (default 42)
-//   --list            the engine and scene names
-// Google Benchmark's own flags (--benchmark_repetitions, --benchmark_out, --benchmark_filter,
-// ...) go to it; any other argument is refused in one line.
+// Own flags (--scenes, --engines, --counts, --threads, --steps, --warmup, --seed, --list) are
+// declared in ParseOwnFlags and removed before Google Benchmark sees the command line; --help
+// lists them with their defaults. Google Benchmark's own flags go to it; any other argument is
+// refused in one line.
 
 #include <benchmark/benchmark.h>
 #include <fmt/format.h>
