@@ -25,6 +25,11 @@ LOG="$WORK/cmake.log"
 cat >"$WORK/bin/cmake" <<EOF
 #!/usr/bin/env bash
 echo "start \$\$ \$*" >>"$LOG"
+# The very first cmake holds on until the test has seen the second build wait (or 30 s), so a
+# loaded machine cannot let the second start after the first is done.
+if mkdir "$WORK/first" 2>/dev/null; then
+  for _ in \$(seq 300); do [[ -e "$WORK/go" ]] && break; sleep 0.1; done
+fi
 sleep 1
 if [[ "\$1" == --build ]]; then
   preset="\$3"
@@ -64,6 +69,8 @@ a=$!
 for _ in $(seq 100); do [[ -s "$LOG" ]] && break; sleep 0.1; done
 "$T/tools/quadrant" build >"$WORK/b.out" 2>"$WORK/b.err" &
 b=$!
+for _ in $(seq 300); do [[ -s "$WORK/b.err" ]] && break; sleep 0.1; done
+touch "$WORK/go"
 wait "$a" || fail "the first build failed: $(cat "$WORK/a.err")"
 wait "$b" || fail "the second build failed: $(cat "$WORK/b.err")"
 # The log must alternate start/end: no cmake started while another ran.
