@@ -326,8 +326,18 @@ struct ContactInfo {
   int pointCount = 0;
   Vec2 points[2];
   Real separations[2] = {0, 0};
-  /// The solver's accumulated impulses (N s): pgs the step's; soft_step its last sub-step's (a
-  /// resting load's share of one sub-step, dt / softSubSteps of its weight).
+  /// The contact's impulses (N s) at each point as the solver keeps them for warm starting, not
+  /// the step's total under the default solver:
+  /// - pgs, jacobi: the step's accumulated impulse of the velocity iterations.
+  /// - soft_step: the last sub-step's alone (its warm start, soft solve and relax passes), so a
+  ///   steady load reads 1 / softSubSteps of what it transmits over the step: a box of mass m
+  ///   resting on the ground reads m |g| dt / softSubSteps in all (multiply by softSubSteps for
+  ///   the step's total while the load is steady).
+  /// - thesis: the last impulse it applied there (with thesisAccumulatedImpulse, the total over
+  ///   its passes).
+  /// Neither pgs nor soft_step includes the restitution passes (RestitutionPolicy::kCollisions)
+  /// nor the position pass (which moves bodies without an impulse). 0 where the solver kept
+  /// none (pgs: a contact of a body over maxLinearSpeed).
   Real normalImpulses[2] = {0, 0};
   Real tangentImpulses[2] = {0, 0};
 };

@@ -153,7 +153,9 @@ class World {
   std::span<const ContactEvent> GetContactEndEvents() const;
 
   int GetBodyCount() const;
-  /// Live ids in creation order (destroying a body moves the last body into its place).
+  /// Live ids in the world's dense order, which StateHash, GetOwners and query ties use: creation
+  /// order until a body is destroyed; DestroyBody then moves the body that was last into the
+  /// destroyed one's place (after DestroyBody(ids[k]), the body that was ids.back() is at k).
   std::vector<BodyId> GetBodyIds() const;
   const WorldDef& GetDef() const;
   const Profile& GetProfile() const;
