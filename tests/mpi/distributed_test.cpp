@@ -409,6 +409,19 @@ TEST(DistributedBadInput, BodyLargerThanARegion) {
   ExpectErrorOnEveryRank([&] { dw.Step(Real(1.0 / 60.0)); }, "more than half a tile");
 }
 
+TEST(DistributedBadInput, GravityScaleAndBulletRefused) {
+  WorldDef def;
+  def.solver = SolverType::kJacobi;
+  DistributedWorld dw(def, DistributedDef{}, MPI_COMM_WORLD);
+  std::vector<BodyDef> bodies = SmallScene(0);
+  bodies[3].gravityScale = 0;
+  ExpectErrorOnEveryRank([&] { dw.Load(bodies); }, "body 3: gravityScale other than 1 and isBullet are not supported");
+  bodies[3].gravityScale = 1;
+  bodies[5].isBullet = true;
+  ExpectErrorOnEveryRank([&] { dw.Load(bodies); }, "body 5: gravityScale other than 1 and isBullet are not supported");
+  ExpectErrorOnEveryRank([&] { dw.Step(Real(1.0 / 60.0)); }, "Load a scene first");
+}
+
 TEST(DistributedBadInput, MoreRanksThanTiles) {
   if (Size() < 2) GTEST_SKIP() << "needs two ranks";
   WorldDef def;

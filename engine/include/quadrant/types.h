@@ -75,6 +75,20 @@ struct BodyDef {
   /// Yours: the engine stores it and never reads it (World::GetUserData). A game keeps an entity
   /// index or a pointer here (reinterpret_cast<uintptr_t>).
   uint64_t userData = 0;
+  /// Multiplies the world's gravity for this body (dimensionless; default 1; 0 floats, -1 falls
+  /// up): finite, in [-1e6, 1e6]. Only dynamic bodies feel gravity. World::SetGravityScale says
+  /// how a scale other than 1 is applied.
+  Real gravityScale = 1;
+  /// Never turns: the body's rotational inertia and inverse inertia are 0 (no contact, force or
+  /// impulse changes its angular velocity, which stays 0; World::GetRotationalInertia reads 0).
+  /// angularVelocity must then be 0. Default false.
+  bool fixedRotation = false;
+  /// Continuous collision for this body where the world's effects.continuous is off: its
+  /// broad-phase box is swept over the step and its speculative contacts kept as far as it can
+  /// close within the step, as every body's are with continuous on, so a fast bullet does not pass
+  /// through a thin wall. With effects.continuous on (the default) every body already gets this
+  /// and the flag changes nothing. Default false.
+  bool isBullet = false;
 };
 
 /// Throws quadrant::Error, with the message CreateBody would give, for a definition that
@@ -326,8 +340,18 @@ struct ContactInfo {
   int pointCount = 0;
   Vec2 points[2];
   Real separations[2] = {0, 0};
-  /// The solver's accumulated impulses (N s): pgs the step's; soft_step its last sub-step's (a
-  /// resting load's share of one sub-step, dt / softSubSteps of its weight).
+  /// The contact's impulses (N s) at each point as the solver keeps them for warm starting, not
+  /// the step's total under the default solver:
+  /// - pgs, jacobi: the step's accumulated impulse of the velocity iterations.
+  /// - soft_step: the last sub-step's alone (its warm start, soft solve and relax passes), so a
+  ///   steady load reads 1 / softSubSteps of what it transmits over the step: a box of mass m
+  ///   resting on the ground reads m |g| dt / softSubSteps in all (multiply by softSubSteps for
+  ///   the step's total while the load is steady).
+  /// - thesis: the last impulse it applied there (with thesisAccumulatedImpulse, the total over
+  ///   its passes).
+  /// Neither pgs nor soft_step includes the restitution passes (RestitutionPolicy::kCollisions)
+  /// nor the position pass (which moves bodies without an impulse). 0 where the solver kept
+  /// none (pgs: a contact of a body over maxLinearSpeed).
   Real normalImpulses[2] = {0, 0};
   Real tangentImpulses[2] = {0, 0};
 };

@@ -87,17 +87,91 @@ class World {
   Vec2 GetLinearVelocity(BodyId id) const;
   Real GetAngularVelocity(BodyId id) const;
   Vec2 GetWorldCenter(BodyId id) const;
-  Real GetMass(BodyId id) const;
-  Real GetRotationalInertia(BodyId id) const;  ///< about the centre of mass
+  Real GetMass(BodyId id) const;                ///< kg; 0 for static and kinematic bodies
+  /// kg m^2 about the centre of mass; 0 for static, kinematic and fixed-rotation bodies.
+  Real GetRotationalInertia(BodyId id) const;
   BodyType GetType(BodyId id) const;
   AABB GetAABB(BodyId id) const;
   const ShapeDef& GetShape(BodyId id) const;
 
-  // Writes (validated; throw quadrant::Error and change nothing on bad input).
-  void SetLinearVelocity(BodyId id, Vec2 v);
+  // Writes (validated; throw quadrant::Error and change nothing on bad input, a stale id included).
+  void SetLinearVelocity(BodyId id, Vec2 v);  ///< m/s of the centre of mass; ignored on a static body
+  /// rad/s; ignored on a static body and where effects.rotation is off. Refuses anything but 0 on
+  /// a fixed-rotation body (SetFixedRotation).
   void SetAngularVelocity(BodyId id, Real w);
   void SetTransform(BodyId id, Vec2 position, Real angle);
+
+  // Forces, torques and impulses, as Box2D's. They act on dynamic bodies only: on a static or
+  // kinematic body each throws quadrant::Error ("...: the body is kinematic; forces, torques and
+  // impulses act on dynamic bodies only"; move a kinematic body by its velocity). Each wakes the
+  // body's island, and a sleeping body takes them with its awake mass. A torque or the angular
+  // part of an off-centre force or impulse does nothing on a fixed-rotation body (inverse inertia
+  // 0) or where effects.rotation is off. Also refused: non-finite values, a point beyond 1e6 m, and
+  // a change of velocity beyond 1e6 m/s (rad/s): for forces, the body's pending sum over a 1 s step.
+
+  /// An impulse (N s) at `worldPoint` (m): v += J / m, w += (r x J) / I now, r from the centre of
+  /// mass.
   void ApplyLinearImpulse(BodyId id, Vec2 impulse, Vec2 worldPoint);
+  /// An angular impulse (N m s): w += impulse / I now.
+  void ApplyAngularImpulse(BodyId id, Real impulse);
+  /// A force (N) at `worldPoint` (m), for the next Step only: the body's forces and torques are
+  /// summed until then (a force off the centre of mass adds the torque r x F, r measured at the
+  /// call), applied in that Step as v += dt F / m and w += dt T / I before the solver runs, and
+  /// cleared (call it every step for a steady force). Under StepRepeated they act in its first
+  /// repeat only, as with as many calls of Step. Applied once before the solver, not spread over
+  /// soft_step's sub-steps as Box2D 3 does: the velocity at the end of the step is the same, but in
+  /// free flight the step moves the body dt^2 (F / m) (n - 1) / (2 n) further along F for n
+  /// sub-steps (0.1 mm a step for F / m = 1 m/s^2 at 60 Hz and 4 sub-steps: a body held up against
+  /// gravity by F = -m g rises 6.25 cm/s). pgs, thesis and jacobi apply gravity once per step
+  /// too, and move the body exactly as if the force were added to it. A body made static or
+  /// kinematic, or put to sleep, before the Step does not get them; one destroyed drops them.
+  void ApplyForce(BodyId id, Vec2 force, Vec2 worldPoint);
+  /// ApplyForce at the centre of mass (no torque).
+  void ApplyForceToCenter(BodyId id, Vec2 force);
+  /// A torque (N m) for the next Step, summed and applied as ApplyForce's: w += dt T / I.
+  void ApplyTorque(BodyId id, Real torque);
+
+  // Per-body settings (BodyDef documents each; stale ids and bad values throw quadrant::Error).
+
+  /// BodyDef::gravityScale. A scale other than 1 adds dt (scale - 1) g to the body's velocity once
+  /// per step before the solver runs (the solver adds the usual dt g), so the velocity after a
+  /// step is that of gravity scale * g. pgs, thesis and jacobi apply gravity once per step too,
+  /// and the motion is exactly scaled gravity's. soft_step spreads gravity over its n sub-steps: the
+  /// added part acts from the step's start instead, so in free flight each step moves the body
+  /// (scale - 1) g dt^2 (n - 1) / (2 n) further along g than sub-stepped gravity would: a body of
+  /// scale 0 rises 1.04 mm a step, 6.25 cm/s, at 60 Hz, 4 sub-steps and g = (0, -10) m/s^2 (its
+  /// velocity reads 0); one of scale 2 falls 1.04 mm a step further. Resting bodies are held as
+  /// before. Static and kinematic bodies keep their scale and ignore it. While every body has
+  /// scale 1 this costs nothing (no pass over the bodies). Wakes the body.
+  Real GetGravityScale(BodyId id) const;
+  void SetGravityScale(BodyId id, Real scale);
+  /// BodyDef::fixedRotation: true sets the inertia and inverse inertia to 0 and the angular
+  /// velocity to 0; false restores the inertia of the shape and density. Wakes the body.
+  bool IsFixedRotation(BodyId id) const;
+  void SetFixedRotation(BodyId id, bool fixedRotation);
+  /// BodyDef::isBullet: continuous collision for this body where effects.continuous is off (with
+  /// it on, the default, every body has it already). Takes effect at the next Step.
+  bool IsBullet(BodyId id) const;
+  void SetBullet(BodyId id, bool bullet);
+  /// Static, kinematic or dynamic, as if created so: dynamic gets the mass and inertia of its
+  /// shape and density (refused, as CreateBody refuses, for density 0 or a mass that is not a
+  /// positive finite number), the others mass 0; static also velocity 0. The velocity is kept
+  /// otherwise. The body, its island and the sleeping bodies its box overlaps wake; its pairs are
+  /// found anew at the next Step. Refuses an unknown type.
+  void SetType(BodyId id, BodyType type);
+  /// The shape's material (ShapeDef documents each; GetShape reads them back). Friction >= 0 and
+  /// restitution in [0, 1], as CreateBody: contacts mix them anew at the next Step. Density
+  /// (kg/m^2, finite, >= 0; > 0 on a dynamic body, whose mass must stay a positive finite number):
+  /// recomputes a dynamic body's mass and inertia (not its centre of mass: the density is
+  /// uniform) and wakes it; a static or kinematic body keeps it for SetType.
+  void SetFriction(BodyId id, Real friction);
+  void SetRestitution(BodyId id, Real restitution);
+  void SetDensity(BodyId id, Real density);
+
+  /// The world's gravity (m/s^2; WorldDef::gravity at creation). SetGravity: finite, else
+  /// quadrant::Error; GetDef().gravity reads it too. A change wakes every sleeping body.
+  Vec2 GetGravity() const;
+  void SetGravity(Vec2 gravity);
 
   /// Whether the body is simulated. Static bodies are never awake (they are not simulated);
   /// kinematic bodies always are; a dynamic body is asleep only when effects.sleep is on and
@@ -107,8 +181,9 @@ class World {
   /// Wakes a sleeping dynamic body and its whole island (true), or puts the body to sleep with
   /// velocity 0 (false; it wakes again at the next step if an awake body touches it). No effect
   /// on static or kinematic bodies, and SetAwake(false) has none when effects.sleep is off.
-  /// SetLinearVelocity, SetAngularVelocity, ApplyLinearImpulse and SetTransform wake the body
-  /// too, and creating, destroying or moving a body wakes the sleeping bodies its box overlaps.
+  /// SetLinearVelocity, SetAngularVelocity, SetTransform, the forces and impulses, SetType,
+  /// SetDensity, SetGravityScale and SetFixedRotation wake the body too, and creating,
+  /// destroying, moving or retyping a body wakes the sleeping bodies its box overlaps.
   /// Throws quadrant::Error on a stale id.
   void SetAwake(BodyId id, bool awake);
 
@@ -153,9 +228,11 @@ class World {
   std::span<const ContactEvent> GetContactEndEvents() const;
 
   int GetBodyCount() const;
-  /// Live ids in creation order (destroying a body moves the last body into its place).
+  /// Live ids in the world's dense order, which StateHash, GetOwners and query ties use: creation
+  /// order until a body is destroyed; DestroyBody then moves the body that was last into the
+  /// destroyed one's place (after DestroyBody(ids[k]), the body that was ids.back() is at k).
   std::vector<BodyId> GetBodyIds() const;
-  const WorldDef& GetDef() const;
+  const WorldDef& GetDef() const;  ///< as created, with SetGravity's gravity
   const Profile& GetProfile() const;
   const Counters& GetCounters() const;
   std::vector<ContactInfo> GetContacts() const;

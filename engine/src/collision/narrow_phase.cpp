@@ -549,6 +549,10 @@ namespace pairs_vex {
 
 void CollidePairs(const Bodies& bodies, const WorldDef& def, Real dt, std::span<const CandidatePair> pairs,
                   std::vector<Contact>& out) {
+  if (!def.effects.continuous && bodies.bulletCount > 0) {  // bullets without continuous collision
+    pairs_default::PairLoop<CallBoxes, true>(bodies, def, dt, pairs, out, CallBoxes{});
+    return;
+  }
 #if QUADRANT_NARROW_SIMD && defined(__x86_64__) && defined(__GNUC__)
   if (BoxesVex()) {
     CollidePairsVex(bodies, def, dt, pairs, out);

@@ -108,6 +108,7 @@ uint64_t HashScene(std::span<const BodyDef> bodies) {
       mix(s.polygon.vertices[k].x), mix(s.polygon.vertices[k].y);
     }
     mix(s.density), mix(s.friction), mix(s.restitution);
+    mix(b.gravityScale), mix(Real(b.fixedRotation ? 1 : 0)), mix(Real(b.isBullet ? 1 : 0));
     // 16 bits at a time: a float holds integers exactly only up to 2^24.
     for (uint32_t bits : {b.filter.categoryBits, b.filter.maskBits}) mix(Real(bits & 0xFFFFu)), mix(Real(bits >> 16));
   }
@@ -452,6 +453,9 @@ void DistributedWorld::Load(std::span<const BodyDef> bodies) {
   uint64_t count = 0, checksum = 0;
   Bodies row;
   for (size_t i = 0; i < bodies.size(); ++i) {
+    // The pre-solve pass and the bullet sweep are the World's (world.cpp), not this world's.
+    Require(bodies[i].gravityScale == 1 && !bodies[i].isBullet,
+            "DistributedWorld::Load: body " + std::to_string(i) + ": gravityScale other than 1 and isBullet are not supported");
     row.ForEachArray([](auto& v) { v.clear(); });
     AppendBody(row, bodies[i], w.def, static_cast<uint32_t>(i));
     const Record r = Impl::ToRecord(row, 0, static_cast<uint32_t>(i));

@@ -92,6 +92,8 @@ ShapeDef ValidateBodyDef(const BodyDef& def) {
           "BodyDef velocity is beyond the limit of 1e6 m/s (rad/s)");
   Require(IsFinite(def.linearDamping) && def.linearDamping >= 0, "BodyDef.linearDamping must be finite and >= 0");
   Require(IsFinite(def.angularDamping) && def.angularDamping >= 0, "BodyDef.angularDamping must be finite and >= 0");
+  Require(GravityScaleOk(def.gravityScale), "BodyDef.gravityScale must be finite and in [-1e6, 1e6]");
+  Require(!def.fixedRotation || def.angularVelocity == 0, "BodyDef.angularVelocity must be 0 with fixedRotation");
   ShapeDef shape = def.shape;
   Require(IsFinite(shape.density) && shape.density >= 0, "ShapeDef.density must be finite and >= 0");
   Require(def.type != BodyType::kDynamic || shape.density > 0, "a dynamic body needs ShapeDef.density > 0");
@@ -107,20 +109,26 @@ ShapeDef ValidateBodyDef(const BodyDef& def) {
   } else {
     throw Error("ShapeDef.type is unknown");
   }
-  if (def.type == BodyType::kDynamic) {
-    // Density times area can overflow (or underflow) float: a mass or inertia that is not a
-    // positive finite number would poison the solver, so the body is refused.
-    // Subnormal values count as underflow: they lose precision and make 1/m overflow.
-    const MassData md = shape.type == ShapeType::kCircle ? ComputeMass(shape.circle, shape.density)
-                                                         : ComputeMass(shape.polygon, shape.density);
-    constexpr Real kSmallest = std::numeric_limits<Real>::min();
-    Require(IsFinite(md.mass) && md.mass >= kSmallest && IsFinite(md.rotationalInertia) &&
-                md.rotationalInertia >= kSmallest && IsFinite(Real(1) / md.mass) &&
-                IsFinite(Real(1) / md.rotationalInertia),
-            "the body's mass or rotational inertia is not a positive finite number (density " +
-                DensityText(shape.density) + ")");
-  }
+  if (def.type == BodyType::kDynamic) RequireDynamicMass(shape, "");
   return shape;
+}
+
+MassData ShapeMass(const ShapeDef& shape) {
+  return shape.type == ShapeType::kCircle ? ComputeMass(shape.circle, shape.density)
+                                          : ComputeMass(shape.polygon, shape.density);
+}
+
+void RequireDynamicMass(const ShapeDef& shape, const std::string& prefix) {
+  // Density times area can overflow (or underflow) float: a mass or inertia that is not a
+  // positive finite number would poison the solver, so the body is refused.
+  // Subnormal values count as underflow: they lose precision and make 1/m overflow.
+  const MassData md = ShapeMass(shape);
+  constexpr Real kSmallest = std::numeric_limits<Real>::min();
+  Require(IsFinite(md.mass) && md.mass >= kSmallest && IsFinite(md.rotationalInertia) &&
+              md.rotationalInertia >= kSmallest && IsFinite(Real(1) / md.mass) &&
+              IsFinite(Real(1) / md.rotationalInertia),
+          prefix + "the body's mass or rotational inertia is not a positive finite number (density " +
+              DensityText(shape.density) + ")");
 }
 
 void CheckBodyDef(const BodyDef& def) { (void)ValidateBodyDef(def); }

@@ -2,6 +2,7 @@
 // changes, and bad input gets a one-line quadrant::Error naming the field.
 #pragma once
 
+#include <cmath>
 #include <string>
 
 #include "quadrant/types.h"
@@ -21,5 +22,16 @@ ShapeDef ValidateBodyDef(const BodyDef& def);
 
 /// A density as text for error messages (%g: std::to_string prints 1e-40 as 0.000000).
 std::string DensityText(Real density);
+
+/// The mass data of a validated shape at its density.
+MassData ShapeMass(const ShapeDef& shape);
+
+/// Throws quadrant::Error (its message after `prefix`) unless a dynamic body made of `shape` (a
+/// validated shape with density finite and > 0) has a positive, finite mass and inertia whose
+/// inverses are finite: CreateBody's rule, shared with SetDensity and SetType.
+void RequireDynamicMass(const ShapeDef& shape, const std::string& prefix);
+
+/// BodyDef::gravityScale's rule: finite and within [-1e6, 1e6].
+inline bool GravityScaleOk(Real scale) { return IsFinite(scale) && std::abs(scale) <= Real(1e6); }
 
 }  // namespace quadrant

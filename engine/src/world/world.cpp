@@ -95,6 +95,18 @@ struct World::Impl {
   // after this step and the last one.
   std::vector<ContactEvent> touching, touchingBefore, beginEvents, endEvents;
 
+  // Forces and torques applied since the last Step (ApplyForce, ApplyForceToCenter, ApplyTorque):
+  // one entry per body, in the order of its first call, summed in double; pendingOf maps an id
+  // slot to its entry (-1: none; grown on demand). Applied and cleared by the pre-solve pass.
+  struct PendingForce {
+    uint32_t slot = 0;
+    bool live = true;  // false once the body is destroyed
+    double fx = 0, fy = 0, torque = 0;
+  };
+  std::vector<PendingForce> pendingForces;
+  std::vector<int32_t> pendingOf;
+  int gravityScaled = 0;  // bodies whose gravity scale is not 1: the pre-solve pass runs while > 0
+
   int Dense(BodyId id) const {
     if (id.generation == 0 || id.index >= generation.size() || generation[id.index] != id.generation ||
         denseOf[id.index] < 0) {
@@ -105,7 +117,8 @@ struct World::Impl {
   }
 
   // The broad-phase box (world_internal.h, BroadPhaseBox: shared with the distributed world).
-  void UpdateAABB(int i, Real dt) { bodies.aabb[i] = BroadPhaseBox(bodies, i, def, dt); }
+  // Always inlined into the box update's loop, as BroadPhaseBox is.
+  [[gnu::always_inline]] void UpdateAABB(int i, Real dt) { bodies.aabb[i] = BroadPhaseBox(bodies, i, def, dt); }
 
   // Sleep (effects.sleep on only): wakes the islands of sleeping bodies that body i's box
   // overlaps, and body i's own island.
@@ -116,6 +129,7 @@ struct World::Impl {
   }
 
   void RunPipeline(Real dt);
+  void PreSolve(Real dt);
   void FindPairs(const BroadPhase::BoxUpdate* update = nullptr);
   void UpdateContactEvents();
   void PrepareQueries();
@@ -128,7 +142,39 @@ struct World::Impl {
     sorter.Sort(*run, bodies.Count(), workerContacts, contacts, persist ? &cache : nullptr);
     contactsIncreasing = sorter.StrictlyIncreasing();
   }
+
+  // Forces, torques and impulses act on dynamic bodies only: a clear refusal for the others.
+  void RequireDynamic(int i, const char* call) const {
+    const BodyType t = bodies.type[i];
+    if (t == BodyType::kDynamic) return;
+    throw Error(std::string(call) + ": the body is " + (t == BodyType::kStatic ? "static" : "kinematic") +
+                "; forces, torques and impulses act on dynamic bodies only");
+  }
+  // The inverse mass a force or impulse acts on: a sleeping body's stored one is 0.
+  BodyInverseMass ActiveInverseMass(int i) const {
+    return def.effects.sleep ? Islands::AwakeInverseMass(bodies, i) : bodies.inv[i];
+  }
+  void AddForce(int i, const char* call, double fx, double fy, double torque);
 };
+
+namespace {
+
+// Mass, inertia and inverse mass of body i from its type, shape (density) and fixed-rotation flag,
+// with AppendBody's expressions. A sleeping body keeps inverse mass 0: waking restores it from
+// the mass and inertia set here (Islands::AwakeInverseMass).
+void UpdateMassData(Bodies& b, int i) {
+  if (b.type[i] != BodyType::kDynamic) {
+    b.mass[i] = b.inertia[i] = 0;
+    b.inv[i] = BodyInverseMass{};
+    return;
+  }
+  const MassData md = ShapeMass(b.shape[i]);
+  b.mass[i] = md.mass;
+  b.inertia[i] = b.fixedRotation[i] ? Real(0) : md.rotationalInertia;
+  if (b.awake[i]) b.inv[i] = BodyInverseMass{Real(1) / md.mass, b.inertia[i] > 0 ? Real(1) / b.inertia[i] : Real(0)};
+}
+
+}  // namespace
 
 World::World(const WorldDef& def) : impl_(std::make_unique<Impl>()) {
   ValidateWorldDef(def);
@@ -172,11 +218,14 @@ int AppendBody(Bodies& b, const BodyDef& def, const WorldDef& worldDef, uint32_t
   const bool moves = def.type != BodyType::kStatic;
   b.vel[i] = moves ? BodyVelocity{def.linearVelocity, worldDef.effects.rotation ? def.angularVelocity : Real(0)}
                    : BodyVelocity{};
-  b.inv[i] = dynamic ? BodyInverseMass{Real(1) / md.mass,
-                                       md.rotationalInertia > 0 ? Real(1) / md.rotationalInertia : Real(0)}
+  // Fixed rotation: inertia and inverse inertia 0 (Box2D's rule), angular velocity 0 (validated).
+  const bool turns = !def.fixedRotation;
+  b.inv[i] = dynamic ? BodyInverseMass{Real(1) / md.mass, turns && md.rotationalInertia > 0
+                                                              ? Real(1) / md.rotationalInertia
+                                                              : Real(0)}
                      : BodyInverseMass{};
   b.mass[i] = dynamic ? md.mass : Real(0);
-  b.inertia[i] = dynamic ? md.rotationalInertia : Real(0);
+  b.inertia[i] = dynamic && turns ? md.rotationalInertia : Real(0);
   b.linearDamping[i] = def.linearDamping;
   b.angularDamping[i] = def.angularDamping;
   b.shape[i] = shape;
@@ -189,6 +238,10 @@ int AppendBody(Bodies& b, const BodyDef& def, const WorldDef& worldDef, uint32_t
   b.islandOf[i] = 0;
   b.filter[i] = def.filter;
   b.userData[i] = def.userData;
+  b.gravityScale[i] = def.gravityScale;
+  b.fixedRotation[i] = def.fixedRotation ? 1 : 0;
+  b.bullet[i] = def.isBullet ? 1 : 0;
+  b.bulletCount += def.isBullet ? 1 : 0;
   b.aabb[i] = BroadPhaseBox(b, i, worldDef, 0);
   return i;
 }
@@ -206,6 +259,7 @@ BodyId World::CreateBody(const BodyDef& def) {
   }
   w.denseOf[slot] = i;
   w.customFilters += def.filter == Filter{} ? 0 : 1;
+  w.gravityScaled += def.gravityScale == 1 ? 0 : 1;
   w.queryStale = true;
   w.WakeAround(i);  // a body created touching a sleeping pile wakes it
   return BodyId{slot, w.generation[slot]};
@@ -218,6 +272,12 @@ void World::DestroyBody(BodyId id) {
   const int last = w.bodies.Count() - 1;
   Bodies& b = w.bodies;
   w.customFilters -= b.filter[i] == Filter{} ? 0 : 1;
+  w.gravityScaled -= b.gravityScale[i] == 1 ? 0 : 1;
+  b.bulletCount -= b.bullet[i];
+  if (id.index < w.pendingOf.size() && w.pendingOf[id.index] >= 0) {
+    w.pendingForces[size_t(w.pendingOf[id.index])].live = false;
+    w.pendingOf[id.index] = -1;
+  }
   w.queryStale = true;
   auto moveLast = [&](auto& v) {
     v[i] = v[last];
@@ -315,12 +375,15 @@ void World::Impl::UpdateContactEvents() {
     // Sleeping bodies get no pairs (among themselves or with statics), so their contacts are not
     // in `contacts`; a pile that falls asleep has not stopped touching. A pair of bodies that are
     // both still there and neither simulated (asleep or static) keeps its touch from last step.
+    // At least one of them must be asleep: a body made static (SetType) beside a static one
+    // no longer touches it.
     auto idle = [&](BodyId id) {
       if (id.index >= generation.size() || generation[id.index] != id.generation || denseOf[id.index] < 0) return false;
       return bodies.awake[denseOf[id.index]] == 0;
     };
+    auto asleep = [&](BodyId id) { return Islands::IsSleeping(bodies, denseOf[id.index]); };
     for (const ContactEvent& e : touchingBefore) {
-      if (idle(e.bodyA) && idle(e.bodyB)) touching.push_back(e);
+      if (idle(e.bodyA) && idle(e.bodyB) && (asleep(e.bodyA) || asleep(e.bodyB))) touching.push_back(e);
     }
   }
   std::sort(touching.begin(), touching.end(), EventLess);
@@ -389,6 +452,7 @@ void World::Impl::RunPipeline(Real dt) {
     run->For(Stage::kBroadPhase, n, run->MinItems(), [&](int begin, int end, int) { boxUpdate(begin, end); });
     int pairCount = 0;
     profile.broadPhase += Ms(t0, Clock::now());  // the AABB update; the scheme times the rest
+    PreSolve(dt);
     quadrants->Step(dt, def, bodies, *run, cache, contacts, pairCount, profile);
     CountContacts(pairCount);
     return;
@@ -416,6 +480,7 @@ void World::Impl::RunPipeline(Real dt) {
   }
   auto t3 = Clock::now();
 
+  PreSolve(dt);
   StepContext ctx;
   ctx.dt = dt;
   ctx.def = &def;
@@ -440,6 +505,49 @@ void World::Impl::RunPipeline(Real dt) {
   profile.persistence += Ms(t2, t3);
 
   CountContacts(static_cast<int>(pairs.size()));
+}
+
+// The pre-solve pass: what the solvers do not know of, as velocity changes before they run (so no
+// solver is touched). Pending forces and torques, v += dt F / m and w += dt T / I, then cleared
+// (in the first pipeline repeat of a StepRepeated, as with calls of Step); and the part of gravity
+// that a scale other than 1 adds, v += dt (scale - 1) g, every repeat. Only awake dynamic bodies
+// (`dynamic` 1): a body made static or kinematic, or put to sleep, since its force was applied
+// does not get it. Serial over the forces' list, in parallel blocks over the bodies for gravity
+// (each body's own arithmetic): the same bits for any thread count. Nothing runs, not even a test
+// per body, while no force is pending and every body's gravity scale is 1.
+void World::Impl::PreSolve(Real dt) {
+  if (pendingForces.empty() && gravityScaled == 0) return;
+  const auto t0 = Clock::now();
+  run->Serial(Stage::kIntegrate, [&] {
+    const bool rotation = def.effects.rotation;
+    const double limit = double(kMaxInputSpeed);
+    for (const PendingForce& f : pendingForces) {
+      if (!f.live) continue;
+      pendingOf[f.slot] = -1;
+      const int i = denseOf[f.slot];
+      if (bodies.dynamic[i] == 0) continue;
+      const BodyInverseMass inv = bodies.inv[i];
+      BodyVelocity& bv = bodies.vel[i];
+      // The calls checked the velocity change against the mass at that time; clamping guards a
+      // mass made smaller since (SetDensity) from overflowing the velocity.
+      const double h = double(dt);
+      bv.v.x = Real(std::clamp(double(bv.v.x) + h * f.fx * double(inv.invMass), -limit, limit));
+      bv.v.y = Real(std::clamp(double(bv.v.y) + h * f.fy * double(inv.invMass), -limit, limit));
+      if (rotation) bv.w = Real(std::clamp(double(bv.w) + h * f.torque * double(inv.invInertia), -limit, limit));
+    }
+    pendingForces.clear();
+  });
+  if (gravityScaled > 0 && def.effects.gravity) {
+    const Vec2 g = def.gravity;
+    run->For(Stage::kIntegrate, bodies.Count(), run->MinItems(), [&](int begin, int end, int) {
+      for (int i = begin; i < end; ++i) {
+        const Real scale = bodies.gravityScale[i];
+        if (scale == 1 || bodies.dynamic[i] == 0) continue;
+        bodies.vel[i].v += (dt * (scale - Real(1))) * g;
+      }
+    });
+  }
+  profile.integrate += Ms(t0, Clock::now());
 }
 
 void World::Impl::CountContacts(int candidatePairs) {
@@ -510,6 +618,7 @@ void World::SetAngularVelocity(BodyId id, Real w) {
   const int i = impl_->Dense(id);
   Require(IsFinite(w), "SetAngularVelocity: angular velocity is not finite");
   Require(std::abs(w) <= kMaxInputSpeed, "SetAngularVelocity: angular velocity is beyond the limit of 1e6 rad/s");
+  Require(w == 0 || !impl_->bodies.fixedRotation[i], "SetAngularVelocity: the body has fixed rotation (its angular velocity stays 0)");
   if (impl_->bodies.type[i] == BodyType::kStatic || !impl_->def.effects.rotation) return;
   if (impl_->def.effects.sleep) impl_->islands.WakeIslandOf(impl_->bodies, i);
   impl_->bodies.vel[i].w = w;
@@ -535,10 +644,10 @@ void World::ApplyLinearImpulse(BodyId id, Vec2 impulse, Vec2 worldPoint) {
   Require(IsFinite(impulse) && IsFinite(worldPoint), "ApplyLinearImpulse: impulse or point is not finite");
   Require(std::abs(worldPoint.x) <= kMaxCoordinate && std::abs(worldPoint.y) <= kMaxCoordinate,
           "ApplyLinearImpulse: point is beyond the coordinate limit of 1e6 m");
-  if (w.bodies.type[i] != BodyType::kDynamic) return;
+  w.RequireDynamic(i, "ApplyLinearImpulse");
   // Compute in double and check before writing: the world must stay as it was if refused.
   // A sleeping body's stored inverse mass is 0; the impulse acts on its awake one.
-  const BodyInverseMass inv = w.def.effects.sleep ? Islands::AwakeInverseMass(w.bodies, i) : w.bodies.inv[i];
+  const BodyInverseMass inv = w.ActiveInverseMass(i);
   const double vx = double(w.bodies.vel[i].v.x) + double(inv.invMass) * impulse.x;
   const double vy = double(w.bodies.vel[i].v.y) + double(inv.invMass) * impulse.y;
   const Vec2 r = worldPoint - w.bodies.center[i];
@@ -549,6 +658,184 @@ void World::ApplyLinearImpulse(BodyId id, Vec2 impulse, Vec2 worldPoint) {
   if (w.def.effects.sleep) w.islands.WakeIslandOf(w.bodies, i);
   w.bodies.vel[i].v = {Real(vx), Real(vy)};
   w.bodies.vel[i].w = Real(wz);
+}
+
+void World::ApplyAngularImpulse(BodyId id, Real impulse) {
+  Impl& w = *impl_;
+  const int i = w.Dense(id);
+  Require(IsFinite(impulse), "ApplyAngularImpulse: impulse is not finite");
+  w.RequireDynamic(i, "ApplyAngularImpulse");
+  const double invI = w.def.effects.rotation ? double(w.ActiveInverseMass(i).invInertia) : 0.0;
+  const double wz = double(w.bodies.vel[i].w) + invI * double(impulse);
+  Require(std::abs(wz) <= kMaxInputSpeed, "ApplyAngularImpulse: the resulting angular velocity is beyond the limit of 1e6 rad/s");
+  if (w.def.effects.sleep) w.islands.WakeIslandOf(w.bodies, i);
+  w.bodies.vel[i].w = Real(wz);
+}
+
+// Adds to body i's pending force and torque after checking the sums: applied over the longest
+// step (1 s) they must not change the velocity by more than 1e6 m/s (rad/s), the limit of every
+// velocity input.
+void World::Impl::AddForce(int i, const char* call, double fx, double fy, double torque) {
+  const uint32_t slot = bodies.slot[i];
+  const int32_t k = slot < pendingOf.size() ? pendingOf[slot] : -1;
+  if (k >= 0) {
+    const PendingForce& f = pendingForces[size_t(k)];
+    fx += f.fx, fy += f.fy, torque += f.torque;
+  }
+  const BodyInverseMass inv = ActiveInverseMass(i);
+  const double invI = def.effects.rotation ? double(inv.invInertia) : 0.0;
+  const double limit = double(kMaxInputSpeed) / double(kMaxTimeStep);
+  Require(std::abs(fx * double(inv.invMass)) <= limit && std::abs(fy * double(inv.invMass)) <= limit &&
+              std::abs(torque * invI) <= limit,
+          std::string(call) + ": the body's pending force or torque would change its velocity by more than 1e6 m/s "
+                              "(rad/s) in a 1 s step");
+  if (def.effects.sleep) islands.WakeIslandOf(bodies, i);
+  if (k >= 0) {
+    PendingForce& f = pendingForces[size_t(k)];
+    f.fx = fx, f.fy = fy, f.torque = torque;
+    return;
+  }
+  if (pendingOf.size() < generation.size()) pendingOf.resize(generation.size(), -1);
+  pendingOf[slot] = static_cast<int32_t>(pendingForces.size());
+  pendingForces.push_back(PendingForce{slot, true, fx, fy, torque});
+}
+
+namespace {
+void CheckForce(const char* call, Vec2 force) {
+  Require(IsFinite(force), std::string(call) + ": force is not finite");
+}
+}  // namespace
+
+void World::ApplyForce(BodyId id, Vec2 force, Vec2 worldPoint) {
+  Impl& w = *impl_;
+  const int i = w.Dense(id);
+  Require(IsFinite(force) && IsFinite(worldPoint), "ApplyForce: force or point is not finite");
+  Require(std::abs(worldPoint.x) <= kMaxCoordinate && std::abs(worldPoint.y) <= kMaxCoordinate,
+          "ApplyForce: point is beyond the coordinate limit of 1e6 m");
+  w.RequireDynamic(i, "ApplyForce");
+  const Vec2 c = w.bodies.center[i];
+  const double rx = double(worldPoint.x) - double(c.x), ry = double(worldPoint.y) - double(c.y);
+  w.AddForce(i, "ApplyForce", force.x, force.y, rx * double(force.y) - ry * double(force.x));
+}
+
+void World::ApplyForceToCenter(BodyId id, Vec2 force) {
+  Impl& w = *impl_;
+  const int i = w.Dense(id);
+  CheckForce("ApplyForceToCenter", force);
+  w.RequireDynamic(i, "ApplyForceToCenter");
+  w.AddForce(i, "ApplyForceToCenter", force.x, force.y, 0.0);
+}
+
+void World::ApplyTorque(BodyId id, Real torque) {
+  Impl& w = *impl_;
+  const int i = w.Dense(id);
+  Require(IsFinite(torque), "ApplyTorque: torque is not finite");
+  w.RequireDynamic(i, "ApplyTorque");
+  w.AddForce(i, "ApplyTorque", 0.0, 0.0, torque);
+}
+
+Real World::GetGravityScale(BodyId id) const { return impl_->bodies.gravityScale[impl_->Dense(id)]; }
+
+void World::SetGravityScale(BodyId id, Real scale) {
+  Impl& w = *impl_;
+  const int i = w.Dense(id);
+  Require(GravityScaleOk(scale), "SetGravityScale: the scale must be finite and in [-1e6, 1e6]");
+  Real& s = w.bodies.gravityScale[i];
+  if (s == scale) return;
+  w.gravityScaled += (scale == 1 ? 0 : 1) - (s == 1 ? 0 : 1);
+  s = scale;
+  if (w.def.effects.sleep) w.islands.WakeIslandOf(w.bodies, i);
+}
+
+bool World::IsFixedRotation(BodyId id) const { return impl_->bodies.fixedRotation[impl_->Dense(id)] != 0; }
+
+void World::SetFixedRotation(BodyId id, bool fixed) {
+  Impl& w = *impl_;
+  const int i = w.Dense(id);
+  Bodies& b = w.bodies;
+  if ((b.fixedRotation[i] != 0) == fixed) return;
+  if (w.def.effects.sleep) w.islands.WakeIslandOf(b, i);
+  b.fixedRotation[i] = fixed ? 1 : 0;
+  if (fixed) b.vel[i].w = 0;
+  UpdateMassData(b, i);
+}
+
+bool World::IsBullet(BodyId id) const { return impl_->bodies.bullet[impl_->Dense(id)] != 0; }
+
+void World::SetBullet(BodyId id, bool bullet) {
+  Impl& w = *impl_;
+  const int i = w.Dense(id);
+  Bodies& b = w.bodies;
+  if ((b.bullet[i] != 0) == bullet) return;
+  b.bullet[i] = bullet ? 1 : 0;
+  b.bulletCount += bullet ? 1 : -1;
+}
+
+void World::SetType(BodyId id, BodyType type) {
+  Impl& w = *impl_;
+  const int i = w.Dense(id);
+  Require(type == BodyType::kStatic || type == BodyType::kKinematic || type == BodyType::kDynamic,
+          "SetType: the type is unknown");
+  Bodies& b = w.bodies;
+  if (b.type[i] == type) return;
+  if (type == BodyType::kDynamic) {
+    Require(b.shape[i].density > 0, "SetType: a dynamic body needs ShapeDef.density > 0 (SetDensity first)");
+    RequireDynamicMass(b.shape[i], "SetType: ");
+  }
+  w.WakeAround(i);  // its island, and what rests on it, wake before it changes
+  b.type[i] = type;
+  if (type == BodyType::kStatic) b.vel[i] = BodyVelocity{};
+  b.dynamic[i] = type == BodyType::kDynamic ? 1 : 0;
+  b.awake[i] = type == BodyType::kStatic ? 0 : 1;
+  b.sleepTime[i] = 0;
+  b.islandOf[i] = 0;
+  UpdateMassData(b, i);
+  w.UpdateAABB(i, 0);
+  w.pairCache.Invalidate();
+  w.WakeAround(i);
+}
+
+void World::SetFriction(BodyId id, Real friction) {
+  Impl& w = *impl_;
+  const int i = w.Dense(id);
+  Require(IsFinite(friction) && friction >= 0, "SetFriction: friction must be finite and >= 0");
+  w.bodies.shape[i].friction = friction;
+}
+
+void World::SetRestitution(BodyId id, Real restitution) {
+  Impl& w = *impl_;
+  const int i = w.Dense(id);
+  Require(IsFinite(restitution) && restitution >= 0 && restitution <= 1, "SetRestitution: restitution must be in [0, 1]");
+  w.bodies.shape[i].restitution = restitution;
+}
+
+void World::SetDensity(BodyId id, Real density) {
+  Impl& w = *impl_;
+  const int i = w.Dense(id);
+  Bodies& b = w.bodies;
+  Require(IsFinite(density) && density >= 0, "SetDensity: density must be finite and >= 0");
+  ShapeDef shape = b.shape[i];
+  shape.density = density;
+  if (b.type[i] == BodyType::kDynamic) {
+    Require(density > 0, "SetDensity: a dynamic body needs density > 0");
+    RequireDynamicMass(shape, "SetDensity: ");
+  }
+  if (w.def.effects.sleep) w.islands.WakeIslandOf(b, i);
+  b.shape[i].density = density;
+  UpdateMassData(b, i);
+}
+
+Vec2 World::GetGravity() const { return impl_->def.gravity; }
+
+void World::SetGravity(Vec2 gravity) {
+  Impl& w = *impl_;
+  Require(IsFinite(gravity), "SetGravity: gravity is not finite");
+  if (w.def.gravity == gravity) return;
+  w.def.gravity = gravity;
+  if (w.def.effects.sleep) {
+    constexpr Real kFar = std::numeric_limits<Real>::max();
+    w.islands.WakeOverlapping(w.bodies, AABB{{-kFar, -kFar}, {kFar, kFar}});  // every sleeping body
+  }
 }
 
 bool World::IsAwake(BodyId id) const { return impl_->bodies.awake[impl_->Dense(id)] != 0; }
