@@ -133,15 +133,12 @@ class World {
 
   // Per-body settings (BodyDef documents each; stale ids and bad values throw quadrant::Error).
 
-  /// BodyDef::gravityScale. A scale other than 1 adds dt (scale - 1) g to the body's velocity once
-  /// per step before the solver runs (the solver adds the usual dt g), so the velocity after a
-  /// step is that of gravity scale * g. pgs, thesis and jacobi apply gravity once per step too,
-  /// and the motion is exactly scaled gravity's. soft_step spreads gravity over its n sub-steps: the
-  /// added part acts from the step's start instead, so in free flight each step moves the body
-  /// (scale - 1) g dt^2 (n - 1) / (2 n) further along g than sub-stepped gravity would: a body of
-  /// scale 0 rises 1.04 mm a step, 6.25 cm/s, at 60 Hz, 4 sub-steps and g = (0, -10) m/s^2 (its
-  /// velocity reads 0); one of scale 2 falls 1.04 mm a step further. Resting bodies are held as
-  /// before. Static and kinematic bodies keep their scale and ignore it. While every body has
+  /// BodyDef::gravityScale: the body feels scale * g. soft_step applies it in each sub-step (a
+  /// body of scale 0 floats exactly); pgs, thesis and jacobi, which apply gravity once a step, get
+  /// dt (scale - 1) g added to the velocity before they run, which is the same motion. Under the
+  /// quadrants scheme soft_step gets it that way too, so a free body there moves
+  /// (scale - 1) g dt^2 (n - 1) / (2 n) a step further along g (1.04 mm at 60 Hz, 4 sub-steps,
+  /// scale 0). Static and kinematic bodies keep their scale and ignore it. While every body has
   /// scale 1 this costs nothing (no pass over the bodies). Wakes the body.
   Real GetGravityScale(BodyId id) const;
   void SetGravityScale(BodyId id, Real scale);

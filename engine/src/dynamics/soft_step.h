@@ -239,6 +239,7 @@ class SoftStepSolver final : public Solver {
   Real collisionShare_ = 1;  // a sub-step's share of the step's collision impulses (Run says why)
   std::vector<SolverBody> states_;
   std::vector<SoftRowGroup> groups_;
+  bool gravityScaled_ = false;  // StepContext::gravityScaled: gravity per body, times its scale
   bool vex_ = false;  // the rows eight-wide with AVX, the integration four-wide in AVX's encoding
   std::span<Contact> contacts_;           // this step's
   const BodyInverseMass* inv_ = nullptr;  // this step's bodies'

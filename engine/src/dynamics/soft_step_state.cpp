@@ -354,6 +354,22 @@ void SoftStepSolver::IntegrateStateVelocities(StageRunner& run, const Bodies& bo
   const bool damp = fx.damping && dampDt > 0;
   if (!fx.gravity && !damp) return;
   const Vec2 dv = fx.gravity ? h * def.gravity : Vec2{};
+  if (gravityScaled_) {  // gravity times each body's scale (WorldDef gravity on, some scale not 1)
+    BodyPass(run, [this, &bodies, dv, damp, dampDt](int b, int e, int) {
+      for (int k = b; k < e; ++k) {
+        const int i = active_[k];
+        if (bodies.inv[i].invMass == 0) continue;
+        SolverBody& st = states_[i];
+        const Real scale = bodies.gravityScale[i];
+        st.v += scale == 1 ? dv : scale * dv;
+        if (damp) {
+          st.v = (Real(1) / (Real(1) + dampDt * bodies.linearDamping[i])) * st.v;
+          st.w *= Real(1) / (Real(1) + dampDt * bodies.angularDamping[i]);
+        }
+      }
+    });
+    return;
+  }
 #if QUADRANT_SOFT_SIMD
   // Gravity alone: one four-wide add per body of (dv.x, dv.y, -0, -0), which leaves w and the
   // pad word exactly as they are (x + -0 is x for every x, signed zeros included).
@@ -426,6 +442,21 @@ void SoftStepSolver::IntegrateStatePositions(StageRunner& run, const Bodies& bod
 void SoftStepSolver::MoveFreeBodies(Bodies& bodies, const WorldDef& def, Real dt, int b, int e) {
   const bool sleep = def.effects.sleep;
   const FreeMotion fm = MakeFreeMotion(def, dt);
+  if (gravityScaled_) {  // one by one, each with gravity times its scale
+    for (int i = b; i < e; ++i) {
+      if (!Moves(bodies, i, sleep) || inRows_[i]) continue;
+      const Real scale = bodies.gravityScale[i];
+      if (scale == 1) {
+        MoveFree(bodies, fm, i);
+      } else {
+        FreeMotion scaled = fm;
+        scaled.hg = scale * fm.hg;
+        scaled.dpGravity = scale * fm.dpGravity;
+        MoveFree(bodies, scaled, i);
+      }
+    }
+    return;
+  }
   int i = b;
 #if QUADRANT_SOFT_SIMD
   // Four consecutive bodies at a time (MoveFour), writing the free ones among them.

@@ -77,6 +77,7 @@ void SoftStepSolver::Run(StepContext& ctx) {
   step.m = graph_.Count();
   if (def.effects.restitution) constraints_.Resize(step.m);  // only restitution reads the list
   contacts_ = ctx.contacts;
+  gravityScaled_ = ctx.gravityScaled;
   inv_ = bodies.inv.data();
   step.simd = def.softSimd;
   vex_ = step.simd && def.softVex && CpuHasAvx();  // soft_rows.h: the rows eight at a time with AVX

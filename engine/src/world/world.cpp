@@ -129,7 +129,8 @@ struct World::Impl {
   }
 
   void RunPipeline(Real dt);
-  void PreSolve(Real dt);
+  /// solverScalesGravity: the solver applies the gravity scales itself (StepContext::gravityScaled).
+  void PreSolve(Real dt, bool solverScalesGravity = false);
   void FindPairs(const BroadPhase::BoxUpdate* update = nullptr);
   void UpdateContactEvents();
   void PrepareQueries();
@@ -480,7 +481,10 @@ void World::Impl::RunPipeline(Real dt) {
   }
   auto t3 = Clock::now();
 
-  PreSolve(dt);
+  // soft_step applies gravity per sub-step, so it scales it there: added once a step here, a
+  // scale would move a free body by (scale - 1) g dt^2 (n - 1) / (2 n) too far.
+  const bool solverScalesGravity = def.solver == SolverType::kSoftStep && gravityScaled > 0 && def.effects.gravity;
+  PreSolve(dt, solverScalesGravity);
   StepContext ctx;
   ctx.dt = dt;
   ctx.def = &def;
@@ -488,6 +492,7 @@ void World::Impl::RunPipeline(Real dt) {
   ctx.contacts = contacts;
   ctx.profile = &profile;
   ctx.run = run.get();
+  ctx.gravityScaled = solverScalesGravity;
   solver->Step(ctx);
   if (sleepOn) {
     // Timed as part of the solve: Box2D 2.4 also builds its islands in the solve.
@@ -515,8 +520,8 @@ void World::Impl::RunPipeline(Real dt) {
 // does not get it. Serial over the forces' list, in parallel blocks over the bodies for gravity
 // (each body's own arithmetic): the same bits for any thread count. Nothing runs, not even a test
 // per body, while no force is pending and every body's gravity scale is 1.
-void World::Impl::PreSolve(Real dt) {
-  if (pendingForces.empty() && gravityScaled == 0) return;
+void World::Impl::PreSolve(Real dt, bool solverScalesGravity) {
+  if (pendingForces.empty() && (gravityScaled == 0 || solverScalesGravity)) return;
   const auto t0 = Clock::now();
   run->Serial(Stage::kIntegrate, [&] {
     const bool rotation = def.effects.rotation;
@@ -537,7 +542,7 @@ void World::Impl::PreSolve(Real dt) {
     }
     pendingForces.clear();
   });
-  if (gravityScaled > 0 && def.effects.gravity) {
+  if (gravityScaled > 0 && def.effects.gravity && !solverScalesGravity) {
     const Vec2 g = def.gravity;
     run->For(Stage::kIntegrate, bodies.Count(), run->MinItems(), [&](int begin, int end, int) {
       for (int i = begin; i < end; ++i) {

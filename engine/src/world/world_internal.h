@@ -162,6 +162,9 @@ struct StepContext {
   std::span<Contact> contacts;
   Profile* profile = nullptr;
   StageRunner* run = nullptr;
+  /// Some body's gravity scale is not 1 (Bodies::gravityScale) and the solver applies the scales
+  /// itself (soft_step, per sub-step); otherwise World's pre-solve pass has applied them.
+  bool gravityScaled = false;
 };
 
 }  // namespace quadrant
