@@ -50,17 +50,28 @@ struct ShapeDef {
 /// Every category bit: the default mask of bodies and queries.
 inline constexpr uint32_t kAllCategories = 0xFFFFFFFFu;
 
-/// Collision filtering with Box2D's rule: bodies a and b collide only if
-/// (a.maskBits & b.categoryBits) != 0 and (b.maskBits & a.categoryBits) != 0. A pair that fails
-/// it gets no contact at all (it is dropped after the broad phase). The default (category 1,
-/// every mask bit) collides with everything; while every body has it, the step does no
-/// filtering work at all. Needs ParallelScheme::kDeterministic (World refuses a non-default
-/// filter under kQuadrants, whose threads find pairs on their own).
+/// Collision filtering with Box2D's rule (ShouldCollide): two bodies of the same non-zero
+/// groupIndex always collide when it is positive and never when it is negative, whatever their
+/// bits; otherwise they collide only if (a.maskBits & b.categoryBits) != 0 and
+/// (b.maskBits & a.categoryBits) != 0. A pair that fails it gets no contact at all (it is dropped
+/// after the broad phase; a sensor's pair that fails it has no overlap either). The default
+/// (category 1, every mask bit, group 0) collides with everything; while every body has it, the
+/// step does no filtering work at all. Needs ParallelScheme::kDeterministic (World refuses a
+/// non-default filter under kQuadrants, whose threads find pairs on their own).
 struct Filter {
   uint32_t categoryBits = 1;              ///< what the body is (usually one bit)
   uint32_t maskBits = kAllCategories;     ///< the categories it collides with
+  /// 0: no group (the bits decide). Bodies sharing a positive group always collide, a negative
+  /// one never (a ragdoll's limbs: one negative group), whatever their bits.
+  int32_t groupIndex = 0;
   friend constexpr bool operator==(Filter a, Filter b) = default;
 };
+
+/// Box2D's filter rule (Filter): whether bodies with filters a and b may collide.
+constexpr bool ShouldCollide(Filter a, Filter b) {
+  if (a.groupIndex == b.groupIndex && a.groupIndex != 0) return a.groupIndex > 0;
+  return (a.maskBits & b.categoryBits) != 0 && (b.maskBits & a.categoryBits) != 0;
+}
 
 struct BodyDef {
   BodyType type = BodyType::kStatic;

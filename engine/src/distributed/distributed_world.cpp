@@ -109,7 +109,9 @@ uint64_t HashScene(std::span<const BodyDef> bodies) {
     }
     mix(s.density), mix(s.friction), mix(s.restitution);
     // 16 bits at a time: a float holds integers exactly only up to 2^24.
-    for (uint32_t bits : {b.filter.categoryBits, b.filter.maskBits}) mix(Real(bits & 0xFFFFu)), mix(Real(bits >> 16));
+    for (uint32_t bits : {b.filter.categoryBits, b.filter.maskBits, uint32_t(b.filter.groupIndex)}) {
+      mix(Real(bits & 0xFFFFu)), mix(Real(bits >> 16));
+    }
   }
   return h.Value();
 }
@@ -680,10 +682,7 @@ void DistributedWorld::Impl::FindContacts(Real dt) {
   const std::vector<Filter>& f = local.filter;
   for (const CandidatePair& p : pairs) {
     if (!localOwned[size_t(p.a)] && !localOwned[size_t(p.b)]) continue;
-    if ((f[size_t(p.a)].maskBits & f[size_t(p.b)].categoryBits) == 0 ||
-        (f[size_t(p.b)].maskBits & f[size_t(p.a)].categoryBits) == 0) {
-      continue;
-    }
+    if (!ShouldCollide(f[size_t(p.a)], f[size_t(p.b)])) continue;
     ownPairs.push_back(p);
   }
   contacts.clear();

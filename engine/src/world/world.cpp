@@ -276,14 +276,11 @@ void World::Impl::FindPairs(const BroadPhase::BoxUpdate* update) {
     broadPhase->FindPairs(bodies.aabb, bodies.dynamic, pairs, *run);
   }
   if (customFilters == 0) return;  // every body collides with everything: nothing to drop
-  // Box2D's rule (world.h, Filter). Compacting in place keeps the pairs' deterministic order.
+  // Box2D's rule (types.h, ShouldCollide). Compacting in place keeps the pairs' deterministic order.
   run->Serial(Stage::kBroadPhase, [&] {
     const std::vector<Filter>& f = bodies.filter;
     pairs.erase(std::remove_if(pairs.begin(), pairs.end(),
-                               [&](const CandidatePair& p) {
-                                 return (f[p.a].maskBits & f[p.b].categoryBits) == 0 ||
-                                        (f[p.b].maskBits & f[p.a].categoryBits) == 0;
-                               }),
+                               [&](const CandidatePair& p) { return !ShouldCollide(f[p.a], f[p.b]); }),
                 pairs.end());
   });
 }
