@@ -36,6 +36,15 @@ enum class ShapeType : uint8_t { kCircle, kPolygon };
 /// suite needs no more, and it keeps the hot loops free of a shape list per body.
 struct ShapeDef {
   ShapeType type = ShapeType::kCircle;
+  /// A sensor senses the bodies its shape overlaps and pushes none: its pairs make no contact,
+  /// only overlap events (World::GetSensorBeginEvents). Any body type may carry one: a static or
+  /// kinematic sensor senses dynamic bodies, a dynamic one every body whose pair the broad phase
+  /// finds (a pair needs an awake dynamic body; World::GetSensorBeginEvents has the rules). A
+  /// dynamic sensor body still has mass (from density) and falls, through everything. Two sensors
+  /// do not sense each other. Needs ParallelScheme::kDeterministic (CreateBody refuses it under
+  /// kQuadrants; DistributedWorld refuses it). Default false. (Kept here, beside `type`, where it
+  /// fills padding: the narrow phase reads shapes in whole cache lines.)
+  bool isSensor = false;
   Circle circle;
   Polygon polygon;
   Real density = 1;       ///< kg/m^2, > 0 for dynamic bodies
@@ -281,6 +290,14 @@ struct WorldDef {
   /// Record begin/end touch events at each Step (World::GetContactBeginEvents). Off: no event
   /// work at all, and reading the events throws quadrant::Error.
   bool contactEvents = false;
+  /// Record hit events at each Step (World::GetContactHitEvents): pairs that begin touching at an
+  /// approach speed above hitEventThreshold. Off: no hit work at all (on: one pass over the
+  /// contacts a step, and the touching pairs tracked as for contactEvents), and reading them
+  /// throws quadrant::Error. Needs ParallelScheme::kDeterministic.
+  bool hitEvents = false;
+  /// Least approach speed (m/s, finite, >= 0) of a hit event: only faster ones are reported.
+  /// Default 1, as Box2D 3's hitEventThreshold.
+  Real hitEventThreshold = 1;
 };
 
 /// The stages of a step, as timed in Profile and StageBalance.
@@ -357,6 +374,24 @@ struct ContactEvent {
   BodyId bodyA;
   BodyId bodyB;
   friend constexpr bool operator==(ContactEvent a, ContactEvent b) = default;
+};
+
+/// A body that began or stopped overlapping a sensor in the last Step (World::GetSensorBeginEvents).
+struct SensorEvent {
+  BodyId sensor;   ///< the body whose shape is the sensor (ShapeDef::isSensor)
+  BodyId visitor;  ///< the body it senses (never a sensor)
+  friend constexpr bool operator==(SensorEvent a, SensorEvent b) = default;
+};
+
+/// Two bodies that began touching in the last Step faster than WorldDef::hitEventThreshold
+/// (World::GetContactHitEvents). bodyA.index < bodyB.index.
+struct ContactHitEvent {
+  BodyId bodyA;
+  BodyId bodyB;
+  Vec2 point;              ///< world, the contact point that approached fastest (m)
+  Vec2 normal;             ///< unit, from A to B
+  Real approachSpeed = 0;  ///< speed at which the two surfaces closed there before the solver (m/s), > 0
+  friend constexpr bool operator==(ContactHitEvent a, ContactHitEvent b) = default;
 };
 
 }  // namespace quadrant

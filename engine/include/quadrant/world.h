@@ -152,6 +152,31 @@ class World {
   std::span<const ContactEvent> GetContactBeginEvents() const;
   std::span<const ContactEvent> GetContactEndEvents() const;
 
+  /// Pairs that began touching in the last Step faster than WorldDef::hitEventThreshold: a
+  /// contact point approaching faster than the threshold (the relative normal velocity of the two
+  /// bodies at the point before the solver, with the velocities the Step began with) whose gap
+  /// closes within the Step (separation <= speed * dt: a speculative point about to close counts,
+  /// so does one already touching), of a pair that was not touching after the Step before (as
+  /// GetContactBeginEvents). One event a pair, at its fastest such point; with StepRepeated, its
+  /// first repeat's. A body that lands and bounces off without ever resting still hits once.
+  /// Sorted by (bodyA.index, bodyB.index), the same for any thread count. Valid until the next
+  /// Step. Cost: one pass over the contacts a Step while WorldDef::hitEvents is on. Throws
+  /// quadrant::Error unless WorldDef::hitEvents is on.
+  std::span<const ContactHitEvent> GetContactHitEvents() const;
+
+  /// Sensor overlaps (ShapeDef::isSensor) that began (and ended) in the last Step: a visitor
+  /// overlaps a sensor when their shapes overlap (touching counts) where the Step found them, at
+  /// its start (as contact begin events see the bodies), among the broad phase's pairs, and the
+  /// pair passes both filters (ShouldCollide). A pair needs one awake dynamic body, so a static or
+  /// kinematic sensor senses dynamic bodies and a dynamic one senses every body; a visitor and a
+  /// sensor that both stop being simulated (asleep or static) keep overlapping until one wakes.
+  /// Sensors do not sense each other, push nothing and wake nothing. Sorted by (sensor.index,
+  /// visitor.index), the same for any thread count. An end event may name a body destroyed since
+  /// (IsValid is then false). Valid until the next Step. Cost: none while the world has no sensor;
+  /// with sensors, the pairs with one are split off after the broad phase and tested exactly.
+  std::span<const SensorEvent> GetSensorBeginEvents() const;
+  std::span<const SensorEvent> GetSensorEndEvents() const;
+
   int GetBodyCount() const;
   /// Live ids in creation order (destroying a body moves the last body into its place).
   std::vector<BodyId> GetBodyIds() const;

@@ -1,6 +1,6 @@
-// Exact shape tests for the world's queries (queries.h). Computed in double: a query is one
-// shape at a time, so the cost is negligible, and a ray grazing a vertex or a box touching an
-// edge then gives the same answer the brute-force tests compute.
+// Exact shape tests for the world's queries and sensors (queries.h). Computed in double: a query
+// is one shape at a time, so the cost is negligible, and a ray grazing a vertex or a box touching
+// an edge then gives the same answer the brute-force tests compute.
 #include "collision/queries.h"
 
 #include <algorithm>
@@ -96,6 +96,90 @@ bool RayCastShape(const ShapeDef& shape, const Transform& xf, Vec2 p1, Vec2 p2, 
   hit.fraction = Real(lower);
   hit.point = {Real(p1.x + lower * d.x), Real(p1.y + lower * d.y)};
   hit.normal = {Real(n.x), Real(n.y)};
+  return true;
+}
+
+namespace {
+
+D2 Sub(D2 a, D2 b) { return {a.x - b.x, a.y - b.y}; }
+D2 Add(D2 a, D2 b) { return {a.x + b.x, a.y + b.y}; }
+D2 Scale(double s, D2 a) { return {s * a.x, s * a.y}; }
+
+// A shape's outline in world coordinates, in double: a polygon's vertices and outward normals,
+// or a circle's centre and radius.
+struct WorldShape {
+  bool circle = false;
+  D2 centre{0, 0};
+  double radius = 0;
+  D2 v[kMaxPolygonVertices];
+  D2 n[kMaxPolygonVertices];
+  int count = 0;
+};
+
+WorldShape ToWorld(const ShapeDef& shape, const Transform& xf) {
+  WorldShape w;
+  if (shape.type == ShapeType::kCircle) {
+    w.circle = true;
+    w.centre = PointD(xf, shape.circle.center);
+    w.radius = shape.circle.radius;
+    return w;
+  }
+  w.count = shape.polygon.count;
+  for (int k = 0; k < w.count; ++k) {
+    w.v[k] = PointD(xf, shape.polygon.vertices[k]);
+    w.n[k] = RotD(xf.q, ToD(shape.polygon.normals[k]));
+  }
+  return w;
+}
+
+// Largest signed distance of p past the polygon's edge lines: <= 0 inside or on the boundary.
+double PolygonSeparation(const D2* v, const D2* n, int count, D2 p) {
+  double s = -INFINITY;
+  for (int k = 0; k < count; ++k) s = std::max(s, DotD(n[k], Sub(p, v[k])));
+  return s;
+}
+
+// Squared distance from p to the segment a-b.
+double SegmentDistanceSquared(D2 a, D2 b, D2 p) {
+  const D2 e = Sub(b, a);
+  const double ee = DotD(e, e);
+  const double u = ee > 0 ? std::clamp(DotD(Sub(p, a), e) / ee, 0.0, 1.0) : 0.0;
+  const D2 q = Sub(p, Add(a, Scale(u, e)));
+  return DotD(q, q);
+}
+
+// Squared distance from a point outside the polygon to it (the nearest edge).
+double OutsideDistanceSquared(const D2* v, int count, D2 p) {
+  double best = INFINITY;
+  for (int k = 0; k < count; ++k) best = std::min(best, SegmentDistanceSquared(v[k], v[(k + 1) % count], p));
+  return best;
+}
+
+}  // namespace
+
+bool ShapesOverlap(const ShapeDef& a, const Transform& xfA, const ShapeDef& b, const Transform& xfB) {
+  const WorldShape sa = ToWorld(a, xfA), sb = ToWorld(b, xfB);
+  if (sa.circle && sb.circle) {
+    const D2 d = Sub(sb.centre, sa.centre);
+    const double r = sa.radius + sb.radius;
+    return DotD(d, d) <= r * r;
+  }
+  if (sa.circle || sb.circle) {
+    const WorldShape& poly = sa.circle ? sb : sa;
+    const WorldShape& circle = sa.circle ? sa : sb;
+    if (PolygonSeparation(poly.v, poly.n, poly.count, circle.centre) <= 0) return true;
+    return OutsideDistanceSquared(poly.v, poly.count, circle.centre) <= circle.radius * circle.radius;
+  }
+  // Separating axes: the two polygons' edge normals.
+  for (int side = 0; side < 2; ++side) {
+    const WorldShape& p = side == 0 ? sa : sb;
+    const WorldShape& q = side == 0 ? sb : sa;
+    for (int k = 0; k < p.count; ++k) {
+      double nearest = INFINITY;
+      for (int j = 0; j < q.count; ++j) nearest = std::min(nearest, DotD(p.n[k], Sub(q.v[j], p.v[k])));
+      if (nearest > 0) return false;
+    }
+  }
   return true;
 }
 
