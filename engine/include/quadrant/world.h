@@ -24,6 +24,7 @@
 #include <span>
 #include <vector>
 
+#include "quadrant/debug_draw.h"
 #include "quadrant/types.h"
 
 namespace quadrant {
@@ -125,7 +126,8 @@ class World {
   // from every body's current box at the first query after a change (O(bodies): about 40 ns per
   // body of CPU on the 2-core VM, 1.3 ms for 32000 circles, quadrant_queries'
   // aabb_after_move; then each query reads only the cells or nodes it touches). Shapes are tested exactly. A body is reported
-  // only if (its categoryBits & categoryMask) != 0. Queries are const but not safe to run
+  // only if (its categoryBits & categoryMask) != 0; sensors are reported as any body (give them a
+  // category of their own to leave them out). Queries are const but not safe to run
   // concurrently with each other or with any other call on the same World.
 
   /// Writes to `out` (cleared first) every body whose shape overlaps `box` (touching counts), in
@@ -141,6 +143,34 @@ class World {
   /// order. Refuses what RayCastClosest refuses.
   void RayCastAll(Vec2 origin, Vec2 translation, std::vector<RayHit>& out,
                   uint32_t categoryMask = kAllCategories) const;
+  /// Writes to `out` (cleared first) every body whose shape contains `point` (its boundary
+  /// counts), in GetBodyIds order. Throws quadrant::Error, changing nothing, for a point that is
+  /// not finite.
+  void QueryPoint(Vec2 point, std::vector<BodyId>& out, uint32_t categoryMask = kAllCategories) const;
+  /// The first shape a circle of `radius` (m) touches as its centre moves from `origin` to
+  /// origin + translation; none if it touches none. Exact: a ray against each shape grown by the
+  /// radius (a circle by the sum of the radii, a polygon to its rounded outline: every edge pushed
+  /// out along its normal and a circle at every corner), in double. The hit: `fraction` of the
+  /// translation where the circle first touches, `point` where it touches the shape, `normal` the
+  /// shape's outward unit normal there (against the motion). A shape the circle overlaps at the
+  /// origin is not reported (as a ray starting inside a shape); one it only touches there is, at
+  /// fraction 0, if the translation moves into it. Ties go to the body earlier in GetBodyIds
+  /// order. Candidates come from the query structure over the swept circle's box. Throws
+  /// quadrant::Error, changing nothing, for what RayCastClosest refuses (naming CastCircle) and a
+  /// radius that is not finite, <= 0 or above 1e6 m.
+  std::optional<RayHit> CastCircle(Vec2 origin, Real radius, Vec2 translation,
+                                   uint32_t categoryMask = kAllCategories) const;
+  /// CastCircle for a convex polygon moved without turning: `vertices` (3 to 8, world
+  /// coordinates, any order; as MakePolygon takes them) where the cast starts, moved by
+  /// `translation`. Exact too: a ray against the Minkowski sum of each shape and the reflected
+  /// polygon (their convex hull for a polygon, the rounded reflected polygon for a circle), in
+  /// double. `point` is where they touch: a corner of either, or the middle of the stretch two
+  /// parallel edges share. The same rules for overlaps at the start and ties. To cast a body's
+  /// shape, pass its vertices through TransformPoint. Throws quadrant::Error, changing nothing,
+  /// for a polygon MakePolygon refuses (its message after "CastPolygon: "), a translation that is
+  /// zero or not finite, or a vertex whose end is beyond 1e6 m.
+  std::optional<RayHit> CastPolygon(std::span<const Vec2> vertices, Vec2 translation,
+                                    uint32_t categoryMask = kAllCategories) const;
 
   /// Pairs of bodies touching (a contact point at separation <= 0, as Counters::touchingContacts)
   /// after the last Step that did not touch after the Step before it (begin), and the other way
@@ -176,6 +206,15 @@ class World {
   /// with sensors, the pairs with one are split off after the broad phase and tested exactly.
   std::span<const SensorEvent> GetSensorBeginEvents() const;
   std::span<const SensorEvent> GetSensorEndEvents() const;
+
+  /// Debug drawing (quadrant/debug_draw.h): with kDrawShapes, every body's shape in GetBodyIds
+  /// order (DrawCircle or DrawPolygon, world coordinates, coloured by what the body is: kSensorColor,
+  /// kStaticColor, kKinematicColor, kDynamicColor or kSleepingColor); then with kDrawAABBs every
+  /// body's shape box (GetAABB) in the same order; then with kDrawContacts every point of the last
+  /// Step's contacts (GetContacts order, touching and speculative) with its contact's normal.
+  /// Reads only; costs the callbacks and one pass over the bodies (and contacts). Throws
+  /// quadrant::Error, drawing nothing, for flag bits other than kDrawAll's.
+  void Draw(DebugDraw& draw, uint32_t flags = kDrawShapes) const;
 
   int GetBodyCount() const;
   /// Live ids in creation order (destroying a body moves the last body into its place).

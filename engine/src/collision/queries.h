@@ -1,5 +1,5 @@
-// World queries: the exact shape tests behind World::QueryAABB, RayCastClosest and RayCastAll,
-// and the sensors' overlap test. The broad phase (broad_phase.h, BuildForQueries) narrows the
+// World queries: the exact shape tests behind World::QueryAABB, QueryPoint, RayCastClosest,
+// RayCastAll, CastCircle and CastPolygon, and the sensors' overlap test. The broad phase (broad_phase.h, BuildForQueries) narrows the
 // bodies down; these decide.
 #pragma once
 
@@ -19,5 +19,18 @@ bool RayCastShape(const ShapeDef& shape, const Transform& xf, Vec2 p1, Vec2 p2, 
 /// and a circle by the centre's distance to the polygon, two polygons by separating axes (both
 /// polygons' normals). For sensors (world.cpp, FindSensorOverlaps).
 bool ShapesOverlap(const ShapeDef& a, const Transform& xfA, const ShapeDef& b, const Transform& xfB);
+
+/// Whether the shape at `xf` contains `point` (its boundary counts).
+bool ShapeContainsPoint(const ShapeDef& shape, const Transform& xf, Vec2 point);
+
+/// Where a circle of `radius` moving from p1 to p2 first touches the shape at `xf`: true and the
+/// hit (fraction, point on the shape, the shape's outward normal there; not body). Not if the
+/// circle overlaps the shape at p1; touching it there and moving in is a hit at 0.
+bool CastCircleShape(const ShapeDef& shape, const Transform& xf, Vec2 p1, Vec2 p2, Real radius, RayHit& hit);
+
+/// The same for the convex polygon `moving` (world vertices and normals, as MakePolygon makes
+/// them) moved by `translation` without turning.
+bool CastPolygonShape(const ShapeDef& shape, const Transform& xf, const Polygon& moving, Vec2 translation,
+                      RayHit& hit);
 
 }  // namespace quadrant

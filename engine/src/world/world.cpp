@@ -793,6 +793,81 @@ std::optional<RayHit> World::RayCastClosest(Vec2 origin, Vec2 translation, uint3
   return best;
 }
 
+void World::QueryPoint(Vec2 point, std::vector<BodyId>& out, uint32_t categoryMask) const {
+  Require(IsFinite(point), "QueryPoint: the point is not finite");
+  Impl& w = *impl_;
+  w.PrepareQueries();
+  w.queryFound.clear();
+  w.queryIndex->QueryBox(AABB{point, point}, w.queryBoxes, w.queryFound);
+  std::sort(w.queryFound.begin(), w.queryFound.end());  // GetBodyIds order
+  out.clear();
+  for (int i : w.queryFound) {
+    if ((w.bodies.filter[i].categoryBits & categoryMask) != 0 && ShapeContainsPoint(w.bodies.shape[i], w.bodies.xf[i], point)) {
+      out.push_back(w.IdOf(i));
+    }
+  }
+}
+
+namespace {
+// The closest hit of `cast` (a shape cast: true and the hit for body i) over the bodies whose
+// query boxes overlap `box` (the swept shape's box), ties to the body earlier in GetBodyIds order.
+template <class Cast>
+std::optional<RayHit> CastClosest(World::Impl& w, const AABB& box, uint32_t categoryMask, const Cast& cast) {
+  w.PrepareQueries();
+  w.queryFound.clear();
+  w.queryIndex->QueryBox(box, w.queryBoxes, w.queryFound);
+  std::optional<RayHit> best;
+  int bestIndex = -1;
+  for (int i : w.queryFound) {
+    RayHit hit;
+    if ((w.bodies.filter[i].categoryBits & categoryMask) == 0) continue;
+    if (!cast(i, hit)) continue;
+    if (best && (hit.fraction > best->fraction || (hit.fraction == best->fraction && i > bestIndex))) continue;
+    hit.body = w.IdOf(i);
+    best = hit;
+    bestIndex = i;
+  }
+  return best;
+}
+}  // namespace
+
+std::optional<RayHit> World::CastCircle(Vec2 origin, Real radius, Vec2 translation, uint32_t categoryMask) const {
+  CheckRay("CastCircle", origin, translation);
+  Require(IsFinite(radius) && radius > 0 && radius <= kMaxCoordinate, "CastCircle: the radius must be > 0 and <= 1e6 m");
+  Impl& w = *impl_;
+  const Vec2 end = origin + translation;
+  const Vec2 r{radius, radius};
+  const AABB box{Min(origin, end) - r, Max(origin, end) + r};
+  return CastClosest(w, box, categoryMask, [&](int i, RayHit& hit) {
+    return CastCircleShape(w.bodies.shape[i], w.bodies.xf[i], origin, end, radius, hit);
+  });
+}
+
+std::optional<RayHit> World::CastPolygon(std::span<const Vec2> vertices, Vec2 translation, uint32_t categoryMask) const {
+  Require(vertices.size() >= 3 && vertices.size() <= size_t(kMaxPolygonVertices),
+          "CastPolygon: the polygon needs 3 to 8 vertices, got " + std::to_string(vertices.size()));
+  Polygon moving;
+  try {
+    moving = MakePolygon(vertices);
+  } catch (const Error& e) {
+    throw Error(std::string("CastPolygon: ") + e.what());
+  }
+  Require(IsFinite(translation), "CastPolygon: the translation is not finite");
+  Require(translation.x != 0 || translation.y != 0, "CastPolygon: the translation is zero (a cast needs a direction)");
+  AABB box{moving.vertices[0], moving.vertices[0]};
+  for (int k = 0; k < moving.count; ++k) {
+    const Vec2 v = moving.vertices[k], end = v + translation;
+    Require(IsFinite(end) && std::abs(end.x) <= kMaxCoordinate && std::abs(end.y) <= kMaxCoordinate,
+            "CastPolygon: a vertex's end is beyond the coordinate limit of 1e6 m");
+    box.lower = Min(box.lower, Min(v, end));
+    box.upper = Max(box.upper, Max(v, end));
+  }
+  Impl& w = *impl_;
+  return CastClosest(w, box, categoryMask, [&](int i, RayHit& hit) {
+    return CastPolygonShape(w.bodies.shape[i], w.bodies.xf[i], moving, translation, hit);
+  });
+}
+
 std::span<const ContactEvent> World::GetContactBeginEvents() const {
   Require(impl_->def.contactEvents, "GetContactBeginEvents: contact events are off (WorldDef::contactEvents)");
   return impl_->beginEvents;
@@ -809,6 +884,43 @@ std::span<const SensorEvent> World::GetSensorEndEvents() const { return impl_->s
 std::span<const ContactHitEvent> World::GetContactHitEvents() const {
   Require(impl_->def.hitEvents, "GetContactHitEvents: hit events are off (WorldDef::hitEvents)");
   return impl_->hitEvents;
+}
+
+void World::Draw(DebugDraw& draw, uint32_t flags) const {
+  Require((flags & ~kDrawAll) == 0, "Draw: unknown flag bits (use kDrawShapes, kDrawAABBs, kDrawContacts)");
+  const Impl& w = *impl_;
+  const Bodies& b = w.bodies;
+  const int n = b.Count();
+  if (flags & kDrawShapes) {
+    for (int i = 0; i < n; ++i) {
+      const ShapeDef& s = b.shape[i];
+      const Color color = s.isSensor                        ? kSensorColor
+                          : b.type[i] == BodyType::kStatic    ? kStaticColor
+                          : b.type[i] == BodyType::kKinematic ? kKinematicColor
+                          : b.awake[i]                        ? kDynamicColor
+                                                              : kSleepingColor;
+      const Transform& xf = b.xf[i];
+      if (s.type == ShapeType::kCircle) {
+        draw.DrawCircle(TransformPoint(xf, s.circle.center), s.circle.radius, quadrant::GetAngle(xf.q), color);
+      } else {
+        Vec2 v[kMaxPolygonVertices];
+        for (int k = 0; k < s.polygon.count; ++k) v[k] = TransformPoint(xf, s.polygon.vertices[k]);
+        draw.DrawPolygon(std::span<const Vec2>(v, size_t(s.polygon.count)), color);
+      }
+    }
+  }
+  if (flags & kDrawAABBs) {
+    for (int i = 0; i < n; ++i) {
+      const ShapeDef& s = b.shape[i];
+      draw.DrawAABB(s.type == ShapeType::kCircle ? ComputeAABB(s.circle, b.xf[i]) : ComputeAABB(s.polygon, b.xf[i]),
+                    kAABBColor);
+    }
+  }
+  if (flags & kDrawContacts) {
+    for (const Contact& c : w.contacts) {
+      for (int k = 0; k < c.manifold.pointCount; ++k) draw.DrawContact(c.manifold.points[k].point, c.manifold.normal);
+    }
+  }
 }
 
 int World::GetBodyCount() const { return impl_->bodies.Count(); }
