@@ -19,6 +19,11 @@ using namespace test;  // the small-world builders of test_helpers.h
 
 constexpr const char* kMoved = "was moved from";
 
+struct Drawer : DebugDraw {
+  void DrawCircle(Vec2, Real, Real, Color) override {}
+  void DrawPolygon(std::span<const Vec2>, Color) override {}
+};
+
 TEST(MovedFromWorldTest, EveryCallThrowsError) {
   World source;
   AddGround(source);
@@ -45,8 +50,15 @@ TEST(MovedFromWorldTest, EveryCallThrowsError) {
       {"QueryAABB", [&] { std::vector<BodyId> out; source.QueryAABB({{-1, -1}, {1, 1}}, out); }},
       {"RayCastClosest", [&] { (void)source.RayCastClosest({0, 5}, {0, -10}); }},
       {"RayCastAll", [&] { std::vector<RayHit> out; source.RayCastAll({0, 5}, {0, -10}, out); }},
+      {"QueryPoint", [&] { std::vector<BodyId> out; source.QueryPoint({0, 0}, out); }},
+      {"CastCircle", [&] { (void)source.CastCircle({0, 5}, 1, {0, -10}); }},
+      {"CastPolygon", [&] { (void)source.CastPolygon(std::vector<Vec2>{{0, 5}, {1, 5}, {0, 6}}, {0, -10}); }},
+      {"Draw", [&] { Drawer d; source.Draw(d); }},
       {"GetContactBeginEvents", [&] { (void)source.GetContactBeginEvents(); }},
       {"GetContactEndEvents", [&] { (void)source.GetContactEndEvents(); }},
+      {"GetContactHitEvents", [&] { (void)source.GetContactHitEvents(); }},
+      {"GetSensorBeginEvents", [&] { (void)source.GetSensorBeginEvents(); }},
+      {"GetSensorEndEvents", [&] { (void)source.GetSensorEndEvents(); }},
       {"GetPosition", [&] { (void)source.GetPosition(id); }},
       {"GetAngle", [&] { (void)source.GetAngle(id); }},
       {"GetRotation", [&] { (void)source.GetRotation(id); }},

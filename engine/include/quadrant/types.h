@@ -36,6 +36,15 @@ enum class ShapeType : uint8_t { kCircle, kPolygon };
 /// suite needs no more, and it keeps the hot loops free of a shape list per body.
 struct ShapeDef {
   ShapeType type = ShapeType::kCircle;
+  /// A sensor senses the bodies its shape overlaps and pushes none: its pairs make no contact,
+  /// only overlap events (World::GetSensorBeginEvents). Any body type may carry one: a static or
+  /// kinematic sensor senses dynamic bodies, a dynamic one every body whose pair the broad phase
+  /// finds (a pair needs an awake dynamic body; World::GetSensorBeginEvents has the rules). A
+  /// dynamic sensor body still has mass (from density) and falls, through everything. Two sensors
+  /// do not sense each other. Needs ParallelScheme::kDeterministic (CreateBody refuses it under
+  /// kQuadrants; DistributedWorld refuses it). Default false. (Kept here, beside `type`, where it
+  /// fills padding: the narrow phase reads shapes in whole cache lines.)
+  bool isSensor = false;
   Circle circle;
   Polygon polygon;
   Real density = 1;       ///< kg/m^2, > 0 for dynamic bodies
@@ -50,17 +59,28 @@ struct ShapeDef {
 /// Every category bit: the default mask of bodies and queries.
 inline constexpr uint32_t kAllCategories = 0xFFFFFFFFu;
 
-/// Collision filtering with Box2D's rule: bodies a and b collide only if
-/// (a.maskBits & b.categoryBits) != 0 and (b.maskBits & a.categoryBits) != 0. A pair that fails
-/// it gets no contact at all (it is dropped after the broad phase). The default (category 1,
-/// every mask bit) collides with everything; while every body has it, the step does no
-/// filtering work at all. Needs ParallelScheme::kDeterministic (World refuses a non-default
-/// filter under kQuadrants, whose threads find pairs on their own).
+/// Collision filtering with Box2D's rule (ShouldCollide): two bodies of the same non-zero
+/// groupIndex always collide when it is positive and never when it is negative, whatever their
+/// bits; otherwise they collide only if (a.maskBits & b.categoryBits) != 0 and
+/// (b.maskBits & a.categoryBits) != 0. A pair that fails it gets no contact at all (it is dropped
+/// after the broad phase; a sensor's pair that fails it has no overlap either). The default
+/// (category 1, every mask bit, group 0) collides with everything; while every body has it, the
+/// step does no filtering work at all. Needs ParallelScheme::kDeterministic (World refuses a
+/// non-default filter under kQuadrants, whose threads find pairs on their own).
 struct Filter {
   uint32_t categoryBits = 1;              ///< what the body is (usually one bit)
   uint32_t maskBits = kAllCategories;     ///< the categories it collides with
+  /// 0: no group (the bits decide). Bodies sharing a positive group always collide, a negative
+  /// one never (a ragdoll's limbs: one negative group), whatever their bits.
+  int32_t groupIndex = 0;
   friend constexpr bool operator==(Filter a, Filter b) = default;
 };
+
+/// Box2D's filter rule (Filter): whether bodies with filters a and b may collide.
+constexpr bool ShouldCollide(Filter a, Filter b) {
+  if (a.groupIndex == b.groupIndex && a.groupIndex != 0) return a.groupIndex > 0;
+  return (a.maskBits & b.categoryBits) != 0 && (b.maskBits & a.categoryBits) != 0;
+}
 
 struct BodyDef {
   BodyType type = BodyType::kStatic;
@@ -284,6 +304,14 @@ struct WorldDef {
   /// Record begin/end touch events at each Step (World::GetContactBeginEvents). Off: no event
   /// work at all, and reading the events throws quadrant::Error.
   bool contactEvents = false;
+  /// Record hit events at each Step (World::GetContactHitEvents): pairs that begin touching at an
+  /// approach speed above hitEventThreshold. Off: no hit work at all (on: one pass over the
+  /// contacts a step, and the touching pairs tracked as for contactEvents), and reading them
+  /// throws quadrant::Error. Needs ParallelScheme::kDeterministic.
+  bool hitEvents = false;
+  /// Least approach speed (m/s, finite, >= 0) of a hit event: only faster ones are reported.
+  /// Default 1, as Box2D 3's hitEventThreshold.
+  Real hitEventThreshold = 1;
 };
 
 /// The stages of a step, as timed in Profile and StageBalance.
@@ -370,6 +398,24 @@ struct ContactEvent {
   BodyId bodyA;
   BodyId bodyB;
   friend constexpr bool operator==(ContactEvent a, ContactEvent b) = default;
+};
+
+/// A body that began or stopped overlapping a sensor in the last Step (World::GetSensorBeginEvents).
+struct SensorEvent {
+  BodyId sensor;   ///< the body whose shape is the sensor (ShapeDef::isSensor)
+  BodyId visitor;  ///< the body it senses (never a sensor)
+  friend constexpr bool operator==(SensorEvent a, SensorEvent b) = default;
+};
+
+/// Two bodies that began touching in the last Step faster than WorldDef::hitEventThreshold
+/// (World::GetContactHitEvents). bodyA.index < bodyB.index.
+struct ContactHitEvent {
+  BodyId bodyA;
+  BodyId bodyB;
+  Vec2 point;              ///< world, the contact point that approached fastest (m)
+  Vec2 normal;             ///< unit, from A to B
+  Real approachSpeed = 0;  ///< speed at which the two surfaces closed there before the solver (m/s), > 0
+  friend constexpr bool operator==(ContactHitEvent a, ContactHitEvent b) = default;
 };
 
 }  // namespace quadrant

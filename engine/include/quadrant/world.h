@@ -24,6 +24,7 @@
 #include <span>
 #include <vector>
 
+#include "quadrant/debug_draw.h"
 #include "quadrant/types.h"
 
 namespace quadrant {
@@ -197,7 +198,8 @@ class World {
   // from every body's current box at the first query after a change (O(bodies): about 40 ns per
   // body of CPU on the 2-core VM, 1.3 ms for 32000 circles, quadrant_queries'
   // aabb_after_move; then each query reads only the cells or nodes it touches). Shapes are tested exactly. A body is reported
-  // only if (its categoryBits & categoryMask) != 0. Queries are const but not safe to run
+  // only if (its categoryBits & categoryMask) != 0; sensors are reported as any body (give them a
+  // category of their own to leave them out). Queries are const but not safe to run
   // concurrently with each other or with any other call on the same World.
 
   /// Writes to `out` (cleared first) every body whose shape overlaps `box` (touching counts), in
@@ -213,6 +215,34 @@ class World {
   /// order. Refuses what RayCastClosest refuses.
   void RayCastAll(Vec2 origin, Vec2 translation, std::vector<RayHit>& out,
                   uint32_t categoryMask = kAllCategories) const;
+  /// Writes to `out` (cleared first) every body whose shape contains `point` (its boundary
+  /// counts), in GetBodyIds order. Throws quadrant::Error, changing nothing, for a point that is
+  /// not finite.
+  void QueryPoint(Vec2 point, std::vector<BodyId>& out, uint32_t categoryMask = kAllCategories) const;
+  /// The first shape a circle of `radius` (m) touches as its centre moves from `origin` to
+  /// origin + translation; none if it touches none. Exact: a ray against each shape grown by the
+  /// radius (a circle by the sum of the radii, a polygon to its rounded outline: every edge pushed
+  /// out along its normal and a circle at every corner), in double. The hit: `fraction` of the
+  /// translation where the circle first touches, `point` where it touches the shape, `normal` the
+  /// shape's outward unit normal there (against the motion). A shape the circle overlaps at the
+  /// origin is not reported (as a ray starting inside a shape); one it only touches there is, at
+  /// fraction 0, if the translation moves into it. Ties go to the body earlier in GetBodyIds
+  /// order. Candidates come from the query structure over the swept circle's box. Throws
+  /// quadrant::Error, changing nothing, for what RayCastClosest refuses (naming CastCircle) and a
+  /// radius that is not finite, <= 0 or above 1e6 m.
+  std::optional<RayHit> CastCircle(Vec2 origin, Real radius, Vec2 translation,
+                                   uint32_t categoryMask = kAllCategories) const;
+  /// CastCircle for a convex polygon moved without turning: `vertices` (3 to 8, world
+  /// coordinates, any order; as MakePolygon takes them) where the cast starts, moved by
+  /// `translation`. Exact too: a ray against the Minkowski sum of each shape and the reflected
+  /// polygon (their convex hull for a polygon, the rounded reflected polygon for a circle), in
+  /// double. `point` is where they touch: a corner of either, or the middle of the stretch two
+  /// parallel edges share. The same rules for overlaps at the start and ties. To cast a body's
+  /// shape, pass its vertices through TransformPoint. Throws quadrant::Error, changing nothing,
+  /// for a polygon MakePolygon refuses (its message after "CastPolygon: "), a translation that is
+  /// zero or not finite, or a vertex whose end is beyond 1e6 m.
+  std::optional<RayHit> CastPolygon(std::span<const Vec2> vertices, Vec2 translation,
+                                    uint32_t categoryMask = kAllCategories) const;
 
   /// Pairs of bodies touching (a contact point at separation <= 0, as Counters::touchingContacts)
   /// after the last Step that did not touch after the Step before it (begin), and the other way
@@ -223,6 +253,40 @@ class World {
   /// Valid until the next Step. Throw quadrant::Error unless WorldDef::contactEvents is on.
   std::span<const ContactEvent> GetContactBeginEvents() const;
   std::span<const ContactEvent> GetContactEndEvents() const;
+
+  /// Pairs that began touching in the last Step faster than WorldDef::hitEventThreshold: a
+  /// contact point approaching faster than the threshold (the relative normal velocity of the two
+  /// bodies at the point before the solver, with the velocities the Step began with) whose gap
+  /// closes within the Step (separation <= speed * dt: a speculative point about to close counts,
+  /// so does one already touching), of a pair that was not touching after the Step before (as
+  /// GetContactBeginEvents). One event a pair, at its fastest such point; with StepRepeated, its
+  /// first repeat's. A body that lands and bounces off without ever resting still hits once.
+  /// Sorted by (bodyA.index, bodyB.index), the same for any thread count. Valid until the next
+  /// Step. Cost: one pass over the contacts a Step while WorldDef::hitEvents is on. Throws
+  /// quadrant::Error unless WorldDef::hitEvents is on.
+  std::span<const ContactHitEvent> GetContactHitEvents() const;
+
+  /// Sensor overlaps (ShapeDef::isSensor) that began (and ended) in the last Step: a visitor
+  /// overlaps a sensor when their shapes overlap (touching counts) where the Step found them, at
+  /// its start (as contact begin events see the bodies), among the broad phase's pairs, and the
+  /// pair passes both filters (ShouldCollide). A pair needs one awake dynamic body, so a static or
+  /// kinematic sensor senses dynamic bodies and a dynamic one senses every body; a visitor and a
+  /// sensor that both stop being simulated (asleep or static) keep overlapping until one wakes.
+  /// Sensors do not sense each other, push nothing and wake nothing. Sorted by (sensor.index,
+  /// visitor.index), the same for any thread count. An end event may name a body destroyed since
+  /// (IsValid is then false). Valid until the next Step. Cost: none while the world has no sensor;
+  /// with sensors, the pairs with one are split off after the broad phase and tested exactly.
+  std::span<const SensorEvent> GetSensorBeginEvents() const;
+  std::span<const SensorEvent> GetSensorEndEvents() const;
+
+  /// Debug drawing (quadrant/debug_draw.h): with kDrawShapes, every body's shape in GetBodyIds
+  /// order (DrawCircle or DrawPolygon, world coordinates, coloured by what the body is: kSensorColor,
+  /// kStaticColor, kKinematicColor, kDynamicColor or kSleepingColor); then with kDrawAABBs every
+  /// body's shape box (GetAABB) in the same order; then with kDrawContacts every point of the last
+  /// Step's contacts (GetContacts order, touching and speculative) with its contact's normal.
+  /// Reads only; costs the callbacks and one pass over the bodies (and contacts). Throws
+  /// quadrant::Error, drawing nothing, for flag bits other than kDrawAll's.
+  void Draw(DebugDraw& draw, uint32_t flags = kDrawShapes) const;
 
   int GetBodyCount() const;
   /// Live ids in the world's dense order, which StateHash, GetOwners and query ties use: creation

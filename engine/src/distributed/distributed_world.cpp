@@ -110,7 +110,9 @@ uint64_t HashScene(std::span<const BodyDef> bodies) {
     mix(s.density), mix(s.friction), mix(s.restitution);
     mix(b.gravityScale), mix(Real(b.fixedRotation ? 1 : 0)), mix(Real(b.isBullet ? 1 : 0));
     // 16 bits at a time: a float holds integers exactly only up to 2^24.
-    for (uint32_t bits : {b.filter.categoryBits, b.filter.maskBits}) mix(Real(bits & 0xFFFFu)), mix(Real(bits >> 16));
+    for (uint32_t bits : {b.filter.categoryBits, b.filter.maskBits, uint32_t(b.filter.groupIndex)}) {
+      mix(Real(bits & 0xFFFFu)), mix(Real(bits >> 16));
+    }
   }
   return h.Value();
 }
@@ -457,6 +459,9 @@ void DistributedWorld::Load(std::span<const BodyDef> bodies) {
     Require(bodies[i].gravityScale == 1 && !bodies[i].isBullet,
             "DistributedWorld::Load: body " + std::to_string(i) + ": gravityScale other than 1 and isBullet are not supported");
     row.ForEachArray([](auto& v) { v.clear(); });
+    // Its ranks find pairs on their own and collide every one (FindContacts).
+    Require(!bodies[i].shape.isSensor, "DistributedWorld::Load: sensor shapes are not supported (body " +
+                                           std::to_string(i) + ")");
     AppendBody(row, bodies[i], w.def, static_cast<uint32_t>(i));
     const Record r = Impl::ToRecord(row, 0, static_cast<uint32_t>(i));
     if (r.type == BodyType::kStatic) {
@@ -684,10 +689,7 @@ void DistributedWorld::Impl::FindContacts(Real dt) {
   const std::vector<Filter>& f = local.filter;
   for (const CandidatePair& p : pairs) {
     if (!localOwned[size_t(p.a)] && !localOwned[size_t(p.b)]) continue;
-    if ((f[size_t(p.a)].maskBits & f[size_t(p.b)].categoryBits) == 0 ||
-        (f[size_t(p.b)].maskBits & f[size_t(p.a)].categoryBits) == 0) {
-      continue;
-    }
+    if (!ShouldCollide(f[size_t(p.a)], f[size_t(p.b)])) continue;
     ownPairs.push_back(p);
   }
   contacts.clear();

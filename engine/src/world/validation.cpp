@@ -42,6 +42,11 @@ void ValidateWorldDef(const WorldDef& d) {
           "WorldDef.speculativeDistance must be finite and >= 0");
   Require(IsFinite(d.restitutionThreshold) && d.restitutionThreshold >= 0,
           "WorldDef.restitutionThreshold must be finite and >= 0");
+  Require(IsFinite(d.hitEventThreshold) && d.hitEventThreshold >= 0,
+          "WorldDef.hitEventThreshold must be finite and >= 0");
+  // The quadrants scheme solves inside its own step: the velocities before the solve are not seen.
+  Require(!(d.hitEvents && d.scheme == ParallelScheme::kQuadrants),
+          "WorldDef.hitEvents is not supported with ParallelScheme::kQuadrants (use kDeterministic)");
   Require(d.restitution == RestitutionPolicy::kCollisions || d.restitution == RestitutionPolicy::kBox2d,
           "WorldDef.restitution is unknown");
   Require(d.restitution == RestitutionPolicy::kCollisions || d.solver != SolverType::kThesis,

@@ -81,6 +81,7 @@ struct World::Impl {
   Counters counters;
   std::vector<std::pair<int, int>> countParts;  // CountContacts: per worker, points and touching contacts
   int customFilters = 0;  // bodies whose Filter is not the default: the pair filter runs while > 0
+  int sensorCount = 0;    // bodies whose shape is a sensor: the sensor passes run while > 0
 
   // Queries (world.h): their own broad-phase instance on a one-thread runner (so they never wake
   // the pool nor touch the step's profile), rebuilt when a query follows a change.
@@ -106,6 +107,16 @@ struct World::Impl {
   std::vector<PendingForce> pendingForces;
   std::vector<int32_t> pendingOf;
   int gravityScaled = 0;  // bodies whose gravity scale is not 1: the pre-solve pass runs while > 0
+  // Sensors (while sensorCount > 0): the broad phase's pairs of a sensor and a body that is not
+  // one (FindPairs moves them out of `pairs`), the overlapping ones as (sensor, visitor) ids
+  // (FindSensorOverlaps), and the overlaps after this step and the last one with their events.
+  std::vector<CandidatePair> sensorPairs;
+  std::vector<SensorEvent> sensorFound, overlaps, overlapsBefore, sensorBeginEvents, sensorEndEvents;
+
+  // Hit events (def.hitEvents): this step's candidates from every pipeline repeat (FindHits),
+  // the per-worker lists they are gathered in, and the events kept (SelectHits).
+  WorkerLists<ContactHitEvent> hitParts;
+  std::vector<ContactHitEvent> hitCandidates, hitEvents;
 
   int Dense(BodyId id) const {
     if (id.generation == 0 || id.index >= generation.size() || generation[id.index] != id.generation ||
@@ -132,7 +143,17 @@ struct World::Impl {
   /// solverScalesGravity: the solver applies the gravity scales itself (StepContext::gravityScaled).
   void PreSolve(Real dt, bool solverScalesGravity = false);
   void FindPairs(const BroadPhase::BoxUpdate* update = nullptr);
+  void SplitSensorPairs();
+  void FindSensorOverlaps();
   void UpdateContactEvents();
+  void UpdateSensorEvents();
+  void FindHits(Real dt);
+  void SelectHits();
+  // Whether id names a live body that is not simulated (static or asleep).
+  bool Idle(BodyId id) const {
+    if (id.index >= generation.size() || generation[id.index] != id.generation || denseOf[id.index] < 0) return false;
+    return bodies.awake[denseOf[id.index]] == 0;
+  }
   void PrepareQueries();
   BodyId IdOf(int i) const { return BodyId{bodies.slot[i], generation[bodies.slot[i]]}; }  // one pass of every stage
   void CountContacts(int candidatePairs);
@@ -195,6 +216,8 @@ int AppendBody(Bodies& b, const BodyDef& def, const WorldDef& worldDef, uint32_t
   const ShapeDef shape = ValidateBodyDef(def);  // throws before anything changes
   Require(worldDef.scheme != ParallelScheme::kQuadrants || def.filter == Filter{},
           "CreateBody: a non-default collision filter needs ParallelScheme::kDeterministic");
+  Require(worldDef.scheme != ParallelScheme::kQuadrants || !def.shape.isSensor,
+          "CreateBody: a sensor shape needs ParallelScheme::kDeterministic");
 
   MassData md{};
   Real boundRadius = 0;
@@ -261,6 +284,7 @@ BodyId World::CreateBody(const BodyDef& def) {
   w.denseOf[slot] = i;
   w.customFilters += def.filter == Filter{} ? 0 : 1;
   w.gravityScaled += def.gravityScale == 1 ? 0 : 1;
+  w.sensorCount += def.shape.isSensor ? 1 : 0;
   w.queryStale = true;
   w.WakeAround(i);  // a body created touching a sleeping pile wakes it
   return BodyId{slot, w.generation[slot]};
@@ -279,6 +303,7 @@ void World::DestroyBody(BodyId id) {
     w.pendingForces[size_t(w.pendingOf[id.index])].live = false;
     w.pendingOf[id.index] = -1;
   }
+  w.sensorCount -= b.shape[i].isSensor ? 1 : 0;
   w.queryStale = true;
   auto moveLast = [&](auto& v) {
     v[i] = v[last];
@@ -315,16 +340,21 @@ void World::StepRepeated(Real dt, int pipelineRepeats) {
   w.run->BeginStep();
   const auto start = Clock::now();
   const Real h = dt / Real(pipelineRepeats);
+  if (w.def.hitEvents) w.hitCandidates.clear();
   for (int s = 0; s < pipelineRepeats; ++s) w.RunPipeline(h);
   w.profile.total = Ms(start, Clock::now());
   w.profile.balance = w.run->Balance();
   // With sleep on, the touching pairs are tracked even without events: a sleeping island's
   // contacts are not in `contacts` (it gets no pairs), yet it still touches, so the counter counts
-  // the tracked pairs (as Box2D, Bullet and Chipmunk count a sleeping pile's contacts).
-  if (w.def.contactEvents || w.def.effects.sleep) {
+  // the tracked pairs (as Box2D, Bullet and Chipmunk count a sleeping pile's contacts). Hit events
+  // need last step's touching pairs too.
+  if (w.def.contactEvents || w.def.hitEvents || w.def.effects.sleep) {
+    if (w.def.hitEvents) w.SelectHits();  // before `touching` becomes this step's
     w.UpdateContactEvents();
     w.counters.touchingContacts = static_cast<int>(w.touching.size());
   }
+  // Also once more after the last sensor is gone: its overlaps end, and then its events clear.
+  if (w.sensorCount > 0 || !w.overlaps.empty() || !w.sensorEndEvents.empty()) w.UpdateSensorEvents();
 }
 
 void World::Impl::FindPairs(const BroadPhase::BoxUpdate* update) {
@@ -336,27 +366,142 @@ void World::Impl::FindPairs(const BroadPhase::BoxUpdate* update) {
   } else {
     broadPhase->FindPairs(bodies.aabb, bodies.dynamic, pairs, *run);
   }
-  if (customFilters == 0) return;  // every body collides with everything: nothing to drop
-  // Box2D's rule (world.h, Filter). Compacting in place keeps the pairs' deterministic order.
+  // While every body collides with everything, nothing is dropped and this is skipped.
+  if (customFilters > 0) {
+    // Box2D's rule (types.h, ShouldCollide). Compacting in place keeps the pairs' deterministic order.
+    run->Serial(Stage::kBroadPhase, [&] {
+      const std::vector<Filter>& f = bodies.filter;
+      pairs.erase(std::remove_if(pairs.begin(), pairs.end(),
+                                 [&](const CandidatePair& p) { return !ShouldCollide(f[p.a], f[p.b]); }),
+                  pairs.end());
+    });
+  }
+  if (sensorCount > 0) SplitSensorPairs();
+}
+
+// A sensor's pairs make no contact: they leave `pairs` (which keeps its order) for `sensorPairs`.
+// Two sensors do not sense each other, and their pair is dropped.
+void World::Impl::SplitSensorPairs() {
   run->Serial(Stage::kBroadPhase, [&] {
-    const std::vector<Filter>& f = bodies.filter;
-    pairs.erase(std::remove_if(pairs.begin(), pairs.end(),
-                               [&](const CandidatePair& p) {
-                                 return (f[p.a].maskBits & f[p.b].categoryBits) == 0 ||
-                                        (f[p.b].maskBits & f[p.a].categoryBits) == 0;
-                               }),
-                pairs.end());
+    sensorPairs.clear();
+    const ShapeDef* shape = bodies.shape.data();
+    size_t kept = 0;
+    for (const CandidatePair& p : pairs) {
+      const bool a = shape[p.a].isSensor, b = shape[p.b].isSensor;
+      if (!a && !b) {
+        pairs[kept++] = p;
+      } else if (a != b) {
+        sensorPairs.push_back(p);
+      }
+    }
+    pairs.resize(kept);
   });
 }
 
-namespace {
-bool EventLess(const ContactEvent& x, const ContactEvent& y) {
-  if (x.bodyA.index != y.bodyA.index) return x.bodyA.index < y.bodyA.index;
-  if (x.bodyB.index != y.bodyB.index) return x.bodyB.index < y.bodyB.index;
-  if (x.bodyA.generation != y.bodyA.generation) return x.bodyA.generation < y.bodyA.generation;
-  return x.bodyB.generation < y.bodyB.generation;
+// The sensor pairs whose shapes overlap (touching counts) where the bodies are now, at the start
+// of the step's solve: exact tests in double (queries.cpp, ShapesOverlap), as (sensor, visitor).
+void World::Impl::FindSensorOverlaps() {
+  run->Serial(Stage::kPersistence, [&] {
+    sensorFound.clear();
+    for (const CandidatePair& p : sensorPairs) {
+      if (!ShapesOverlap(bodies.shape[p.a], bodies.xf[p.a], bodies.shape[p.b], bodies.xf[p.b])) continue;
+      const bool aSenses = bodies.shape[p.a].isSensor;
+      sensorFound.push_back({IdOf(aSenses ? p.a : p.b), IdOf(aSenses ? p.b : p.a)});
+    }
+  });
 }
+
+// Hit candidates: contacts with a point approaching faster than the threshold that reaches the
+// other shape within this step (separation <= approach speed * dt, so a speculative point about
+// to close counts, and a point already touching does), with the velocities before the solver. Per
+// contact the fastest such point. SelectHits keeps those of pairs that were not touching.
+void World::Impl::FindHits(Real dt) {
+  hitParts.Reset(run->Workers());
+  const Real threshold = def.hitEventThreshold;
+  run->For(Stage::kPersistence, static_cast<int>(contacts.size()), run->MinHeavyItems(),
+           [&](int begin, int end, int worker) {
+             std::vector<ContactHitEvent>& out = hitParts[worker];
+             for (int i = begin; i < end; ++i) {
+               const Contact& c = contacts[size_t(i)];
+               const Manifold& m = c.manifold;
+               const BodyVelocity& va = bodies.vel[c.a];
+               const BodyVelocity& vb = bodies.vel[c.b];
+               ContactHitEvent e;
+               e.approachSpeed = threshold;
+               bool hit = false;
+               for (int k = 0; k < m.pointCount; ++k) {
+                 const ManifoldPoint& mp = m.points[k];
+                 const Vec2 rA = mp.point - bodies.center[c.a];
+                 const Vec2 rB = mp.point - bodies.center[c.b];
+                 const Vec2 dv = vb.v + Cross(vb.w, rB) - va.v - Cross(va.w, rA);
+                 const Real approach = -Dot(dv, m.normal);
+                 if (approach > e.approachSpeed && mp.separation <= approach * dt) {
+                   e.approachSpeed = approach;
+                   e.point = mp.point;
+                   hit = true;
+                 }
+               }
+               if (!hit) continue;
+               e.bodyA = IdOf(c.a);
+               e.bodyB = IdOf(c.b);
+               e.normal = m.normal;
+               if (e.bodyB.index < e.bodyA.index) {
+                 std::swap(e.bodyA, e.bodyB);
+                 e.normal = -e.normal;
+               }
+               out.push_back(e);
+             }
+           });
+  for (int k = 0; k < hitParts.Count(); ++k) hitCandidates.insert(hitCandidates.end(), hitParts[k].begin(), hitParts[k].end());
+}
+
+namespace {
+bool IdPairLess(BodyId a1, BodyId b1, BodyId a2, BodyId b2) {
+  if (a1.index != a2.index) return a1.index < a2.index;
+  if (b1.index != b2.index) return b1.index < b2.index;
+  if (a1.generation != a2.generation) return a1.generation < a2.generation;
+  return b1.generation < b2.generation;
+}
+bool EventLess(const ContactEvent& x, const ContactEvent& y) { return IdPairLess(x.bodyA, x.bodyB, y.bodyA, y.bodyB); }
+bool SensorLess(const SensorEvent& x, const SensorEvent& y) { return IdPairLess(x.sensor, x.visitor, y.sensor, y.visitor); }
+bool HitLess(const ContactHitEvent& x, const ContactHitEvent& y) { return IdPairLess(x.bodyA, x.bodyB, y.bodyA, y.bodyB); }
 }  // namespace
+
+// The hit events of the step: the candidates (FindHits) of pairs that were not touching after the
+// last Step (`touching` still holds that step's pairs), one per pair (its first pipeline repeat's),
+// sorted by ids as the contact events.
+void World::Impl::SelectHits() {
+  std::stable_sort(hitCandidates.begin(), hitCandidates.end(), HitLess);
+  hitEvents.clear();
+  for (size_t k = 0; k < hitCandidates.size(); ++k) {
+    const ContactHitEvent& e = hitCandidates[k];
+    if (k > 0 && !HitLess(hitCandidates[k - 1], e)) continue;  // a later repeat's hit of the same pair
+    if (std::binary_search(touching.begin(), touching.end(), ContactEvent{e.bodyA, e.bodyB}, EventLess)) continue;
+    hitEvents.push_back(e);
+  }
+}
+
+// Sensor begin and end events as the difference of two sorted lists of overlaps, as the contact
+// events are made (below).
+void World::Impl::UpdateSensorEvents() {
+  std::swap(overlaps, overlapsBefore);
+  overlaps.clear();
+  if (sensorCount > 0) overlaps.assign(sensorFound.begin(), sensorFound.end());
+  if (def.effects.sleep) {
+    // A pair of which neither body is simulated has no broad-phase pair: it keeps its overlap.
+    for (const SensorEvent& e : overlapsBefore) {
+      if (Idle(e.sensor) && Idle(e.visitor)) overlaps.push_back(e);
+    }
+  }
+  std::sort(overlaps.begin(), overlaps.end(), SensorLess);
+  overlaps.erase(std::unique(overlaps.begin(), overlaps.end()), overlaps.end());
+  sensorBeginEvents.clear();
+  sensorEndEvents.clear();
+  std::set_difference(overlaps.begin(), overlaps.end(), overlapsBefore.begin(), overlapsBefore.end(),
+                      std::back_inserter(sensorBeginEvents), SensorLess);
+  std::set_difference(overlapsBefore.begin(), overlapsBefore.end(), overlaps.begin(), overlaps.end(),
+                      std::back_inserter(sensorEndEvents), SensorLess);
+}
 
 // Begin and end events as the difference of two sorted lists of touching pairs, named by id
 // (not by dense index, which destroying a body changes): the order depends on ids only, so it is
@@ -378,13 +523,9 @@ void World::Impl::UpdateContactEvents() {
     // both still there and neither simulated (asleep or static) keeps its touch from last step.
     // At least one of them must be asleep: a body made static (SetType) beside a static one
     // no longer touches it.
-    auto idle = [&](BodyId id) {
-      if (id.index >= generation.size() || generation[id.index] != id.generation || denseOf[id.index] < 0) return false;
-      return bodies.awake[denseOf[id.index]] == 0;
-    };
     auto asleep = [&](BodyId id) { return Islands::IsSleeping(bodies, denseOf[id.index]); };
     for (const ContactEvent& e : touchingBefore) {
-      if (idle(e.bodyA) && idle(e.bodyB) && (asleep(e.bodyA) || asleep(e.bodyB))) touching.push_back(e);
+      if (Idle(e.bodyA) && Idle(e.bodyB) && (asleep(e.bodyA) || asleep(e.bodyB))) touching.push_back(e);
     }
   }
   std::sort(touching.begin(), touching.end(), EventLess);
@@ -479,6 +620,9 @@ void World::Impl::RunPipeline(Real dt) {
       SortContacts();
     }
   }
+  // Timed with persistence, as the rewaking above: they read the contacts and pairs found so far.
+  if (sensorCount > 0) FindSensorOverlaps();
+  if (def.hitEvents) FindHits(dt);
   auto t3 = Clock::now();
 
   // soft_step applies gravity per sub-step, so it scales it there: added once a step here, a
@@ -940,6 +1084,81 @@ std::optional<RayHit> World::RayCastClosest(Vec2 origin, Vec2 translation, uint3
   return best;
 }
 
+void World::QueryPoint(Vec2 point, std::vector<BodyId>& out, uint32_t categoryMask) const {
+  Require(IsFinite(point), "QueryPoint: the point is not finite");
+  Impl& w = *impl_;
+  w.PrepareQueries();
+  w.queryFound.clear();
+  w.queryIndex->QueryBox(AABB{point, point}, w.queryBoxes, w.queryFound);
+  std::sort(w.queryFound.begin(), w.queryFound.end());  // GetBodyIds order
+  out.clear();
+  for (int i : w.queryFound) {
+    if ((w.bodies.filter[i].categoryBits & categoryMask) != 0 && ShapeContainsPoint(w.bodies.shape[i], w.bodies.xf[i], point)) {
+      out.push_back(w.IdOf(i));
+    }
+  }
+}
+
+namespace {
+// The closest hit of `cast` (a shape cast: true and the hit for body i) over the bodies whose
+// query boxes overlap `box` (the swept shape's box), ties to the body earlier in GetBodyIds order.
+template <class Cast>
+std::optional<RayHit> CastClosest(World::Impl& w, const AABB& box, uint32_t categoryMask, const Cast& cast) {
+  w.PrepareQueries();
+  w.queryFound.clear();
+  w.queryIndex->QueryBox(box, w.queryBoxes, w.queryFound);
+  std::optional<RayHit> best;
+  int bestIndex = -1;
+  for (int i : w.queryFound) {
+    RayHit hit;
+    if ((w.bodies.filter[i].categoryBits & categoryMask) == 0) continue;
+    if (!cast(i, hit)) continue;
+    if (best && (hit.fraction > best->fraction || (hit.fraction == best->fraction && i > bestIndex))) continue;
+    hit.body = w.IdOf(i);
+    best = hit;
+    bestIndex = i;
+  }
+  return best;
+}
+}  // namespace
+
+std::optional<RayHit> World::CastCircle(Vec2 origin, Real radius, Vec2 translation, uint32_t categoryMask) const {
+  CheckRay("CastCircle", origin, translation);
+  Require(IsFinite(radius) && radius > 0 && radius <= kMaxCoordinate, "CastCircle: the radius must be > 0 and <= 1e6 m");
+  Impl& w = *impl_;
+  const Vec2 end = origin + translation;
+  const Vec2 r{radius, radius};
+  const AABB box{Min(origin, end) - r, Max(origin, end) + r};
+  return CastClosest(w, box, categoryMask, [&](int i, RayHit& hit) {
+    return CastCircleShape(w.bodies.shape[i], w.bodies.xf[i], origin, end, radius, hit);
+  });
+}
+
+std::optional<RayHit> World::CastPolygon(std::span<const Vec2> vertices, Vec2 translation, uint32_t categoryMask) const {
+  Require(vertices.size() >= 3 && vertices.size() <= size_t(kMaxPolygonVertices),
+          "CastPolygon: the polygon needs 3 to 8 vertices, got " + std::to_string(vertices.size()));
+  Polygon moving;
+  try {
+    moving = MakePolygon(vertices);
+  } catch (const Error& e) {
+    throw Error(std::string("CastPolygon: ") + e.what());
+  }
+  Require(IsFinite(translation), "CastPolygon: the translation is not finite");
+  Require(translation.x != 0 || translation.y != 0, "CastPolygon: the translation is zero (a cast needs a direction)");
+  AABB box{moving.vertices[0], moving.vertices[0]};
+  for (int k = 0; k < moving.count; ++k) {
+    const Vec2 v = moving.vertices[k], end = v + translation;
+    Require(IsFinite(end) && std::abs(end.x) <= kMaxCoordinate && std::abs(end.y) <= kMaxCoordinate,
+            "CastPolygon: a vertex's end is beyond the coordinate limit of 1e6 m");
+    box.lower = Min(box.lower, Min(v, end));
+    box.upper = Max(box.upper, Max(v, end));
+  }
+  Impl& w = *impl_;
+  return CastClosest(w, box, categoryMask, [&](int i, RayHit& hit) {
+    return CastPolygonShape(w.bodies.shape[i], w.bodies.xf[i], moving, translation, hit);
+  });
+}
+
 std::span<const ContactEvent> World::GetContactBeginEvents() const {
   Require(impl_->def.contactEvents, "GetContactBeginEvents: contact events are off (WorldDef::contactEvents)");
   return impl_->beginEvents;
@@ -948,6 +1167,51 @@ std::span<const ContactEvent> World::GetContactBeginEvents() const {
 std::span<const ContactEvent> World::GetContactEndEvents() const {
   Require(impl_->def.contactEvents, "GetContactEndEvents: contact events are off (WorldDef::contactEvents)");
   return impl_->endEvents;
+}
+
+std::span<const SensorEvent> World::GetSensorBeginEvents() const { return impl_->sensorBeginEvents; }
+std::span<const SensorEvent> World::GetSensorEndEvents() const { return impl_->sensorEndEvents; }
+
+std::span<const ContactHitEvent> World::GetContactHitEvents() const {
+  Require(impl_->def.hitEvents, "GetContactHitEvents: hit events are off (WorldDef::hitEvents)");
+  return impl_->hitEvents;
+}
+
+void World::Draw(DebugDraw& draw, uint32_t flags) const {
+  Require((flags & ~kDrawAll) == 0, "Draw: unknown flag bits (use kDrawShapes, kDrawAABBs, kDrawContacts)");
+  const Impl& w = *impl_;
+  const Bodies& b = w.bodies;
+  const int n = b.Count();
+  if (flags & kDrawShapes) {
+    for (int i = 0; i < n; ++i) {
+      const ShapeDef& s = b.shape[i];
+      const Color color = s.isSensor                        ? kSensorColor
+                          : b.type[i] == BodyType::kStatic    ? kStaticColor
+                          : b.type[i] == BodyType::kKinematic ? kKinematicColor
+                          : b.awake[i]                        ? kDynamicColor
+                                                              : kSleepingColor;
+      const Transform& xf = b.xf[i];
+      if (s.type == ShapeType::kCircle) {
+        draw.DrawCircle(TransformPoint(xf, s.circle.center), s.circle.radius, quadrant::GetAngle(xf.q), color);
+      } else {
+        Vec2 v[kMaxPolygonVertices];
+        for (int k = 0; k < s.polygon.count; ++k) v[k] = TransformPoint(xf, s.polygon.vertices[k]);
+        draw.DrawPolygon(std::span<const Vec2>(v, size_t(s.polygon.count)), color);
+      }
+    }
+  }
+  if (flags & kDrawAABBs) {
+    for (int i = 0; i < n; ++i) {
+      const ShapeDef& s = b.shape[i];
+      draw.DrawAABB(s.type == ShapeType::kCircle ? ComputeAABB(s.circle, b.xf[i]) : ComputeAABB(s.polygon, b.xf[i]),
+                    kAABBColor);
+    }
+  }
+  if (flags & kDrawContacts) {
+    for (const Contact& c : w.contacts) {
+      for (int k = 0; k < c.manifold.pointCount; ++k) draw.DrawContact(c.manifold.points[k].point, c.manifold.normal);
+    }
+  }
 }
 
 int World::GetBodyCount() const { return impl_->bodies.Count(); }
