@@ -89,7 +89,10 @@ class TraceError(Exception):
 
 
 class Params:
-    """The model's costs, in microseconds (see the module's docstring)."""
+    """The model's costs, in microseconds (see the module's docstring). The defaults are the 2-core
+    VMs' figures (docs/notes/thread_pool.md): a region's stage took 0.40-0.53 us beyond half its
+    work at 2 threads, a parallel-for of trivial work 0.89 us, a sleeping worker about 100 us to
+    wake; the pool spins 1 ms. A 16-core machine's are not measured here (--fit estimates them)."""
 
     def __init__(self, handover=0.5, barrier=0.5, claim=0.1, wake=100.0, wake_call=2.0, spin=1000.0):
         self.handover, self.barrier, self.claim = handover, barrier, claim
@@ -244,6 +247,7 @@ class Case:
     def __init__(self, trace, use_reference=True):
         self.scene, self.count = trace["scene"], trace["count"]
         self.bodies = trace.get("bodies")
+        self.warmup, self.repeats = trace.get("warmup"), trace.get("repeats")
         self.ref = reference_of(self.scene, self.count) if use_reference else None
         self.recorded_total, self.t1_model = one_thread_us(trace)
         self.by_p = {t["threads"]: t["steps"] for t in trace["traces"]}
@@ -276,6 +280,7 @@ def model_case(case, threads, params):
     n = case.nsteps
     ms = lambda us: us / n / 1000.0  # noqa: E731  (us summed over the steps -> ms per step)
     out = {"scene": case.scene, "count": case.count, "bodies": case.bodies, "steps": n,
+           "warmup": case.warmup, "repeats": case.repeats,
            "recorded_one_thread_ms": ms(case.recorded_total), "scale": case.scale,
            "one_thread_ms": ms(case.t1_scaled),
            "one_thread_stage_ms": {s: ms(case.t1_model["stage_us"][s] * case.scale) for s in STAGES},
@@ -359,6 +364,11 @@ def report(cases, params, threads, note=""):
                  "(benchmarks/scaling_trace.cpp) and replayed on P workers with the pool's claiming "
                  "rules (tools/scaling.py's docstring has the model). Costs: " +
                  ", ".join(f"{k} {v:g}" for k, v in params.as_dict().items()) + ".")
+    machine, commit = os.environ.get("QUADRANT_MACHINE"), os.environ.get("QUADRANT_COMMIT")
+    if machine or commit:
+        lines += ["", f"Recorded on {machine or 'an unnamed machine'}, commit {commit or 'unknown'}; per case "
+                  + ", ".join(f"{c['scene']} {c['count']}: {c['steps']} steps after {c['warmup']}, "
+                              f"least of {c['repeats']} repeats" for c in cases) + "."]
     if note:
         lines += ["", note]
     lines += ["", "Speed-up against 1 thread; s: the serial fraction (time in which one thread works, at "
