@@ -8,19 +8,24 @@
 // so every section is cut into the P-way partition (blocks and chunks depend on P only), but
 // the process is pinned to one core and QUADRANT_POOL_ALONE=0 is set, so the pool starts no
 // worker and runs every block and chunk on the caller, one at a time and in order, each timed on
-// its own with the wall clock, undisturbed by another thread of the pool. What the threads would
-// do with these pieces is the model's business (tools/scaling.py).
+// its own with the wall clock, undisturbed by another thread of the pool. The sections' begins
+// and ends are read on the thread's CPU clock (--clock thread, the default): a serial section of
+// a few milliseconds on a shared core is rarely spared by the other processes in every repeat,
+// and they cannot add to that clock. Each read's cost (measured: the least of 32 back-to-back
+// differences) and the trace's own bookkeeping are taken out of the times between sections. What
+// the threads would do with these pieces is the model's business (tools/scaling.py).
 //
 // The machine may be shared: each thread count is recorded in `--repeats` worlds of the same
-// scene, interleaved (repeat by repeat, every thread count in each), and every time is the least
-// over the repeats (another process taking the core only ever adds time: with the median, the
-// sections that two of three repeats lost the core in kept it). The scenes are deterministic, so at a given thread count every repeat
-// runs the same sections with the same chunks (checked; a difference is an error), and step k is
-// the same physical state at every thread count (the state is bit-identical for any partition).
+// scene, interleaved (repeat by repeat, every thread count in each), and every time is reduced
+// over the repeats: the median (default), or the least (--reduce least; another process only
+// ever adds time, but the least of each of many small times adds up to less than any repeat
+// took). The scenes are deterministic, so at a given thread count every repeat runs the same
+// sections with the same chunks (checked; a difference is an error), and step k is the same
+// physical state at every thread count (the state is bit-identical for any partition).
 //
 // Output: JSON (--out FILE, or stdout): {"scene", "count", "bodies", "warmup", "steps",
-// "repeats", "recorded_on", "traces": [{"threads": P, "steps": [{"us": step time, "sections":
-// [...]}]}]}, a section being {"kind": "serial", "stage", "us"}, {"kind": "gap", "us"} (between
+// "repeats", "recorded_on", "clock", "clock_read_us", "reduce", "traces": [{"threads": P, "steps":
+// [{"us": the step (the sum of its parts, reduced), "sections": [...]}]}]}, a section being {"kind": "serial", "stage", "us"}, {"kind": "gap", "us"} (between
 // sections), {"kind": "for", "stage", "span_us", "us": [[block us...]]} or {"kind": "region",
 // "stage", "runs", "span_us", "us": [[chunk us of stage 0...], ...]}. Times in microseconds.
 #include <sched.h>
@@ -54,6 +59,8 @@ struct Args {
   uint64_t seed = 42;
   std::string out;
   bool noPin = false;
+  std::string clock = "thread";
+  std::string reduce = "median";
 };
 
 // One step as recorded: the sections and the step's own begin and end (steady clock, ms).
@@ -63,19 +70,24 @@ struct RecordedStep {
 };
 
 // A step flattened into one list of times (us), with a signature of its structure (the kinds,
-// stages and chunk counts) that must be equal across repeats.
+// stages and chunk counts) that must be equal across repeats. `readMs`: one clock read, taken
+// out of every interval (each holds about one read's worth of the two around it).
 struct FlatStep {
   std::vector<double> us;
   std::vector<long long> shape;
 };
 
-FlatStep Flatten(const RecordedStep& step) {
+FlatStep Flatten(const RecordedStep& step, double readMs) {
   FlatStep f;
-  f.us.push_back((step.endMs - step.beginMs) * 1e3);
-  double last = step.beginMs;
+  f.us.push_back(0);  // the step: the sum of the parts, below
+  double last = step.beginMs, lastRecord = 0;
+  auto put = [&](double ms) {
+    f.us.push_back(std::max(0.0, ms) * 1e3);
+    f.us[0] += f.us.back();
+  };
   for (const StepTrace::Section& s : step.sections) {
-    f.us.push_back(std::max(0.0, s.beginMs - last) * 1e3);  // the gap before the section
-    f.us.push_back((s.endMs - s.beginMs) * 1e3);
+    put(s.beginMs - last - lastRecord - readMs);  // the gap before the section
+    put(s.endMs - s.beginMs - readMs);
     f.shape.push_back(static_cast<long long>(s.kind) * 64 + static_cast<long long>(s.stage) * 2 + s.runs);
     f.shape.push_back(static_cast<long long>(s.ms.size()));
     for (const std::vector<double>& stage : s.ms) {
@@ -83,9 +95,27 @@ FlatStep Flatten(const RecordedStep& step) {
       for (double ms : stage) f.us.push_back(ms * 1e3);
     }
     last = s.endMs;
+    lastRecord = s.recordMs;
   }
-  f.us.push_back(std::max(0.0, step.endMs - last) * 1e3);  // the tail after the last section
+  put(step.endMs - last - lastRecord - readMs);  // the tail after the last section
   return f;
+}
+
+double Reduce(std::vector<double>& v, bool least) {
+  std::sort(v.begin(), v.end());
+  if (least) return v.front();
+  const size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+// One read of StepTrace::Now(): the least of 32 back-to-back differences.
+double ClockReadMs() {
+  double least = 1e9;
+  for (int k = 0; k < 32; ++k) {
+    const double a = StepTrace::Now();
+    least = std::min(least, StepTrace::Now() - a);
+  }
+  return least;
 }
 
 
@@ -95,7 +125,7 @@ void Put(std::string& out, double us) {
   out += buf;
 }
 
-// Writes one step from its least times (in Flatten's order) and its sections' structure.
+// Writes one step from its reduced times (in Flatten's order) and its sections' structure.
 void WriteStep(std::string& out, const RecordedStep& shape, const std::vector<double>& us) {
   size_t k = 0;
   out += "{\"us\": ";
@@ -197,9 +227,12 @@ int main(int argc, char** argv) {
   p.IntList("--threads", &a.threads, 1, 64, "thread counts (each a partition)").Value("a,b").Default("1,2,4,8,16");
   p.Int("--warmup", &a.warmup, 0, 100000000, "steps before the recorded ones");
   p.Int("--steps", &a.steps, 1, 100000, "recorded steps");
-  p.Int("--repeats", &a.repeats, 1, 100, "worlds per thread count (every time is the least over them)");
+  p.Int("--repeats", &a.repeats, 1, 100, "worlds per thread count (each time is reduced over them: --reduce)");
   p.Int("--seed", &a.seed, 0, INT64_MAX, "the scene's seed");
   p.String("--out", &a.out, "FILE", "the JSON file to write (default: stdout)");
+  p.Name("--reduce", &a.reduce, {"median", "least"}, "reduction", "how each time is taken over the repeats");
+  p.Name("--clock", &a.clock, {"thread", "wall"}, "clock",
+         "the clock of the sections' begins and ends: the thread's CPU time, or the steady clock");
   p.Flag("--no-pin", &a.noPin,
          "do not pin the process to one core (then a pool of several threads runs the chunks, "
          "and a run of chunks is timed as one)");
@@ -218,29 +251,35 @@ int main(int argc, char** argv) {
       return 1;
     }
   }
+  StepTrace::threadClock = a.clock == "thread";
+  const double readMs = ClockReadMs();
   try {
     const qs::Scene scene = qs::MakeScene(a.scene, a.count, a.seed);
     const auto byThreads = Record(scene, a);
     std::string out = "{\"scene\": \"" + a.scene + "\", \"count\": " + std::to_string(a.count) +
                       ", \"bodies\": " + std::to_string(scene.bodies.size()) + ", \"warmup\": " + std::to_string(a.warmup) +
                       ", \"steps\": " + std::to_string(a.steps) + ", \"repeats\": " + std::to_string(a.repeats) +
-                      ", \"recorded_on\": \"" + (a.noPin ? "unpinned" : "one core") + "\", \"traces\": [";
+                      ", \"recorded_on\": \"" + (a.noPin ? "unpinned" : "one core") + "\", \"clock\": \"" + a.clock +
+                      "\", \"clock_read_us\": " + std::to_string(readMs * 1e3) + ", \"reduce\": \"" + a.reduce +
+                      "\", \"traces\": [";
     for (size_t t = 0; t < a.threads.size(); ++t) {
       out += t ? ",\n {" : "\n {";
       out += "\"threads\": " + std::to_string(a.threads[t]) + ", \"steps\": [";
       for (int i = 0; i < a.steps; ++i) {
         const RecordedStep& shape = byThreads[t][0][i];
-        const FlatStep reference = Flatten(shape);
-        std::vector<double> us(reference.us.size(), 1e300);
+        const FlatStep reference = Flatten(shape, readMs);
+        std::vector<std::vector<double>> samples(reference.us.size());
         for (int r = 0; r < a.repeats; ++r) {
-          const FlatStep f = Flatten(byThreads[t][r][i]);
+          const FlatStep f = Flatten(byThreads[t][r][i], readMs);
           if (f.shape != reference.shape || f.us.size() != reference.us.size()) {
             throw std::runtime_error("step " + std::to_string(i) + " at " + std::to_string(a.threads[t]) +
                                      " threads ran other sections in repeat " + std::to_string(r) +
                                      " than in repeat 0 (the scene is not deterministic?)");
           }
-          for (size_t k = 0; k < f.us.size(); ++k) us[k] = std::min(us[k], f.us[k]);
+          for (size_t k = 0; k < f.us.size(); ++k) samples[k].push_back(f.us[k]);
         }
+        std::vector<double> us(samples.size());
+        for (size_t k = 0; k < samples.size(); ++k) us[k] = Reduce(samples[k], a.reduce == "least");
         out += i ? ",\n    " : "\n    ";
         WriteStep(out, shape, us);
       }

@@ -248,6 +248,7 @@ class Case:
         self.scene, self.count = trace["scene"], trace["count"]
         self.bodies = trace.get("bodies")
         self.warmup, self.repeats = trace.get("warmup"), trace.get("repeats")
+        self.reduce = trace.get("reduce", "median")
         self.ref = reference_of(self.scene, self.count) if use_reference else None
         self.recorded_total, self.t1_model = one_thread_us(trace)
         self.by_p = {t["threads"]: t["steps"] for t in trace["traces"]}
@@ -280,7 +281,7 @@ def model_case(case, threads, params):
     n = case.nsteps
     ms = lambda us: us / n / 1000.0  # noqa: E731  (us summed over the steps -> ms per step)
     out = {"scene": case.scene, "count": case.count, "bodies": case.bodies, "steps": n,
-           "warmup": case.warmup, "repeats": case.repeats,
+           "warmup": case.warmup, "repeats": case.repeats, "reduce": case.reduce,
            "recorded_one_thread_ms": ms(case.recorded_total), "scale": case.scale,
            "one_thread_ms": ms(case.t1_scaled),
            "one_thread_stage_ms": {s: ms(case.t1_model["stage_us"][s] * case.scale) for s in STAGES},
@@ -368,7 +369,7 @@ def report(cases, params, threads, note=""):
     if machine or commit:
         lines += ["", f"Recorded on {machine or 'an unnamed machine'}, commit {commit or 'unknown'}; per case "
                   + ", ".join(f"{c['scene']} {c['count']}: {c['steps']} steps after {c['warmup']}, "
-                              f"least of {c['repeats']} repeats" for c in cases) + "."]
+                              f"{c['reduce']} of {c['repeats']} repeats" for c in cases) + "."]
     if note:
         lines += ["", note]
     lines += ["", "Speed-up against 1 thread; s: the serial fraction (time in which one thread works, at "
@@ -425,7 +426,9 @@ def report(cases, params, threads, note=""):
               "Per stage: the 1-thread ms, and at each P the predicted speed-up; at "
               f"{top} threads the serial ms, the stage's serial fraction s (over its 1-thread time), "
               "Amdahl's bound and the barriers per step. 'outside': the step's code between the stage "
-              "runner's sections (serial).", "",
+              "runner's sections (serial). At one thread the code of a lone part (StageRunner::Beside) "
+              "between its own sections is 'outside'; at P threads it is inside the lone part's chunk, "
+              "in its stage: that stage's speed-up reads a little low and outside's high.", "",
               "| case | stage | 1 thread ms | " + " | ".join(f"{p} thr" for p in threads) +
               f" | serial ms at {top} | s | Amdahl at {top} | barriers at {top} |",
               "|" + "---|" * (7 + len(threads))]
@@ -491,7 +494,7 @@ def main(argv=None):
     ap.add_argument("--counts", help="body counts, for every scene (default: each scene's reference counts)")
     ap.add_argument("--steps", type=int, help="recorded steps per case (default 120, the bench's timed steps)")
     ap.add_argument("--warmup", type=int, default=30)
-    ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--threads", default="2,4,8,16")
     ap.add_argument("--out", help="directory for scaling.md and scaling.json (and the recordings)")
     ap.add_argument("--handover-us", type=float, default=Params().handover,

@@ -6,12 +6,14 @@
 // Off unless a program points stepTraceSink at a StepTrace before it makes its World: a
 // StageRunner reads the sink once, when it is made, and with none it tests one pointer per
 // section. Times are the runner's own (StageRunner::NowMs, less one clock read) for blocks and
-// chunks, and the steady clock for a section's begin and end, so the time between two sections
-// (the step's code outside the runner) can be read from a trace too. A run of chunks that one
+// chunks, and Now() for a section's begin and end, so the time between two sections (the step's
+// code outside the runner) can be read from a trace too. A run of chunks that one
 // thread claimed together is timed as one and filed under its first chunk, so a trace holds
 // every chunk's own time only where the task system runs chunks one at a time: a pool with one
 // running thread (the recording program pins itself to one core).
 #pragma once
+
+#include <time.h>
 
 #include <chrono>
 #include <cstdint>
@@ -34,20 +36,34 @@ struct StepTrace {
     Stage stage = Stage::kBroadPhase;
     /// A region whose chunks a thread may claim several at a time (every stage's plan allows it).
     bool runs = false;
-    double beginMs = 0, endMs = 0;       ///< steady clock, around the whole section
+    double beginMs = 0, endMs = 0;       ///< Now(), around the whole section
     std::vector<std::vector<double>> ms;  ///< per stage (a parallel-for: one), each chunk's ms
+    /// Now() from endMs to the end of the record's own work (copying the times), which the time
+    /// to the next section includes.
+    double recordMs = 0;
   };
   std::vector<Section> sections;
 
+  /// The clock of every begin and end: the steady clock, or with threadClock this thread's CPU
+  /// time (a recording on a shared core: time another process took is not counted; a read is a
+  /// system call on some machines, so a recording measures and subtracts it).
+  static inline bool threadClock = false;
   static double Now() {
+    if (threadClock) {
+      timespec ts;
+      clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+      return double(ts.tv_sec) * 1e3 + double(ts.tv_nsec) * 1e-6;
+    }
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now().time_since_epoch()).count();
   }
   void AddSerial(Stage stage, double beginMs, double endMs) {
     sections.push_back({Kind::kSerial, stage, false, beginMs, endMs, {}});
+    sections.back().recordMs = Now() - endMs;
   }
   /// A parallel-for: each block's ms, in block order.
   void AddFor(Stage stage, double beginMs, double endMs, std::span<const double> blockMs) {
     sections.push_back({Kind::kFor, stage, false, beginMs, endMs, {{blockMs.begin(), blockMs.end()}}});
+    sections.back().recordMs = Now() - endMs;
   }
   /// A region run by `plan`: stage s's chunks' ms are chunkMs[offsets[s], offsets[s + 1]). A
   /// stage of no items has no chunk (the task system skips it: no barrier).
@@ -60,6 +76,7 @@ struct StepTrace {
       if (plan[k].count > 0) s.ms.back().assign(chunkMs.begin() + offsets[k], chunkMs.begin() + offsets[k + 1]);
     }
     sections.push_back(std::move(s));
+    sections.back().recordMs = Now() - endMs;
   }
 };
 
