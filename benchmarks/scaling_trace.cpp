@@ -8,11 +8,12 @@
 // so every section is cut into the P-way partition (blocks and chunks depend on P only), but
 // the process is pinned to one core and QUADRANT_POOL_ALONE=0 is set, so the pool starts no
 // worker and runs every block and chunk on the caller, one at a time and in order, each timed on
-// its own with the wall clock, undisturbed by another thread of the pool. The sections' begins
-// and ends are read on the thread's CPU clock (--clock thread, the default): a serial section of
-// a few milliseconds on a shared core is rarely spared by the other processes in every repeat,
-// and they cannot add to that clock. Each read's cost (measured: the least of 32 back-to-back
-// differences) and the trace's own bookkeeping are taken out of the times between sections. What
+// its own, undisturbed by another thread of the pool. Every time is read on the thread's CPU
+// clock (--clock thread, the default; the stage runner's blocks and chunks too): a section or a
+// large chunk of a few milliseconds on a shared core is rarely spared by the other processes in
+// most repeats, and they cannot add to that clock. Each read's cost (measured: the least of 32
+// back-to-back differences) is taken out of every time (the runner does so for its blocks), and
+// the trace's own bookkeeping out of the times between sections. What
 // the threads would do with these pieces is the model's business (tools/scaling.py).
 //
 // The machine may be shared: each thread count is recorded in `--repeats` worlds of the same
@@ -232,7 +233,7 @@ int main(int argc, char** argv) {
   p.String("--out", &a.out, "FILE", "the JSON file to write (default: stdout)");
   p.Name("--reduce", &a.reduce, {"median", "least"}, "reduction", "how each time is taken over the repeats");
   p.Name("--clock", &a.clock, {"thread", "wall"}, "clock",
-         "the clock of the sections' begins and ends: the thread's CPU time, or the steady clock");
+         "the clock of every time: the thread's CPU time, or the steady clock");
   p.Flag("--no-pin", &a.noPin,
          "do not pin the process to one core (then a pool of several threads runs the chunks, "
          "and a run of chunks is timed as one)");

@@ -46,7 +46,8 @@ struct StepTrace {
 
   /// The clock of every begin and end: the steady clock, or with threadClock this thread's CPU
   /// time (a recording on a shared core: time another process took is not counted; a read is a
-  /// system call on some machines, so a recording measures and subtracts it).
+  /// system call on some machines, so a recording measures and subtracts it). A runner made with
+  /// a sink while threadClock is set times its blocks and chunks by that clock too.
   static inline bool threadClock = false;
   static double Now() {
     if (threadClock) {
