@@ -16,6 +16,9 @@
 // A timed block also holds part of the two clock reads around it (for the thread clock about a
 // microsecond, a small serial section's whole work): the runner measures a read once (the least
 // of 32 back-to-back differences) and subtracts it from every block.
+//
+// With a StepTrace (step_trace.h, off unless a program asks) the runner also records every
+// section it runs, in order, for the scaling model.
 #pragma once
 
 #include <time.h>
@@ -26,6 +29,7 @@
 #include <thread>
 #include <vector>
 
+#include "parallel/step_trace.h"
 #include "quadrant/task_system.h"
 #include "quadrant/types.h"
 
@@ -38,7 +42,8 @@ class StageRunner {
         minItems_(minParallelItems),
         workerMs_(tasks.WorkerCount(), 0.0),
         measure_(tasks.WorkerCount() > 1),
-        threadClock_(static_cast<unsigned>(tasks.ThreadCount()) > std::max(1u, std::thread::hardware_concurrency())),
+        threadClock_(static_cast<unsigned>(tasks.ThreadCount()) > std::max(1u, std::thread::hardware_concurrency()) ||
+                     (stepTraceSink != nullptr && StepTrace::threadClock)),  // or a trace asks (step_trace.h)
         readMs_(measure_ ? ClockReadMs() : 0.0) {}
 
   /// Blocks of this step's parallel sections: 1 for a step that runs alone (BeginStep).
@@ -71,6 +76,7 @@ class StageRunner {
       return;
     }
     std::fill(workerMs_.begin(), workerMs_.end(), 0.0);
+    const double traceMs = trace_ ? StepTrace::Now() : 0.0;
     tasks_.ParallelFor(count, [&](int begin, int end, int block) {
       const double t0 = NowMs();
       fn(begin, end, block);
@@ -82,6 +88,7 @@ class StageRunner {
       largest = std::max(largest, ms);
     }
     Add(stage, sum, largest);
+    if (trace_) [[unlikely]] trace_->AddFor(stage, traceMs, StepTrace::Now(), workerMs_);
   }
 
   /// Runs the stages of `plan` in order as one region (TaskSystem::ParallelStages): fn(stage,
@@ -129,6 +136,7 @@ class StageRunner {
       chunkOffset_[s + 1] = chunkOffset_[s] + std::max(1, StageChunks(plan[s].count, plan[s].grain, Workers()));
     }
     chunkMs_.assign(chunkOffset_[stages], 0.0);
+    const double traceMs = trace_ ? StepTrace::Now() : 0.0;
     tasks_.ParallelStages(stages, plan.data(), [&](int s, int b, int e, int chunk) {
       const double t0 = NowMs();
       fn(s, b, e);
@@ -146,6 +154,7 @@ class StageRunner {
       critical += std::max(largest, sum / Workers());
     }
     Add(stage, work, critical);
+    if (trace_) [[unlikely]] trace_->AddRegion(stage, traceMs, StepTrace::Now(), plan, chunkMs_, chunkOffset_);
   }
 
   /// fn(begin, end) over [0, count) as one stage of Stages: chunks of at least `grain` items that
@@ -188,6 +197,7 @@ class StageRunner {
     // the solve stage 0.138 ms a step, 0.155 ms with runs).
     const TaskSystem::StagePlan plan{items, 1, false};  // one stage: no list to allocate every step
     chunkMs_.assign(items, 0.0);
+    const double traceMs = trace_ ? StepTrace::Now() : 0.0;
     tasks_.ParallelStages(1, &plan, [&](int, int b, int e, int) {
       for (int item = b; item < e; ++item) {
         const double t0 = measure_ ? NowMs() : 0.0;
@@ -214,6 +224,7 @@ class StageRunner {
       largest = std::max(largest, ms);
     }
     Add(stage, sum, std::max(largest, sum / Workers()));
+    if (trace_) [[unlikely]] trace_->AddRegion(stage, traceMs, StepTrace::Now(), {&plan, 1}, chunkMs_, std::array{0, items});
   }
 
   /// Runs fn on the calling thread; all of it is on the critical path.
@@ -223,14 +234,16 @@ class StageRunner {
       fn();
       return;
     }
+    const double traceMs = trace_ ? StepTrace::Now() : 0.0;
     if (!measure_) {
       fn();
-      return;
+    } else {
+      const double t0 = NowMs();
+      fn();
+      const double ms = Elapsed(t0);
+      Add(stage, ms, ms);
     }
-    const double t0 = NowMs();
-    fn();
-    const double ms = Elapsed(t0);
-    Add(stage, ms, ms);
+    if (trace_) [[unlikely]] trace_->AddSerial(stage, traceMs, StepTrace::Now());
   }
 
   void Reset() { balance_ = {}; }
@@ -271,6 +284,7 @@ class StageRunner {
   bool measure_;      // more than one worker: a single one's bound is 1 by definition
   bool threadClock_;  // more workers than cores: time blocks by thread CPU time
   double readMs_;     // the cost of one clock read, subtracted from every timed block
+  StepTrace* trace_ = stepTraceSink;  // where each section is recorded (step_trace.h); usually none
   std::array<StageBalance, kStageCount> balance_{};
 };
 
