@@ -11,16 +11,23 @@
 // unclaimed [front, back)); the thread that finishes a stage's last chunk publishes the next, so
 // a solver pass costs one hand-over, not one per colour. The caller and even workers claim from
 // the front, odd workers from the back (Claim). Idle threads spin up to kMaxSpinMicros, then
-// sleep on a futex. On a busy machine the caller runs jobs alone (Judge) and steps take the
-// one-thread path (RunsAlone; not with QUADRANT_POOL_ALONE=0, which determinism tests set).
-// QUADRANT_POOL_STATS=1 prints the pool's counters when it is destroyed.
+// sleep on a futex; a step's start (Prepare) wakes them, so that a game loop, which sleeps to its
+// next frame for longer than any spin, finds them up by its first job. On a busy machine the
+// caller runs jobs alone (Judge) and steps take the one-thread path (RunsAlone; not with
+// QUADRANT_POOL_ALONE=0, which determinism tests set). QUADRANT_POOL_STATS=1 prints the counters.
 //
 // Why the caller may run alone: a preempted worker holding a chunk stalls its stage for a time
 // slice. Beside one busy loop on the 2-core VM, a pool whose caller waited for every block took
-// 161 ms a step on 16000 circles at 2 threads against 3.49 ms at 1 (niced builds also ran);
-// this pool 1.32 ms at 2 threads, 1.34 ms at 1. Not OpenMP: GCC's libgomp is not instrumented
-// for ThreadSanitizer (docs/parallelism.md compares the costs). docs/notes/thread_pool.md holds
-// the earlier pools and the measurements behind this one.
+// 161 ms a step on 16000 circles at 2 threads against 3.49 ms at 1; this pool stays within 10 %
+// of one thread in every cell (2-4 threads; 1000 and 16000 circles, pyramids of 5050 and 7975
+// boxes: 0.96-1.23x). Its signs: stalls and idle workers seen from inside, and /proc for a pool
+// born beside busy cores and for staying serial; without /proc the same cells fell to 0.4x (a
+// 70-step run of 1000 circles ends before a window is judged). No sign may misread a quiet
+// machine: a worker's wake-up latency after the caller slept is excused (a 60 Hz frame loop of
+// 8000 boxes had run 271 of 300 steps alone on it), and the stall limit and the cores left to
+// others scale with the threads (16 threads on a quiet 16-core machine had run 122 of 180 steps
+// alone on their own stage ends). Not OpenMP: GCC's libgomp is not instrumented for
+// ThreadSanitizer. docs/notes/thread_pool.md holds the earlier pools and the measurements.
 #include <algorithm>
 #include <array>
 #include <atomic>
@@ -420,19 +427,21 @@ class ThreadPool final : public TaskSystem {
 
   // The step begins (StageRunner::BeginStep, after RunsAlone said no): wake sleeping workers, so
   // that they spin by the step's first job. Only where the last step (or none yet) ran a job: a
-  // step with no parallel section would only keep a core spinning for a millisecond. Workers
-  // sleep here because the caller was away for longer than a spin (a game loop sleeping to its
-  // next frame): the jobs published before they are up, within a spin of the wake, are excused
-  // from the idle rule (Run), since a wake-up's latency is no sign of a busy machine. A 60 Hz
-  // frame loop of 8000 boxes at 2 threads otherwise ran 271 of 300 steps alone.
+  // step with no parallel section would only keep a core spinning for a millisecond. Where the
+  // caller was away from the pool for longer than a spin (a game loop sleeping to its next
+  // frame), the workers sleep by design, and the jobs published before they are up are excused
+  // from the idle rule (Run): a wake-up's latency is no sign of a busy machine (a 60 Hz frame
+  // loop of 8000 boxes at 2 threads ran 271 of 300 steps alone on that sign). Steps back to back
+  // get no excuse: there a worker asleep at a step's start was preempted while it spun.
   void Prepare() override {
+    waking_ = false;
     if (threads_.empty() || tRunning == this) return;
     const bool ranJobs = jobs_ != jobsAtPrepare_ || !prepared_;
     jobsAtPrepare_ = jobs_;
     prepared_ = true;
     if (!ranJobs || jobSleepers_.load(std::memory_order_seq_cst) == 0) return;
     ++statPrepareWakes_;
-    wakeGraceUntil_ = Clock::now() + std::chrono::microseconds(kMaxSpinMicros);
+    waking_ = Clock::now() - lastJobEnd_ > std::chrono::microseconds(kMaxSpinMicros);
     // A bump without a new job: a woken worker finds the claim word of a finished job, claims
     // nothing and spins for the next one (WorkerLoop).
     jobWord_.fetch_add(1, std::memory_order_seq_cst);
@@ -679,11 +688,12 @@ class ThreadPool final : public TaskSystem {
     if (first == stages) return;
     ++statJobs_;
     ++jobs_;
-    const Clock::time_point jobStart = Clock::now();
+    const Clock::time_point jobStart = stats_ ? Clock::now() : Clock::time_point{};
     if (stats_ && statFirstJobMs_ < 0) statFirstJobMs_ = std::chrono::duration<double, std::milli>(jobStart - born_).count();
-    // A job published while the workers that Prepare woke are still getting up, within a spin of
-    // the wake, says nothing about the machine (Judge's idle rule).
-    const bool excused = jobStart < wakeGraceUntil_ && jobSleepers_.load(std::memory_order_seq_cst) > 0;
+    // A job published while the workers that Prepare woke are still getting up says nothing about
+    // the machine (Judge's idle rule); the first job that finds them up ends the excuse.
+    waking_ = waking_ && jobSleepers_.load(std::memory_order_seq_cst) > 0;
+    const bool excused = waking_;
     failed_.store(false, std::memory_order_relaxed);
     done_.store(0, std::memory_order_relaxed);
     tag_ = (tag_ + 1) & (kRunsTag - 1);
@@ -704,7 +714,8 @@ class ThreadPool final : public TaskSystem {
       ++windowJobs_;
       windowHelped_ += mine < total;
     }
-    if (stats_) statJobNs_ += std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now() - jobStart).count();
+    lastJobEnd_ = Clock::now();
+    if (stats_) statJobNs_ += std::chrono::duration_cast<std::chrono::nanoseconds>(lastJobEnd_ - jobStart).count();
     rangeFn_ = nullptr;
     stageFn_ = nullptr;
     if (error_) {
@@ -876,7 +887,8 @@ class ThreadPool final : public TaskSystem {
   bool windowOpen_ = false;
   bool probing_ = false;
   long long windowJobs_ = 0, windowHelped_ = 0;  // this window's jobs, those a worker took part in
-  Clock::time_point wakeGraceUntil_{};             // jobs before it, with workers asleep, are excused (Prepare)
+  bool waking_ = false;                            // Prepare woke workers after the caller's time away
+  Clock::time_point lastJobEnd_{};                 // the end of the caller's last parallel job
   long long jobs_ = 0, jobsAtPrepare_ = 0;         // jobs run; jobs_ at the last Prepare
   bool prepared_ = false;
   int contendedMillis_ = kContendedMillis;
