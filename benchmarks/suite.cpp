@@ -22,19 +22,22 @@
 // N is the scene's dynamic bodies as built: a count the scene rounds (pyramid to a whole base,
 // many_pyramids to a multiple of 55) is named and reported as the count that ran (issue #29).
 //
-// Own flags (--scenes, --engines, --counts, --threads, --steps, --warmup, --seed, --list) are
-// declared in ParseOwnFlags and removed before Google Benchmark sees the command line; --help
-// lists them with their defaults. Google Benchmark's own flags go to it; any other argument is
-// refused in one line.
+// Own flags (--scenes, --engines, --counts, --threads, --steps, --warmup, --seed, --frame-rate,
+// --list) are declared in ParseOwnFlags and removed before Google Benchmark sees the command
+// line; --help lists them with their defaults. --frame-rate HZ is a game's frame loop: each step
+// is followed by sleeping to the next frame boundary (absolute deadlines) and only the steps are
+// timed (manual time). Google Benchmark's own flags go to it; other arguments are refused.
 
 #include <benchmark/benchmark.h>
 #include <fmt/format.h>
 #include <malloc.h>
 #include <sys/resource.h>
+#include <time.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
+#include <cerrno>
 #include <chrono>
 #include <cstdint>
 #include <cstdio>
@@ -77,6 +80,7 @@ struct Options {
   int steps = 120;
   int warmup = 30;
   uint64_t seed = 42;
+  int frameRate = 0;  // Hz; 0: back to back
   bool list = false;
 };
 
@@ -111,6 +115,8 @@ Options ParseOwnFlags(quadrant::cli::Parser& p, int& argc, char** argv) {
   p.Int("--steps", &opts.steps, 1, 100'000'000, "timed steps per run");
   p.Int("--warmup", &opts.warmup, 0, 100'000'000, "untimed steps before timing");
   p.Int("--seed", &opts.seed, 0, INT64_MAX, "scene seed");
+  p.Int("--frame-rate", &opts.frameRate, 0, 10'000,
+        "frames a second: sleep after each step to the next frame boundary and time the steps only (0: back to back)");
   p.Flag("--list", &opts.list, "print the engine and scene names and exit");
   p.PassThrough("--benchmark_",
                 "The rest goes to Google Benchmark, e.g. --benchmark_repetitions=3 --benchmark_out=bench.json\n"
@@ -331,6 +337,41 @@ std::string DescribeScene(const qs::Scene& scene) {
       scene.pipelineRepeats, effects.empty() ? std::string("none") : effects);
 }
 
+// ---- The frame loop (--frame-rate) ----------------------------------------------------------
+
+/// A game's loop: after each step, sleep until the next frame boundary. Boundaries are absolute
+/// (start + k / HZ on the monotonic clock, clock_nanosleep TIMER_ABSTIME), so a step's duration
+/// and the sleep's wake-up delay do not drift the frames; a step that ends past its boundary
+/// waits for the first boundary after it (a dropped frame, counted). Hz 0: Wait does nothing.
+class FramePacer {
+ public:
+  explicit FramePacer(int hz)
+      : period_(hz > 0 ? std::chrono::nanoseconds(1'000'000'000LL / hz) : std::chrono::nanoseconds(0)),
+        next_(std::chrono::steady_clock::now()) {}
+  bool On() const { return period_.count() > 0; }
+  void Wait() {
+    if (!On()) return;
+    next_ += period_;
+    const auto now = std::chrono::steady_clock::now();
+    if (next_ < now) {
+      ++late_;
+      next_ += ((now - next_) / period_ + 1) * period_;
+    }
+    // libstdc++'s steady_clock is CLOCK_MONOTONIC.
+    const auto ns = std::chrono::duration_cast<std::chrono::nanoseconds>(next_.time_since_epoch()).count();
+    const timespec at{static_cast<time_t>(ns / 1'000'000'000), static_cast<long>(ns % 1'000'000'000)};
+    while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &at, nullptr) == EINTR) {
+    }
+  }
+  /// Steps that ended past their frame's boundary.
+  int Late() const { return late_; }
+
+ private:
+  std::chrono::nanoseconds period_;
+  std::chrono::steady_clock::time_point next_;
+  int late_ = 0;
+};
+
 // ---- The benchmark -------------------------------------------------------------------------
 
 struct Job {
@@ -341,6 +382,7 @@ struct Job {
   int steps = 120;
   int warmup = 30;
   uint64_t seed = 42;
+  int frameRate = 0;
   std::string name;
 };
 
@@ -356,12 +398,16 @@ std::string RunJob(benchmark::State& state, const Job& job) {
   // Setup, untimed, repeated for every repetition so that repetitions are independent.
   std::unique_ptr<qs::Adapter> adapter;
   MemoryProbe memory;
+  FramePacer pacer(job.frameRate);  // --frame-rate: warm-up and timed steps alike, each a frame
   try {
     const qs::Scene scene = qs::MakeScene(job.scene, job.count, job.seed);
     memory.Begin();
     adapter = qs::MakeAdapter(job.engine);
     adapter->Load(scene, job.threads);
-    for (int i = 0; i < job.warmup; ++i) adapter->Step();
+    for (int i = 0; i < job.warmup; ++i) {
+      adapter->Step();
+      pacer.Wait();
+    }
   } catch (const std::exception& e) {
     const std::string error = fmt::format("setup failed: {}", e.what());
     state.SkipWithError(error.c_str());
@@ -372,20 +418,37 @@ std::string RunJob(benchmark::State& state, const Job& job) {
 
   // Timed: exactly job.steps steps in one iteration. The two clock reads give ms_per_step
   // as a plain counter (Google Benchmark prints an inverted rate with an "s" suffix, which
-  // would mislabel milliseconds); it matches real_time / steps.
+  // would mislabel milliseconds); it matches real_time / steps. In a frame loop each step is
+  // timed on its own and the sum is the iteration's (manual) time.
   double elapsedMs = 0;
   std::string stepError;
+  const int lateBefore = pacer.Late();
   const auto stagesBefore = adapter->StageTotals();
   for (auto _ : state) {
     const auto t0 = std::chrono::steady_clock::now();
+    std::chrono::steady_clock::duration stepped{};
     try {
-      for (int i = 0; i < job.steps; ++i) adapter->Step();
+      for (int i = 0; i < job.steps; ++i) {
+        if (!pacer.On()) {
+          adapter->Step();
+          continue;
+        }
+        const auto s0 = std::chrono::steady_clock::now();
+        adapter->Step();
+        stepped += std::chrono::steady_clock::now() - s0;
+        pacer.Wait();
+      }
     } catch (const std::exception& e) {
       stepError = fmt::format("step failed: {}", e.what());
       state.SkipWithError(stepError.c_str());
       break;
     }
-    elapsedMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    if (pacer.On()) {
+      elapsedMs = std::chrono::duration<double, std::milli>(stepped).count();
+      state.SetIterationTime(elapsedMs * 1e-3);
+    } else {
+      elapsedMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    }
   }
   if (state.error_occurred()) return "ERROR " + stepError;
   const double othersCores = load.OthersCores();
@@ -400,6 +463,7 @@ std::string RunJob(benchmark::State& state, const Job& job) {
   state.counters["engine_threads"] = Counter(double(job.threads));
   state.counters["steps"] = Counter(double(job.steps));
   state.counters["warmup"] = Counter(double(job.warmup));
+  if (pacer.On()) state.counters["late_frames"] = Counter(double(pacer.Late() - lateBefore));
   // RSS growth (peak) while making, loading and warming up this adapter, MB; see MemoryProbe.
   state.counters["memory_mb"] = Counter(memoryMb);
   state.counters["heap_mb"] = Counter(heapMb);
@@ -519,7 +583,7 @@ int main(int argc, char** argv) {
         for (int threads : opts.threads) {
           for (size_t e = 0; e < opts.engines.size(); ++e) {
             const std::string& engine = opts.engines[e];
-            Job job{sceneName, engine, count, threads, opts.steps, opts.warmup, opts.seed,
+            Job job{sceneName, engine, count, threads, opts.steps, opts.warmup, opts.seed, opts.frameRate,
                     fmt::format("{}/{}/n:{}/threads:{}", sceneName, engine, count, threads)};
             std::string reason;
             if (threads > caps[e].maxThreads) {
@@ -542,19 +606,21 @@ int main(int argc, char** argv) {
               ++unsupportedReasons[reason];
               continue;
             }
-            benchmark::RegisterBenchmark(job.name.c_str(),
-                                         [job](benchmark::State& state) {
-                                           const auto t0 = std::chrono::steady_clock::now();
-                                           const std::string result = RunJob(state, job);
-                                           progress.Finished(SpecOf(job),
-                                                             std::chrono::duration<double>(
-                                                                 std::chrono::steady_clock::now() - t0)
-                                                                 .count(),
-                                                             result);
-                                         })
-                ->Iterations(1)
-                ->UseRealTime()
-                ->Unit(benchmark::kMillisecond);
+            benchmark::internal::Benchmark* b = benchmark::RegisterBenchmark(
+                job.name.c_str(), [job](benchmark::State& state) {
+                  const auto t0 = std::chrono::steady_clock::now();
+                  const std::string result = RunJob(state, job);
+                  progress.Finished(SpecOf(job),
+                                    std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(),
+                                    result);
+                });
+            b->Iterations(1)->Unit(benchmark::kMillisecond);
+            // A frame loop's iteration time is its steps' (the sleeps between them are not work).
+            if (opts.frameRate > 0) {
+              b->UseManualTime();
+            } else {
+              b->UseRealTime();
+            }
             ++registered;
             progress.Plan(SpecOf(job), repetitions);
           }
@@ -596,6 +662,8 @@ int main(int argc, char** argv) {
     benchmark::AddCustomContext("steps", fmt::format("{}", opts.steps));
     benchmark::AddCustomContext("warmup", fmt::format("{}", opts.warmup));
     benchmark::AddCustomContext("seed", fmt::format("{}", opts.seed));
+    // Frames a second of the frame loop (0: steps back to back).
+    benchmark::AddCustomContext("frame_rate", fmt::format("{}", opts.frameRate));
     // Set by tools/quadrant bench: busy processes it ran beside the suite (--busy K), and the
     // 1-minute load average before it started them.
     benchmark::AddCustomContext("busy_processes", EnvOr("QUADRANT_BUSY", "0"));

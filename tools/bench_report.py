@@ -382,6 +382,9 @@ def markdown(results, source, busy=None):
     if busy_count(results):
         out(f"- **busy machine run**: {busy_count(results)} busy process(es) (shell busy loops) ran beside "
             "every benchmark (`tools/quadrant bench --busy`)")
+    if ctx(results, 'frame_rate', '0') not in ('0', ''):
+        out(f"- **frame loop**: every step followed by sleeping to the next frame boundary at "
+            f"{ctx(results, 'frame_rate')} Hz (`--frame-rate`); only the steps are timed")
     out(f"- load: 1-minute load average {ctx(results, 'load_avg_before')} before the run")
     reps = sorted({s['reps'] for s in results.stats.values()})
     out(f"- settings: {ctx(results, 'steps')} timed steps after {ctx(results, 'warmup')} untimed warm-up "

@@ -1,6 +1,7 @@
 // Tests for the task system (engine/src/parallel/thread_pool.cpp, include/quadrant/task_system.h): the
 // block partition, that every index runs exactly once whichever thread claims it, nesting,
-// empty ranges, exceptions, and a world stepped on more threads than there are free cores.
+// empty ranges, exceptions, Prepare, a world stepped on more threads than there are free cores
+// and one stepped with pauses between steps (a game loop).
 // Nothing here is timed.
 #include <gtest/gtest.h>
 
@@ -111,6 +112,26 @@ TEST(ThreadPoolTest, BackToBackJobsEachCoverTheirRange) {
     });
   }
   EXPECT_EQ(sum[0].load() + sum[1].load() + sum[2].load(), want);
+}
+
+TEST(ThreadPoolTest, PrepareBetweenJobsChangesNothing) {
+  // Prepare (a step begins: wake the workers) may come at any time, with or without jobs after it,
+  // and after the workers went to sleep (a game loop's pause between frames, longer than a spin).
+  const int hardware = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  for (int threads : {1, 2, hardware + 1}) {
+    auto tasks = MakeThreadPool(threads);
+    std::vector<int> hits;
+    for (int round = 0; round < 20; ++round) {
+      tasks->Prepare();
+      if (round % 3 == 0) tasks->Prepare();  // twice, no job between
+      if (round % 5 == 4) std::this_thread::sleep_for(std::chrono::milliseconds(3));  // workers asleep
+      const int count = 100 + 37 * round;
+      const std::vector<Call> calls = RunOnce(*tasks, count, hits);
+      EXPECT_EQ(calls.size(), size_t(std::min(count, threads)));
+      for (int h : hits) ASSERT_EQ(h, 1);
+    }
+    tasks->Prepare();  // the pool is destroyed right after a wake
+  }
 }
 
 TEST(ThreadPoolTest, NestedCallsRunInlineAndCoverTheirRange) {
@@ -240,6 +261,29 @@ TEST(ThreadPoolTest, MoreThreadsThanFreeCoresGiveTheOneThreadHash) {
     EXPECT_EQ(busyMany, serial);
     EXPECT_EQ(busyAlone, serial);
   }
+}
+
+TEST(ThreadPoolTest, StepsWithPausesBetweenThemGiveTheOneThreadHash) {
+  // A game loop: every step is followed by a pause longer than a worker's spin, so the workers
+  // sleep between steps and each step wakes them (TaskSystem::Prepare) before its first job.
+  auto paused = [](int threads) {
+    WorldDef def;
+    def.threadCount = threads;
+    def.solver = SolverType::kPgs;  // as HashAfterSteps
+    def.minParallelItems = 8;
+    World world(def);
+    BuildBusyScene(world);
+    for (int i = 0; i < 25; ++i) {
+      world.Step(kDt);
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    }
+    return world.StateHash();
+  };
+  const uint64_t serial = HashAfterSteps(1, 25);
+  EXPECT_EQ(paused(2), serial);
+  EXPECT_EQ(paused(3), serial);
+  PoolMayRunAlone may;  // and where the pool may take some of the steps alone
+  EXPECT_EQ(paused(2), serial);
 }
 
 #if defined(__linux__)

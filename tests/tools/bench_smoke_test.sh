@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Smoke test of the benchmark pipeline: quadrant_bench on a tiny configuration (both stress
 # scenes, every engine, 50 bodies, 1 and 2 threads, 2 + 5 steps, 1 repetition), then
-# bench_report.py --check on its JSON, then the report, whose files must exist and be non-empty.
+# bench_report.py --check on its JSON, then the report, whose files must exist and be non-empty;
+# then a frame loop (--frame-rate), whose rows time the steps only.
 #
 # usage: bench_smoke_test.sh <path to quadrant_bench> <tools dir>
 set -euo pipefail
@@ -77,5 +78,30 @@ grep -q "^## Busy machine (1 busy process" "$TMP/speedup.md" || fail "speedup.md
 grep -q "^- \`circle_stress/quadrant/n:50/threads:2\`: repetitions spread" "$TMP/speedup.md" \
   || fail "the 200 % spread is not flagged"
 grep -q "circle_stress | 50 | Quadrant | .*(\*\*noisy\*\*)" "$TMP/speedup.md" || fail "no noisy mark in the busy table"
+
+echo "== quadrant_bench --frame-rate (a frame loop: each step then a sleep to the next frame)"
+# 500 Hz (2 ms frames), 2 + 5 steps: only the steps are timed (manual time), so a step's time
+# stays far below its frame; the context says the rate, every row has late_frames.
+QUADRANT_COMMIT=smoke-test QUADRANT_MACHINE=smoke-test "$BENCH" \
+  --scenes circle_stress --engines quadrant --counts 50 --threads 1,2 --steps 5 --warmup 2 --frame-rate 500 \
+  --benchmark_out="$TMP/frames.json" --benchmark_out_format=json >/dev/null \
+  || fail "quadrant_bench --frame-rate exited with status $?"
+"$PYTHON" "$TOOLS/bench_report.py" --check "$TMP/frames.json" || fail "frame loop JSON check failed"
+"$PYTHON" - "$TMP/frames.json" <<'PY' || fail "frame loop JSON: see above"
+import json, sys
+d = json.load(open(sys.argv[1]))
+assert d["context"]["frame_rate"] == "500", d["context"].get("frame_rate")
+rows = [r for r in d["benchmarks"] if r.get("run_type") == "iteration"]
+assert len(rows) == 2, [r["name"] for r in rows]
+for r in rows:
+    assert r["name"].endswith("/manual_time"), r["name"]
+    assert "late_frames" in r, r
+    # 5 steps of 50 circles take well under 5 frames of 2 ms: the sleeps are not timed.
+    assert r["ms_per_step"] < 2.0, r["ms_per_step"]
+    assert abs(r["real_time"] - 5 * r["ms_per_step"]) <= 1e-6 * r["real_time"] + 1e-9, (r["real_time"], r["ms_per_step"])
+print("frame loop rows:", ", ".join(f'{r["name"]} {r["ms_per_step"]:.4f} ms/step' for r in rows))
+PY
+"$PYTHON" "$TOOLS/bench_report.py" "$TMP/frames.json" --out "$TMP/frames" >/dev/null || fail "frame loop report failed"
+grep -q "frame loop" "$TMP/frames/speedup.md" || fail "speedup.md does not say it is a frame loop"
 
 echo "PASS"

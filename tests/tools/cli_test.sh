@@ -45,7 +45,8 @@ expect_refusal() {
 # The driver: refused before anything is built (the rows of docs/bad_input.md).
 for args in "--counts abc" "--counts 0" "--counts -5" "--counts 1000,,2000" "--counts ,1000" \
             "--counts 1000," "--threads 0" "--threads 100" "--threads 1,x" "--repetitions 0" \
-            "--repetitions abc" "--steps 0" "--warmup -1" "--busy x" "--busy -1" "--busy 65"; do
+            "--repetitions abc" "--steps 0" "--warmup -1" "--busy x" "--busy -1" "--busy 65" \
+            "--frame-rate -1" "--frame-rate x" "--frame-rate 10001"; do
   read -ra words <<<"$args"
   expect_refusal "${words[0]}" "$DRIVER" bench "${words[@]}" --out "$OUT"
 done
@@ -57,6 +58,7 @@ expect_refusal "is not a directory" "$DRIVER" bench --out "$WORK/a_file/sub"
 expect_refusal "is not a directory" "$DRIVER" bench --out "$WORK/a_file"
 expect_refusal "unknown option '--frob'" "$DRIVER" bench --frob 1 --out "$OUT"
 expect_refusal "--busy measures a loaded machine" "$DRIVER" bench --busy 1 --compare --out "$OUT"
+expect_refusal "--frame-rate times a frame loop" "$DRIVER" bench --frame-rate 60 --compare --out "$OUT"
 expect_refusal "--steps needs a value" "$DRIVER" bench --out "$OUT" --steps=
 expect_refusal "--counts needs a value" "$DRIVER" bench --out "$OUT" --counts
 expect_refusal "exclude each other" "$DRIVER" bench --baseline --compare --out "$OUT"
@@ -138,7 +140,7 @@ program_parsers() {
     expect_refusal "$want" "$dir/$program" "$@"
   }
 
-  expect_help quadrant_bench --scenes --engines --counts --threads --steps --warmup --seed --list
+  expect_help quadrant_bench --scenes --engines --counts --threads --steps --warmup --seed --frame-rate --list
   grep -q -- "--benchmark_filter" "$WORK/stdout" || fail "quadrant_bench --help does not go on to Google Benchmark's flags"
   expect_help quadrant_accuracy --out --json --quick --settings --scenes --hard-cases --steps --repetitions --count
   expect_help quadrant_effects --out --quick --count --steps --warmup --repetitions
@@ -154,6 +156,7 @@ program_parsers() {
   # an open set checked by the engine, a flag, a positional argument, a missing value.
   expect_value_refusal quadrant_bench --counts 0 "integers in [1, 10000000]" --counts=0
   expect_value_refusal quadrant_bench --threads 1,x "'x' is not an integer" --threads 1,x
+  expect_value_refusal quadrant_bench --frame-rate -1 "an integer in [0, 10000]" --frame-rate -1
   expect_value_refusal quadrant_accuracy --steps 0 "an integer in [1, 1000000]" --steps 0
   expect_value_refusal quadrant_accuracy --settings quadrant:thesis,quadrant:nope "unknown setting 'quadrant:nope'" \
     --settings quadrant:thesis,quadrant:nope

@@ -62,6 +62,13 @@ class TaskSystem {
   /// default pool never runs alone with QUADRANT_POOL_ALONE=0 in the environment (tests that
   /// must exercise the partition on a busy machine set it).
   virtual bool RunsAlone() { return false; }
+
+  /// A step that will run jobs in parallel is about to start (the engine calls it once a step,
+  /// after RunsAlone said no). A pool may wake its sleeping workers here, so that they are running
+  /// by the step's first job instead of paying their wake-up latency inside it (a game loop steps
+  /// and then sleeps to the next frame, longer than any spin). A hint: it changes no result.
+  /// Default: nothing.
+  virtual void Prepare() {}
 };
 
 /// A pool of threadCount blocks run by the caller and up to threadCount - 1 worker threads (no

@@ -52,7 +52,11 @@ class StageRunner {
   /// alone (TaskSystem::RunsAlone, a busy machine) takes the one-thread path throughout. Running
   /// the two-thread partition serially cost 6 % more time than one thread on 16000 circles and
   /// 3 % on the base-100 pyramid (both pinned to one core, thread_pool.cpp).
-  void BeginStep() { alone_ = tasks_.WorkerCount() > 1 && tasks_.RunsAlone(); }
+  /// Otherwise the task system is told that a step begins (TaskSystem::Prepare: wake the workers).
+  void BeginStep() {
+    alone_ = tasks_.WorkerCount() > 1 && tasks_.RunsAlone();
+    if (!alone_ && tasks_.WorkerCount() > 1) tasks_.Prepare();
+  }
   /// Sections with fewer items run inline (WorldDef::minParallelItems).
   int MinItems() const { return minItems_; }
   /// The grain for items that cost about ten times a body update (a pair's manifold, a

@@ -11,16 +11,23 @@
 // unclaimed [front, back)); the thread that finishes a stage's last chunk publishes the next, so
 // a solver pass costs one hand-over, not one per colour. The caller and even workers claim from
 // the front, odd workers from the back (Claim). Idle threads spin up to kMaxSpinMicros, then
-// sleep on a futex. On a busy machine the caller runs jobs alone (Judge) and steps take the
-// one-thread path (RunsAlone; not with QUADRANT_POOL_ALONE=0, which determinism tests set).
-// QUADRANT_POOL_STATS=1 prints the pool's counters when it is destroyed.
+// sleep on a futex; a step's start (Prepare) wakes them, so that a game loop, which sleeps to its
+// next frame for longer than any spin, finds them up by its first job. On a busy machine the
+// caller runs jobs alone (Judge) and steps take the one-thread path (RunsAlone; not with
+// QUADRANT_POOL_ALONE=0, which determinism tests set). QUADRANT_POOL_STATS=1 prints the counters.
 //
 // Why the caller may run alone: a preempted worker holding a chunk stalls its stage for a time
 // slice. Beside one busy loop on the 2-core VM, a pool whose caller waited for every block took
-// 161 ms a step on 16000 circles at 2 threads against 3.49 ms at 1 (niced builds also ran);
-// this pool 1.32 ms at 2 threads, 1.34 ms at 1. Not OpenMP: GCC's libgomp is not instrumented
-// for ThreadSanitizer (docs/parallelism.md compares the costs). docs/notes/thread_pool.md holds
-// the earlier pools and the measurements behind this one.
+// 161 ms a step on 16000 circles at 2 threads against 3.49 ms at 1; this pool stays within 10 %
+// of one thread in every cell (2-4 threads; 1000 and 16000 circles, pyramids of 5050 and 7975
+// boxes: 0.96-1.23x). Its signs: stalls and idle workers seen from inside, and /proc for a pool
+// born beside busy cores and for staying serial; without /proc the same cells fell to 0.4x (a
+// 70-step run of 1000 circles ends before a window is judged). No sign may misread a quiet
+// machine: a worker's wake-up latency after the caller slept is excused (a 60 Hz frame loop of
+// 8000 boxes had run 271 of 300 steps alone on it), and the stall limit and the cores left to
+// others scale with the threads (16 threads on a quiet 16-core machine had run 122 of 180 steps
+// alone on their own stage ends). Not OpenMP: GCC's libgomp is not instrumented for
+// ThreadSanitizer. docs/notes/thread_pool.md holds the earlier pools and the measurements.
 #include <algorithm>
 #include <array>
 #include <atomic>
@@ -176,8 +183,8 @@ constexpr int kMinJobs = 8;
 // the VM itself was slow); beside one busy loop 0.4-1.9 over the first 10 ms.
 constexpr double kQueueShare = 0.35;
 constexpr int kQueueFloorMillis = 20;
-// Other processes using more than cores - threads + this many cores over a serial period keep
-// the pool serial without a probe (OthersHoldCores).
+// Other processes using more than SpareCores + this many cores over a serial period keep the pool
+// serial without a probe (OthersHoldCores).
 constexpr double kOthersMargin = 0.5;
 // Reads of procs_running that must all show other running threads (OthersPersist).
 constexpr int kPersistReads = 3;
@@ -287,7 +294,7 @@ class ThreadPool final : public TaskSystem {
     // 70 steps: 2.1-2.4 ms a step against 1.4-1.5 in parallel). A busy loop is on a core at
     // every read.
     if (!splitSerialSteps_ && running > 1 && machineCores_ > 0) {
-      if (OthersPersist(/*ownRunning=*/1, machineCores_ - running, kPersistReads, std::chrono::milliseconds(1))) {
+      if (OthersPersist(/*ownRunning=*/1, SpareCores(running), kPersistReads, std::chrono::milliseconds(1))) {
         const Clock::time_point now = Clock::now();
         serialUntil_ = now + std::chrono::milliseconds(kContendedMillis);
         windowOpen_ = false;
@@ -325,11 +332,13 @@ class ThreadPool final : public TaskSystem {
       std::fprintf(stderr,
                    "pool %d: life %.1f ms, steps %lld (alone %lld), jobs %lld, serial %lld, caller alone %lld, parallel-job time %.3f ms, wait %.3f ms, "
                    "waits>1ms %lld, first job at %.1f ms, marks %d (first at %.1f ms), probes %d, failed probes %d; caller cpu %.1f ms runq %.1f ms "
-                   "slices %lld; marks by stall %d idle %d queue %d, first queue share %.2f, max %.2f, extended %d, others %.2f cores, born serial %d, queue unconfirmed %d",
+                   "slices %lld; marks by stall %d idle %d queue %d, first queue share %.2f, max %.2f, extended %d, others %.2f cores, born serial %d, queue unconfirmed %d, "
+                   "excused jobs %lld (helped %lld), prepare wakes %lld",
                    workers_, std::chrono::duration<double, std::milli>(Clock::now() - born_).count(), statSteps_, statAloneSteps_, statJobs_, statSerial_,
                    statAlone_, statJobNs_ * 1e-6, statWaitNs_ * 1e-6, statLong_, statFirstJobMs_, statMarks_, statFirstMarkMs_, statProbes_,
                    statFailedProbes_, callerSched_[0] * 1e-6, callerSched_[1] * 1e-6, callerSched_[2], statMarkStall_, statMarkIdle_,
-                   statMarkQueued_, statFirstQueue_, statMaxQueue_, statExtended_, statOthers_, statBornSerial_, statQueueUnconfirmed_);
+                   statMarkQueued_, statFirstQueue_, statMaxQueue_, statExtended_, statOthers_, statBornSerial_, statQueueUnconfirmed_,
+                   statExcused_, statExcusedHelped_, statPrepareWakes_);
       for (size_t w = 1; w < workerSched_.size(); ++w) {
         std::fprintf(stderr, "; worker %zu cpu %.1f ms runq %.1f ms slices %lld", w, workerSched_[w][0] * 1e-6,
                      workerSched_[w][1] * 1e-6, workerSched_[w][2]);
@@ -416,6 +425,29 @@ class ThreadPool final : public TaskSystem {
     return alone;
   }
 
+  // The step begins (StageRunner::BeginStep, after RunsAlone said no): wake sleeping workers, so
+  // that they spin by the step's first job. Only where the last step (or none yet) ran a job: a
+  // step with no parallel section would only keep a core spinning for a millisecond. Where the
+  // caller was away from the pool for longer than a spin (a game loop sleeping to its next
+  // frame), the workers sleep by design, and the jobs published before they are up are excused
+  // from the idle rule (Run): a wake-up's latency is no sign of a busy machine (a 60 Hz frame
+  // loop of 8000 boxes at 2 threads ran 271 of 300 steps alone on that sign). Steps back to back
+  // get no excuse: there a worker asleep at a step's start was preempted while it spun.
+  void Prepare() override {
+    waking_ = false;
+    if (threads_.empty() || tRunning == this) return;
+    const bool ranJobs = jobs_ != jobsAtPrepare_ || !prepared_;
+    jobsAtPrepare_ = jobs_;
+    prepared_ = true;
+    if (!ranJobs || jobSleepers_.load(std::memory_order_seq_cst) == 0) return;
+    ++statPrepareWakes_;
+    waking_ = Clock::now() - lastJobEnd_ > std::chrono::microseconds(kMaxSpinMicros);
+    // A bump without a new job: a woken worker finds the claim word of a finished job, claims
+    // nothing and spins for the next one (WorkerLoop).
+    jobWord_.fetch_add(1, std::memory_order_seq_cst);
+    WakeAll(jobWord_);
+  }
+
   // True while the pool runs every job on the caller alone (contention, see Judge).
   bool Serial() {
     const Clock::time_point now = Clock::now();
@@ -426,6 +458,16 @@ class ThreadPool final : public TaskSystem {
     if (now - windowStart_ >= std::chrono::milliseconds(kFirstJudgeMillis)) Judge(now);
     return now < serialUntil_;
   }
+
+  // The window's stalled share above which the caller alone is faster. Alone gives up P - 1
+  // threads, so it pays only where stalls took more of the window than those threads gave back:
+  // about 1 - 1/P of it with perfect speed-up. The limit keeps the measured 2-thread margin
+  // (kStallShare) on that scale: 1 - (1 - kStallShare) * 2 / P, 0.2 at 2 threads, 0.6 at 4, 0.9
+  // at 16. On a quiet machine a stage's end waits for the slowest thread's last chunk, a larger
+  // part of the stage the more threads share it, so a fixed share that fits 2 threads reads the
+  // waits of 16 as stalls (seen on a quiet 16-core machine: 64000 circles at 16 threads ran 122
+  // of 180 steps alone, slower than 4 threads).
+  double StallShareLimit() const { return 1.0 - (1.0 - kStallShare) * 2.0 / std::max(2, ThreadCount()); }
 
   // No window is open: the pool has not run a parallel job yet, or a serial period has ended.
   // If other processes kept the cores busy all through that period, a probe would only fail
@@ -479,8 +521,10 @@ class ThreadPool final : public TaskSystem {
         // Over at least kQueueFloorMillis: one time slice of another process (about 3 ms) in
         // the first 10 ms is a burst, not a busy machine (one busy loop queued the two threads
         // for 0.4-1.9 of the first 10 ms: 4-19 ms).
+        // Per two threads of the pool, the limit's scale: every wake-up of every thread waits on
+        // a run queue a little, so the sum over 16 threads grows 8-fold on a quiet machine.
         const Clock::duration over = std::max<Clock::duration>(now - windowStart_, std::chrono::milliseconds(kQueueFloorMillis));
-        const double queue = double(runq - runqStart_) * 1e-9 / std::chrono::duration<double>(over).count();
+        const double queue = 2.0 / ThreadCount() * double(runq - runqStart_) * 1e-9 / std::chrono::duration<double>(over).count();
         if (statFirstQueue_ < 0) statFirstQueue_ = queue;
         statMaxQueue_ = std::max(statMaxQueue_, queue);
         // Confirmed by the machine's run queue right now (OthersPersist, reads back to back):
@@ -488,12 +532,13 @@ class ThreadPool final : public TaskSystem {
         // 0.38 in the first window (2 of 14 base-100 pyramid processes at 2 threads), which then
         // went serial; a busy loop is still on a core when the pool looks.
         queued = queue > kQueueShare &&
-                 OthersPersist(ThreadCount() - jobSleepers_.load(std::memory_order_relaxed), machineCores_ - ThreadCount(),
+                 OthersPersist(ThreadCount() - jobSleepers_.load(std::memory_order_relaxed), SpareCores(ThreadCount()),
                                kPersistReads, std::chrono::microseconds(0));
         statQueueUnconfirmed_ += queue > kQueueShare && !queued;
       }
     }
-    if (share <= kStallShare && !idle && !queued) {
+    const bool stalls = share > StallShareLimit();
+    if (!stalls && !idle && !queued) {
       if (!full) return;
       probing_ = false;
       OpenWindow(now);
@@ -503,7 +548,7 @@ class ThreadPool final : public TaskSystem {
     const bool probe = probing_;  // the first window after a serial period
     probing_ = false;
     ++statMarks_;
-    statMarkStall_ += share > kStallShare;
+    statMarkStall_ += stalls;
     statMarkIdle_ += idle;
     statMarkQueued_ += queued;
     statFailedProbes_ += probe;
@@ -516,7 +561,7 @@ class ThreadPool final : public TaskSystem {
   }
 
   // Whether other processes used more of the machine's cores since machine_ was sampled than
-  // the pool's threads could spare (more than cores - threads + kOthersMargin of them), from
+  // the pool could spare (more than SpareCores + kOthersMargin of them), from
   // /proc/stat's busy ticks less this process's own CPU time. /proc/stat counts in ticks of
   // 10 ms per core, which is enough over a serial period of 200 ms. Niced processes count only
   // where they compete with this one (countNiced_). False where /proc/stat cannot say.
@@ -528,8 +573,15 @@ class ThreadPool final : public TaskSystem {
     if (wall < 0.1) return false;
     const double others = ((after.busySeconds - before.busySeconds) - (after.ownSeconds - before.ownSeconds)) / wall;
     statOthers_ = others;
-    return others > double(machineCores_ - ThreadCount()) + kOthersMargin;
+    return others > double(SpareCores(ThreadCount())) + kOthersMargin;
   }
+
+  // The machine's cores that other processes may use before they crowd a pool of `threads`: all
+  // but the two a parallel step needs (all but the pool's threads where it has one or two). On 2
+  // cores that is none, as the busy-machine figures need; on 16 cores a pool of 16 threads does
+  // not go alone because a background process uses half a core: beside 15 free cores the caller
+  // alone is the slowest schedule, and a preempted thread's stalls are what Judge weighs.
+  int SpareCores(int threads) const { return machineCores_ - std::min(threads, 2); }
 
   // Whether other threads than the pool's `ownRunning` ones are on the machine's cores, more
   // of them than `freeCores` + kOthersMargin, at each of `samples` reads of procs_running, `gap`
@@ -635,8 +687,13 @@ class ThreadPool final : public TaskSystem {
     while (first < stages && chunks_[first] == 0) ++first;
     if (first == stages) return;
     ++statJobs_;
+    ++jobs_;
     const Clock::time_point jobStart = stats_ ? Clock::now() : Clock::time_point{};
     if (stats_ && statFirstJobMs_ < 0) statFirstJobMs_ = std::chrono::duration<double, std::milli>(jobStart - born_).count();
+    // A job published while the workers that Prepare woke are still getting up says nothing about
+    // the machine (Judge's idle rule); the first job that finds them up ends the excuse.
+    waking_ = waking_ && jobSleepers_.load(std::memory_order_seq_cst) > 0;
+    const bool excused = waking_;
     failed_.store(false, std::memory_order_relaxed);
     done_.store(0, std::memory_order_relaxed);
     tag_ = (tag_ + 1) & (kRunsTag - 1);
@@ -650,9 +707,15 @@ class ThreadPool final : public TaskSystem {
     if (jobSleepers_.load(std::memory_order_seq_cst) > 0) WakeAll(jobWord_);
     const int mine = Claim(tag_, true, false), total = TotalChunks();
     if (mine == total) ++statAlone_;
-    ++windowJobs_;
-    windowHelped_ += mine < total;
-    if (stats_) statJobNs_ += std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now() - jobStart).count();
+    if (excused) {
+      ++statExcused_;
+      statExcusedHelped_ += mine < total;
+    } else {
+      ++windowJobs_;
+      windowHelped_ += mine < total;
+    }
+    lastJobEnd_ = Clock::now();
+    if (stats_) statJobNs_ += std::chrono::duration_cast<std::chrono::nanoseconds>(lastJobEnd_ - jobStart).count();
     rangeFn_ = nullptr;
     stageFn_ = nullptr;
     if (error_) {
@@ -824,6 +887,10 @@ class ThreadPool final : public TaskSystem {
   bool windowOpen_ = false;
   bool probing_ = false;
   long long windowJobs_ = 0, windowHelped_ = 0;  // this window's jobs, those a worker took part in
+  bool waking_ = false;                            // Prepare woke workers after the caller's time away
+  Clock::time_point lastJobEnd_{};                 // the end of the caller's last parallel job
+  long long jobs_ = 0, jobsAtPrepare_ = 0;         // jobs run; jobs_ at the last Prepare
+  bool prepared_ = false;
   int contendedMillis_ = kContendedMillis;
   long long runqStart_ = -1;  // PoolRunqNanos at the window's start
   Clock::time_point runqCheck_{};
@@ -836,6 +903,7 @@ class ThreadPool final : public TaskSystem {
   long long statJobs_ = 0, statSerial_ = 0, statAlone_ = 0, statWaitNs_ = 0, statLong_ = 0, statJobNs_ = 0;
   int statMarks_ = 0, statProbes_ = 0, statFailedProbes_ = 0, statMarkStall_ = 0, statMarkIdle_ = 0, statMarkQueued_ = 0;
   int statExtended_ = 0;
+  long long statExcused_ = 0, statExcusedHelped_ = 0, statPrepareWakes_ = 0;
   long long statSteps_ = 0, statAloneSteps_ = 0;
   double statFirstQueue_ = -1, statMaxQueue_ = 0, statOthers_ = -1;
   double statFirstMarkMs_ = -1, statFirstJobMs_ = -1;
