@@ -5,24 +5,12 @@
 // step's code outside the stage runner, serial too).
 //
 // How P threads are recorded on a machine with fewer cores: the world runs with threadCount P,
-// so every section is cut into the P-way partition (blocks and chunks depend on P only), but
-// the process is pinned to one core and QUADRANT_POOL_ALONE=0 is set, so the pool starts no
-// worker and runs every block and chunk on the caller, one at a time and in order, each timed on
-// its own, undisturbed by another thread of the pool. Every time is read on the thread's CPU
-// clock (--clock thread, the default; the stage runner's blocks and chunks too): a section or a
-// large chunk of a few milliseconds on a shared core is rarely spared by the other processes in
-// most repeats, and they cannot add to that clock. Each read's cost (measured: the least of 32
-// back-to-back differences) is taken out of every time (the runner does so for its blocks), and
-// the trace's own bookkeeping out of the times between sections. What
-// the threads would do with these pieces is the model's business (tools/scaling.py).
-//
-// The machine may be shared: each thread count is recorded in `--repeats` worlds of the same
-// scene, interleaved (repeat by repeat, every thread count in each), and every time is reduced
-// over the repeats: the median (default), or the least (--reduce least; another process only
-// ever adds time, but the least of each of many small times adds up to less than any repeat
-// took). The scenes are deterministic, so at a given thread count every repeat runs the same
-// sections with the same chunks (checked; a difference is an error), and step k is the same
-// physical state at every thread count (the state is bit-identical for any partition).
+// so every section is cut into the P-way partition (blocks and chunks depend on P only), but the
+// process is pinned to one core with QUADRANT_POOL_ALONE=0, so the caller runs every block and
+// chunk in order, each timed on the thread's CPU clock (other processes cannot add to it), the
+// clock read's own cost taken out. Each thread count is recorded in --repeats worlds, interleaved,
+// and every time reduced over them (median, or --reduce least); the scenes are deterministic, so
+// every repeat runs the same sections with the same chunks (checked).
 //
 // Output: JSON (--out FILE, or stdout): {"scene", "count", "bodies", "warmup", "steps",
 // "repeats", "recorded_on", "clock", "clock_read_us", "reduce", "traces": [{"threads": P, "steps":
