@@ -7,10 +7,12 @@
 // How P threads are recorded on a machine with fewer cores: the world runs with threadCount P,
 // so every section is cut into the P-way partition (blocks and chunks depend on P only), but the
 // process is pinned to one core with QUADRANT_POOL_ALONE=0, so the caller runs every block and
-// chunk in order, each timed on the thread's CPU clock (other processes cannot add to it), the
-// clock read's own cost taken out. Each thread count is recorded in --repeats worlds, interleaved,
-// and every time reduced over them (median, or --reduce least); the scenes are deterministic, so
-// every repeat runs the same sections with the same chunks (checked).
+// chunk in order, each timed on its own (the runner's wall clock); the sections' begins and ends
+// are read on the thread's CPU clock, which other processes cannot add to, and a section whose
+// chunks add up to more than its CPU time lost the core inside them: they are scaled down to it.
+// Each thread count is recorded in --repeats worlds, interleaved, and every time reduced over
+// them (median, or --reduce least); the scenes are deterministic, so every repeat runs the same
+// sections with the same chunks (checked).
 //
 // Output: JSON (--out FILE, or stdout): {"scene", "count", "bodies", "warmup", "steps",
 // "repeats", "recorded_on", "clock", "clock_read_us", "reduce", "traces": [{"threads": P, "steps":
@@ -60,13 +62,15 @@ struct RecordedStep {
 
 // A step flattened into one list of times (us), with a signature of its structure (the kinds,
 // stages and chunk counts) that must be equal across repeats. `readMs`: one clock read, taken
-// out of every interval (each holds about one read's worth of the two around it).
+// out of every interval (each holds about one read's worth of the two around it). `cpuSpans`: the
+// sections were timed on the CPU clock, their chunks on the wall clock (a section's chunks are
+// scaled down to its span where they add up to more).
 struct FlatStep {
   std::vector<double> us;
   std::vector<long long> shape;
 };
 
-FlatStep Flatten(const RecordedStep& step, double readMs) {
+FlatStep Flatten(const RecordedStep& step, double readMs, bool cpuSpans) {
   FlatStep f;
   f.us.push_back(0);  // the step: the sum of the parts, below
   double last = step.beginMs, lastRecord = 0;
@@ -76,12 +80,18 @@ FlatStep Flatten(const RecordedStep& step, double readMs) {
   };
   for (const StepTrace::Section& s : step.sections) {
     put(s.beginMs - last - lastRecord - readMs);  // the gap before the section
-    put(s.endMs - s.beginMs - readMs);
+    const double span = s.endMs - s.beginMs - readMs;
+    put(span);
     f.shape.push_back(static_cast<long long>(s.kind) * 64 + static_cast<long long>(s.stage) * 2 + s.runs);
     f.shape.push_back(static_cast<long long>(s.ms.size()));
+    double sum = 0;
+    for (const std::vector<double>& stage : s.ms) {
+      for (double ms : stage) sum += ms;
+    }
+    const double scale = cpuSpans && sum > span && sum > 0 ? std::max(0.0, span) / sum : 1.0;
     for (const std::vector<double>& stage : s.ms) {
       f.shape.push_back(static_cast<long long>(stage.size()));
-      for (double ms : stage) f.us.push_back(ms * 1e3);
+      for (double ms : stage) f.us.push_back(ms * scale * 1e3);
     }
     last = s.endMs;
     lastRecord = s.recordMs;
@@ -221,7 +231,7 @@ int main(int argc, char** argv) {
   p.String("--out", &a.out, "FILE", "the JSON file to write (default: stdout)");
   p.Name("--reduce", &a.reduce, {"median", "least"}, "reduction", "how each time is taken over the repeats");
   p.Name("--clock", &a.clock, {"thread", "wall"}, "clock",
-         "the clock of every time: the thread's CPU time, or the steady clock");
+         "the clock of the sections' begins and ends: the thread's CPU time, or the steady clock");
   p.Flag("--no-pin", &a.noPin,
          "do not pin the process to one core (then a pool of several threads runs the chunks, "
          "and a run of chunks is timed as one)");
@@ -256,10 +266,10 @@ int main(int argc, char** argv) {
       out += "\"threads\": " + std::to_string(a.threads[t]) + ", \"steps\": [";
       for (int i = 0; i < a.steps; ++i) {
         const RecordedStep& shape = byThreads[t][0][i];
-        const FlatStep reference = Flatten(shape, readMs);
+        const FlatStep reference = Flatten(shape, readMs, StepTrace::threadClock);
         std::vector<std::vector<double>> samples(reference.us.size());
         for (int r = 0; r < a.repeats; ++r) {
-          const FlatStep f = Flatten(byThreads[t][r][i], readMs);
+          const FlatStep f = Flatten(byThreads[t][r][i], readMs, StepTrace::threadClock);
           if (f.shape != reference.shape || f.us.size() != reference.us.size()) {
             throw std::runtime_error("step " + std::to_string(i) + " at " + std::to_string(a.threads[t]) +
                                      " threads ran other sections in repeat " + std::to_string(r) +

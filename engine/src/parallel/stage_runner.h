@@ -42,8 +42,7 @@ class StageRunner {
         minItems_(minParallelItems),
         workerMs_(tasks.WorkerCount(), 0.0),
         measure_(tasks.WorkerCount() > 1),
-        threadClock_(static_cast<unsigned>(tasks.ThreadCount()) > std::max(1u, std::thread::hardware_concurrency()) ||
-                     (stepTraceSink != nullptr && StepTrace::threadClock)),  // or a trace asks (step_trace.h)
+        threadClock_(static_cast<unsigned>(tasks.ThreadCount()) > std::max(1u, std::thread::hardware_concurrency())),
         readMs_(measure_ ? ClockReadMs() : 0.0) {}
 
   /// Blocks of this step's parallel sections: 1 for a step that runs alone (BeginStep).
