@@ -20,8 +20,8 @@
 // slice. Beside one busy loop on the 2-core VM, a pool whose caller waited for every block took
 // 161 ms a step on 16000 circles at 2 threads against 3.49 ms at 1; this pool stays within 10 %
 // of one thread in every cell (2-4 threads; 1000 and 16000 circles, pyramids of 5050 and 7975
-// boxes: 0.96-1.23x). Its signs: stalls and idle workers seen from inside, and /proc for a pool
-// born beside busy cores and for staying serial; without /proc the same cells fell to 0.4x (a
+// boxes: 0.97-1.08x). Its signs: stalls and idle workers seen from inside, and /proc for a pool
+// born beside busy cores and for staying serial; without /proc the same cells fell to 0.34x (a
 // 70-step run of 1000 circles ends before a window is judged). No sign may misread a quiet
 // machine: a worker's wake-up latency after the caller slept is excused (a 60 Hz frame loop of
 // 8000 boxes had run 271 of 300 steps alone on it), and the stall limit and the cores left to
