@@ -9,6 +9,9 @@
 
 #if defined(__linux__)
 #include <sched.h>
+
+#include <filesystem>
+#include <fstream>
 #endif
 
 #include <algorithm>
@@ -312,6 +315,40 @@ class OneCore {
   cpu_set_t saved_;
   bool ok_ = false;
 };
+
+// Each thread's Cpus_allowed_list from /proc/self/task/*/status.
+std::vector<std::string> ThreadAffinities() {
+  std::vector<std::string> lists;
+  for (const auto& task : std::filesystem::directory_iterator("/proc/self/task")) {
+    std::ifstream status(task.path() / "status");
+    std::string line;
+    while (std::getline(status, line)) {
+      if (line.rfind("Cpus_allowed_list:", 0) == 0) lists.push_back(line);
+    }
+  }
+  return lists;
+}
+
+TEST(ThreadPoolTest, WorkersWokenAfterAPauseGetTheirWholeAffinityBack) {
+  // After a pause longer than a spin, the pool keeps sleeping workers off the caller's core while
+  // it wakes them (SteerSleepers); each takes the process's mask back once it runs, so no thread
+  // is left narrowed. Where the process has one core there is nothing to steer.
+  cpu_set_t mine;
+  ASSERT_EQ(sched_getaffinity(0, sizeof(mine), &mine), 0);
+  if (CPU_COUNT(&mine) < 2) GTEST_SKIP() << "one usable core";
+  auto tasks = MakeThreadPool(2);
+  std::vector<int> hits;
+  for (int frame = 0; frame < 5; ++frame) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(4));  // the worker sleeps
+    tasks->Prepare();
+    RunOnce(*tasks, 1000, hits);
+    for (int h : hits) ASSERT_EQ(h, 1);
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));  // the worker is up and asleep again
+  const std::vector<std::string> lists = ThreadAffinities();
+  ASSERT_EQ(lists.size(), 2u);  // this thread and the worker
+  EXPECT_EQ(lists[0], lists[1]);
+}
 
 TEST(ThreadPoolTest, APoolWithoutWorkersRunsAloneAndStepsGiveTheOneThreadHash) {
   // On one usable core the pool starts no worker: it says so (RunsAlone), every step takes the

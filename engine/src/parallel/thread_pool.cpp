@@ -8,25 +8,23 @@
 // ones finish, and the pool stays usable. A call from inside a chunk runs inline on that thread.
 //
 // How: a region is one job whose stages' chunks are claimed from one 64-bit word (job tag, stage,
-// unclaimed [front, back)); the thread that finishes a stage's last chunk publishes the next, so
-// a solver pass costs one hand-over, not one per colour. The caller and even workers claim from
-// the front, odd workers from the back (Claim). Idle threads spin up to kMaxSpinMicros, then
-// sleep on a futex; a step's start (Prepare) wakes them, so that a game loop, which sleeps to its
-// next frame for longer than any spin, finds them up by its first job. On a busy machine the
-// caller runs jobs alone (Judge) and steps take the one-thread path (RunsAlone; not with
+// unclaimed [front, back)); the thread that finishes a stage's last chunk publishes the next. The
+// caller and even workers claim from the front, odd workers from the back (Claim). Idle threads
+// spin up to kMaxSpinMicros, then sleep on a futex. A step's start (Prepare) wakes them, and
+// after the caller was away longer than a spin (a game loop's sleep) it first keeps them off its
+// own core (SteerSleepers): on the 2-core VMs the kernel put a woken worker on the caller's core
+// 9 times in 10, where it queued behind the caller while the other core idled (7975 boxes at
+// 60 Hz, 2 threads: 4.2 ms a step against 2.7 back to back). On a busy machine the caller runs
+// jobs alone (Judge) and steps take the one-thread path (RunsAlone; not with
 // QUADRANT_POOL_ALONE=0, which determinism tests set). QUADRANT_POOL_STATS=1 prints the counters.
 //
 // Why the caller may run alone: a preempted worker holding a chunk stalls its stage for a time
-// slice. Beside one busy loop on the 2-core VM, a pool whose caller waited for every block took
-// 161 ms a step on 16000 circles at 2 threads against 3.49 ms at 1; this pool stays within 10 %
-// of one thread in every cell (2-4 threads; 1000 and 16000 circles, pyramids of 5050 and 7975
-// boxes: 0.97-1.08x). Its signs: stalls and idle workers seen from inside, and /proc for a pool
-// born beside busy cores and for staying serial; without /proc the same cells fell to 0.34x (a
-// 70-step run of 1000 circles ends before a window is judged). No sign may misread a quiet
-// machine: a worker's wake-up latency after the caller slept is excused (a 60 Hz frame loop of
-// 8000 boxes had run 271 of 300 steps alone on it), and the stall limit and the cores left to
-// others scale with the threads (16 threads on a quiet 16-core machine had run 122 of 180 steps
-// alone on their own stage ends). Not OpenMP: GCC's libgomp is not instrumented for
+// slice (beside one busy loop a pool whose caller waited for every block took 161 ms a step on
+// 16000 circles at 2 threads, 3.49 ms at 1); this pool stays within 10 % of one thread there.
+// Its signs: stalls and idle workers seen from inside, run-queue waits, and /proc for a pool
+// born beside busy cores; limits scale with the threads, and a worker's wake-up after the
+// caller slept is excused, so that a quiet machine is not misread (16 threads on a quiet 16-core
+// machine had run 122 of 180 steps alone). Not OpenMP: GCC's libgomp is not instrumented for
 // ThreadSanitizer. docs/notes/thread_pool.md holds the earlier pools and the measurements.
 #include <algorithm>
 #include <array>
@@ -222,6 +220,15 @@ int UsableCores() {
   return static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
 }
 
+// The core this thread runs on right now, or -1 where the system cannot say.
+int CurrentCpu() {
+#if defined(__linux__)
+  return sched_getcpu();
+#else
+  return -1;
+#endif
+}
+
 // The pool thread (or caller) that is running a chunk of some pool right now, for nesting.
 thread_local const TaskSystem* tRunning = nullptr;
 
@@ -261,6 +268,15 @@ class ThreadPool final : public TaskSystem {
     workerSched_.assign(running, {});
     schedFds_ = std::vector<std::atomic<int>>(running);
     for (auto& fd : schedFds_) fd.store(-1, std::memory_order_relaxed);
+    cpuOf_ = std::vector<std::atomic<int>>(running);
+    tids_ = std::vector<std::atomic<int>>(running);
+    steered_ = std::vector<std::atomic<bool>>(running);
+    for (auto& tid : tids_) tid.store(0, std::memory_order_relaxed);
+#if defined(__linux__)
+    CPU_ZERO(&affinity_);
+    hasAffinity_ = sched_getaffinity(0, sizeof(affinity_), &affinity_) == 0;
+#endif
+    for (auto& cpu : cpuOf_) cpu.store(-1, std::memory_order_relaxed);
 #if defined(__linux__)
     // /proc/stat covers every core of the machine: it describes this process's cores only when
     // the process may run on all of them.
@@ -333,12 +349,12 @@ class ThreadPool final : public TaskSystem {
                    "pool %d: life %.1f ms, steps %lld (alone %lld), jobs %lld, serial %lld, caller alone %lld, parallel-job time %.3f ms, wait %.3f ms, "
                    "waits>1ms %lld, first job at %.1f ms, marks %d (first at %.1f ms), probes %d, failed probes %d; caller cpu %.1f ms runq %.1f ms "
                    "slices %lld; marks by stall %d idle %d queue %d, first queue share %.2f, max %.2f, extended %d, others %.2f cores, born serial %d, queue unconfirmed %d, "
-                   "excused jobs %lld (helped %lld), prepare wakes %lld",
+                   "excused jobs %lld (helped %lld), prepare wakes %lld, spreads %lld, steers %lld",
                    workers_, std::chrono::duration<double, std::milli>(Clock::now() - born_).count(), statSteps_, statAloneSteps_, statJobs_, statSerial_,
                    statAlone_, statJobNs_ * 1e-6, statWaitNs_ * 1e-6, statLong_, statFirstJobMs_, statMarks_, statFirstMarkMs_, statProbes_,
                    statFailedProbes_, callerSched_[0] * 1e-6, callerSched_[1] * 1e-6, callerSched_[2], statMarkStall_, statMarkIdle_,
                    statMarkQueued_, statFirstQueue_, statMaxQueue_, statExtended_, statOthers_, statBornSerial_, statQueueUnconfirmed_,
-                   statExcused_, statExcusedHelped_, statPrepareWakes_);
+                   statExcused_, statExcusedHelped_, statPrepareWakes_, statSpreads_.load(), statSteers_.load());
       for (size_t w = 1; w < workerSched_.size(); ++w) {
         std::fprintf(stderr, "; worker %zu cpu %.1f ms runq %.1f ms slices %lld", w, workerSched_[w][0] * 1e-6,
                      workerSched_[w][1] * 1e-6, workerSched_[w][2]);
@@ -436,12 +452,14 @@ class ThreadPool final : public TaskSystem {
   void Prepare() override {
     waking_ = false;
     if (threads_.empty() || tRunning == this) return;
+    cpuOf_[0].store(CurrentCpu(), std::memory_order_relaxed);
     const bool ranJobs = jobs_ != jobsAtPrepare_ || !prepared_;
     jobsAtPrepare_ = jobs_;
     prepared_ = true;
     if (!ranJobs || jobSleepers_.load(std::memory_order_seq_cst) == 0) return;
     ++statPrepareWakes_;
     waking_ = Clock::now() - lastJobEnd_ > std::chrono::microseconds(kMaxSpinMicros);
+    if (waking_) SteerSleepers();
     // A bump without a new job: a woken worker finds the claim word of a finished job, claims
     // nothing and spins for the next one (WorkerLoop).
     jobWord_.fetch_add(1, std::memory_order_seq_cst);
@@ -683,6 +701,7 @@ class ThreadPool final : public TaskSystem {
   // runs chunks with the workers and returns when the last stage is done.
   void Run(int stages) {
     stages_ = stages;
+    cpuOf_[0].store(CurrentCpu(), std::memory_order_relaxed);
     int first = 0;
     while (first < stages && chunks_[first] == 0) ++first;
     if (first == stages) return;
@@ -702,10 +721,13 @@ class ThreadPool final : public TaskSystem {
       for (int s = 0; s < stages; ++s) runs = runs && plan_[s].runs;
       if (runs) tag_ |= kRunsTag;
     }
+    // Workers that slept since the step began (a serial part longer than a spin) are steered too.
+    const bool wake = jobSleepers_.load(std::memory_order_seq_cst) > 0;
+    if (wake) SteerSleepers();
     claim_.store(Pack(tag_, first, 0, chunks_[first]), std::memory_order_seq_cst);
     jobWord_.fetch_add(1, std::memory_order_seq_cst);
-    if (jobSleepers_.load(std::memory_order_seq_cst) > 0) WakeAll(jobWord_);
-    const int mine = Claim(tag_, true, false), total = TotalChunks();
+    if (wake || jobSleepers_.load(std::memory_order_seq_cst) > 0) WakeAll(jobWord_);
+    const int mine = Claim(tag_, 0, false), total = TotalChunks();
     if (mine == total) ++statAlone_;
     if (excused) {
       ++statExcused_;
@@ -735,7 +757,8 @@ class ThreadPool final : public TaskSystem {
   // stage's last chunk publishes the next stage. A thread claims from the front of the stage's
   // unclaimed chunks, or from the back if fromBack (the constructor says why). Returns the
   // chunks it ran.
-  int Claim(uint32_t tag, bool caller, bool fromBack) {
+  int Claim(uint32_t tag, int self, bool fromBack) {
+    const bool caller = self == 0;
     const TaskSystem* outer = std::exchange(tRunning, this);
     int ran = 0;
     uint64_t w = claim_.load(std::memory_order_acquire);
@@ -769,7 +792,7 @@ class ThreadPool final : public TaskSystem {
         w = claim_.load(std::memory_order_acquire);
         continue;
       }
-      w = WaitForChange(w, caller, lastChunk);
+      w = WaitForChange(w, self, lastChunk);
     }
     tRunning = outer;
     return ran;
@@ -790,17 +813,20 @@ class ThreadPool final : public TaskSystem {
   // its last chunks). Spins up to kMaxSpinMicros, then sleeps. A caller whose wait outlasts a
   // few tens of microseconds more than twice its own last chunk was (in that excess) waiting
   // on a chunk whose thread was not running: a stall (Judge).
-  uint64_t WaitForChange(uint64_t w, bool caller, Clock::duration ownChunk) {
+  uint64_t WaitForChange(uint64_t w, int self, Clock::duration ownChunk) {
+    const bool caller = self == 0;
     auto changed = [&] { return claim_.load(std::memory_order_acquire) != w; };
     const Clock::time_point start = Clock::now();
     if (!Spin(changed, std::chrono::microseconds(kMaxSpinMicros))) {
       progressSleepers_.fetch_add(1, std::memory_order_seq_cst);
+      if (!caller) cpuOf_[self].store(-1, std::memory_order_relaxed);
       for (;;) {
         const uint32_t seen = progress_.load(std::memory_order_seq_cst);
         if (changed()) break;
         WaitWhileEqual(progress_, seen);
       }
       progressSleepers_.fetch_sub(1, std::memory_order_seq_cst);
+      if (!caller) Spread(self);
     }
     if (caller) {
       const Clock::time_point now = Clock::now();
@@ -832,19 +858,80 @@ class ThreadPool final : public TaskSystem {
     }
   }
 
+  // A worker just woken: if it landed on a core where another of the pool's threads runs, it
+  // moves to a core none of them uses (its affinity without theirs, then the whole mask again,
+  // which leaves it where it went). On the 2-core VMs the kernel puts a woken worker on the
+  // waking caller's core 9 times in 10 while the other core idles (it sees no cache shared
+  // between them), and the worker, spinning there, holds the caller off its own core: a 60 Hz
+  // frame loop of 7975 boxes at 2 threads took 4.2 ms a step against 2.7 back to back, the caller
+  // waiting 0.6 ms a frame on the run queue. Back to back the threads never sleep and never meet.
+  void Spread(int self) {
+#if defined(__linux__)
+    if (steered_[self].exchange(false, std::memory_order_acq_rel)) sched_setaffinity(0, sizeof(affinity_), &affinity_);
+    const int here = CurrentCpu();
+    if (here < 0) return;
+    bool shared = false;
+    for (size_t t = 0; t < cpuOf_.size(); ++t) shared = shared || (int(t) != self && cpuOf_[t].load(std::memory_order_relaxed) == here);
+    if (shared) {
+      cpu_set_t all, elsewhere;
+      if (sched_getaffinity(0, sizeof(all), &all) == 0) {
+        elsewhere = all;
+        CPU_CLR(here, &elsewhere);
+        for (size_t t = 0; t < cpuOf_.size(); ++t) {
+          const int cpu = cpuOf_[t].load(std::memory_order_relaxed);
+          if (cpu >= 0 && cpu < CPU_SETSIZE) CPU_CLR(cpu, &elsewhere);
+        }
+        if (CPU_COUNT(&elsewhere) > 0 && sched_setaffinity(0, sizeof(elsewhere), &elsewhere) == 0) {
+          sched_setaffinity(0, sizeof(all), &all);
+          statSpreads_.fetch_add(1, std::memory_order_relaxed);
+        }
+      }
+    }
+    cpuOf_[self].store(CurrentCpu(), std::memory_order_relaxed);
+#else
+    (void)self;
+#endif
+  }
+
+  // The caller, back after longer than a spin (a frame loop's sleep), is about to wake the
+  // workers: each sleeping one may for now run anywhere but on the caller's core, so that the
+  // kernel cannot queue it behind the caller there (Spread says how often it did); the worker
+  // takes back the whole mask once it runs. Without this, 7975 boxes at 60 Hz on 2 threads: the
+  // worker waited 2.4 ms a frame on the caller's run queue and took part in 93 of 1573 jobs.
+  void SteerSleepers() {
+#if defined(__linux__)
+    const int here = CurrentCpu();
+    if (!hasAffinity_ || here < 0 || here >= CPU_SETSIZE || !CPU_ISSET(here, &affinity_)) return;
+    cpu_set_t elsewhere = affinity_;
+    CPU_CLR(here, &elsewhere);
+    if (CPU_COUNT(&elsewhere) == 0) return;
+    for (size_t w = 1; w < tids_.size(); ++w) {
+      const int tid = tids_[w].load(std::memory_order_acquire);
+      if (tid <= 0 || cpuOf_[w].load(std::memory_order_relaxed) >= 0) continue;  // not started, or awake
+      if (sched_setaffinity(tid, sizeof(elsewhere), &elsewhere) == 0) {
+        steered_[w].store(true, std::memory_order_release);
+        statSteers_.fetch_add(1, std::memory_order_relaxed);
+      }
+    }
+#endif
+  }
+
   void WorkerLoop(int index, bool fromBack) {
     std::array<long long, 3> start{};
     if (stats_) ReadSchedStat(start);
 #if defined(__linux__)
     schedFds_[index].store(open("/proc/thread-self/schedstat", O_RDONLY | O_CLOEXEC), std::memory_order_release);
+    tids_[index].store(static_cast<int>(syscall(SYS_gettid)), std::memory_order_release);
 #endif
     uint32_t seen = 0;
     for (;;) {
       auto arrived = [&] { return jobWord_.load(std::memory_order_acquire) != seen; };
       if (!Spin(arrived, std::chrono::microseconds(kMaxSpinMicros))) {
         jobSleepers_.fetch_add(1, std::memory_order_seq_cst);
+        cpuOf_[index].store(-1, std::memory_order_relaxed);
         while (jobWord_.load(std::memory_order_seq_cst) == seen) WaitWhileEqual(jobWord_, seen);
         jobSleepers_.fetch_sub(1, std::memory_order_relaxed);
+        Spread(index);
       }
       if (stop_.load(std::memory_order_acquire)) {
         if (stats_) {
@@ -854,7 +941,7 @@ class ThreadPool final : public TaskSystem {
         return;
       }
       seen = jobWord_.load(std::memory_order_acquire);
-      Claim(TagOf(claim_.load(std::memory_order_acquire)), false, fromBack);
+      Claim(TagOf(claim_.load(std::memory_order_acquire)), index, fromBack);
     }
   }
 
@@ -877,6 +964,14 @@ class ThreadPool final : public TaskSystem {
   std::atomic<uint32_t> jobWord_{0};         // bumped per job, for workers to wait on
   std::atomic<uint32_t> progress_{0};        // bumped per stage, for waiters inside a job
   std::atomic<int> jobSleepers_{0};
+  std::vector<std::atomic<int>> cpuOf_;  // the core each started thread (0: the caller) last ran on, -1 asleep
+  std::atomic<long long> statSpreads_{0}, statSteers_{0};
+  std::vector<std::atomic<int>> tids_;       // each started worker's thread id (0 until it starts)
+  std::vector<std::atomic<bool>> steered_;   // SteerSleepers narrowed the worker's affinity
+#if defined(__linux__)
+  cpu_set_t affinity_;  // the process's cores at the pool's birth
+#endif
+  bool hasAffinity_ = false;
   std::atomic<int> progressSleepers_{0};
   std::atomic<bool> stop_{false};
 
