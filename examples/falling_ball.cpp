@@ -1,6 +1,6 @@
-// The README's "engine in 15 lines" as a complete program: a ball dropped on a static box comes to
-// rest on it. Built by CI against an installed Quadrant twice (examples/CMakeLists.txt with
-// find_package, and g++ with pkg-config; .ci/package_test.sh), and run: it exits 1 if the ball is
+// The README's "engine in 20 lines" as a complete program: a ball and a capsule dropped on a static
+// box come to rest on it. Built by CI against an installed Quadrant twice (examples/CMakeLists.txt with
+// find_package, and g++ with pkg-config; .ci/package_test.sh), and run: it exits 1 if either is
 // not resting on the ground.
 #include <cmath>
 #include <cstdio>
@@ -19,11 +19,18 @@ int main() {
   ball.position = {0, 4};
   ball.shape = ShapeDef::MakeCircle(0.5f);
   BodyId id = world.CreateBody(ball);
+  BodyDef pill = ball;                            // a capsule: two centres and a radius
+  pill.position = {3, 2};
+  pill.shape = ShapeDef::MakeCapsule({-0.5f, 0}, {0.5f, 0}, 0.25f);
+  BodyId pillId = world.CreateBody(pill);
   for (int i = 0; i < 60; ++i) world.Step(1.0f / 60.0f);
   Vec2 p = world.GetPosition(id);                  // resting on the ground: y = 1.0
+  Vec2 q = world.GetPosition(pillId);             // lying on its side: y = 0.75
 
-  std::printf("ball at x = %.3f m, y = %.3f m\n", static_cast<double>(p.x), static_cast<double>(p.y));
+  std::printf("ball at x = %.3f m, y = %.3f m; capsule at y = %.3f m\n", static_cast<double>(p.x), static_cast<double>(p.y),
+              static_cast<double>(q.y));
   // The ground's top is at y = 0.5 and the radius 0.5: resting means y = 1.0 within the
   // linear slop (0.005 m by default) and a little speculative margin.
-  return std::fabs(p.y - 1.0f) < 0.02f ? 0 : 1;
+  // The capsule lies on its side: its radius, 0.25, above the ground.
+  return std::fabs(p.y - 1.0f) < 0.02f && std::fabs(q.y - 0.75f) < 0.02f ? 0 : 1;
 }

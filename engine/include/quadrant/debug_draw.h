@@ -42,6 +42,17 @@ class DebugDraw {
   virtual void DrawCircle(Vec2 center, Real radius, Real angle, Color color) = 0;
   /// A convex polygon, its 3 to 8 vertices counter-clockwise (the span lives for the call only).
   virtual void DrawPolygon(std::span<const Vec2> vertices, Color color) = 0;
+  /// A capsule: the points within `radius` of the segment p1-p2. By default its rectangle as a
+  /// polygon and its two end discs as circles.
+  virtual void DrawCapsule(Vec2 p1, Vec2 p2, Real radius, Color color) {
+    const Vec2 axis = p2 - p1;
+    const Real length = Length(axis);
+    const Vec2 side = length > 0 ? (radius / length) * Vec2{-axis.y, axis.x} : Vec2{0, radius};
+    const Vec2 rect[4] = {p1 - side, p2 - side, p2 + side, p1 + side};
+    DrawPolygon(std::span<const Vec2>(rect, 4), color);
+    DrawCircle(p1, radius, 0, color);
+    DrawCircle(p2, radius, 0, color);
+  }
   /// A contact point and its unit normal (from the contact's first body to its second).
   virtual void DrawContact(Vec2 point, Vec2 normal) { (void)point, (void)normal; }
   /// A shape's axis-aligned bounding box.

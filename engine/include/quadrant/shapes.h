@@ -38,6 +38,14 @@ struct Circle {
   Real radius = Real(0.5);
 };
 
+/// A capsule: the points within `radius` of the segment from center1 to center2 (body
+/// coordinates), a segment's length of rectangle with a half disc on each end.
+struct Capsule {
+  Vec2 center1{Real(-0.5), 0};
+  Vec2 center2{Real(0.5), 0};
+  Real radius = Real(0.25);
+};
+
 /// A convex polygon, counter-clockwise, with precomputed outward unit normals.
 /// Build it with MakePolygon or MakeBox: they validate the input.
 struct Polygon {
@@ -67,13 +75,18 @@ Polygon MakeBox(Real hx, Real hy, Vec2 center = {}, Real angle = 0);
 /// Validates a circle (finite centre, radius >= kMinFeatureSize); throws quadrant::Error.
 void ValidateCircle(const Circle& circle);
 
+/// Validates a capsule (finite centres, radius and length >= kMinFeatureSize, within the
+/// coordinate limit); throws quadrant::Error.
+void ValidateCapsule(const Capsule& capsule);
 MassData ComputeMass(const Circle& circle, Real density);
+MassData ComputeMass(const Capsule& capsule, Real density);
 MassData ComputeMass(const Polygon& polygon, Real density);
 
 /// Signed area of a polygon (positive for counter-clockwise).
 Real ComputeArea(const Polygon& polygon);
 
 AABB ComputeAABB(const Circle& circle, Transform xf);
+AABB ComputeAABB(const Capsule& capsule, Transform xf);
 AABB ComputeAABB(const Polygon& polygon, Transform xf);
 
 }  // namespace quadrant

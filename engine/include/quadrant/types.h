@@ -30,7 +30,7 @@ enum class BodyType : uint8_t {
   kDynamic,    ///< moved by gravity and contacts
 };
 
-enum class ShapeType : uint8_t { kCircle, kPolygon };
+enum class ShapeType : uint8_t { kCircle, kPolygon, kCapsule };
 
 /// The single shape of a body. Quadrant bodies carry exactly one shape: every scene of the
 /// suite needs no more, and it keeps the hot loops free of a shape list per body.
@@ -47,6 +47,7 @@ struct ShapeDef {
   bool isSensor = false;
   Circle circle;
   Polygon polygon;
+  Capsule capsule;
   Real density = 1;       ///< kg/m^2, > 0 for dynamic bodies
   Real friction = Real(0.6);   ///< Coulomb coefficient, >= 0; mixed as sqrt(fa*fb) like Box2D
   Real restitution = 0;   ///< 0..1 (values above 1 are refused); mixed as max(ea, eb) like Box2D
@@ -54,6 +55,9 @@ struct ShapeDef {
   static ShapeDef MakeCircle(Real radius, Vec2 center = {});
   static ShapeDef Box(Real hx, Real hy, Vec2 center = {}, Real angle = 0);
   static ShapeDef FromPolygon(const Polygon& polygon);
+  /// A capsule from center1 to center2 (body coordinates) of the given radius; validated
+  /// (ValidateCapsule). Not under ParallelScheme::kQuadrants or in a DistributedWorld.
+  static ShapeDef MakeCapsule(Vec2 center1, Vec2 center2, Real radius);
 };
 
 /// Every category bit: the default mask of bodies and queries.

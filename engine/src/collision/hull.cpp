@@ -142,4 +142,22 @@ void ValidateCircle(const Circle& circle) {
   }
 }
 
+void ValidateCapsule(const Capsule& capsule) {
+  if (!IsFinite(capsule.center1) || !IsFinite(capsule.center2)) throw Error("capsule centre is not finite");
+  if (!IsFinite(capsule.radius)) throw Error("capsule radius is not finite");
+  if (capsule.radius < kMinFeatureSize) {
+    throw Error("capsule radius must be at least 0.005 m, got " + std::to_string(capsule.radius));
+  }
+  const Real limit = kMaxCoordinate;
+  if (capsule.radius > limit || std::abs(capsule.center1.x) > limit || std::abs(capsule.center1.y) > limit ||
+      std::abs(capsule.center2.x) > limit || std::abs(capsule.center2.y) > limit) {
+    throw Error("capsule is beyond the coordinate limit of 1e6 m");
+  }
+  const Real length = Length(capsule.center2 - capsule.center1);
+  if (!(length >= kMinFeatureSize)) {
+    throw Error("capsule length (centre to centre) must be at least 0.005 m, got " + std::to_string(length) +
+                " (a circle is ShapeDef::MakeCircle)");
+  }
+}
+
 }  // namespace quadrant

@@ -15,6 +15,30 @@ MassData ComputeMass(const Circle& circle, Real density) {
   return md;
 }
 
+MassData ComputeMass(const Capsule& capsule, Real density) {
+  // A rectangle of length L and width 2r plus a disc of radius r cut in two, each half's
+  // centroid 4r/(3 pi) beyond its end of the segment. Each half's inertia about its own
+  // centroid is (m_disc/2)(r^2/2 - c^2); moved to the capsule's centre by the parallel axis.
+  const Real r = capsule.radius, r2 = r * r;
+  const Vec2 axis = capsule.center2 - capsule.center1;
+  const Real length = Length(axis);
+  const Real rectMass = density * length * 2 * r;
+  const Real discMass = density * std::numbers::pi_v<Real> * r2;
+  const Real c = Real(4) * r / (Real(3) * std::numbers::pi_v<Real>);
+  const Real d = Real(0.5) * length + c;
+  MassData md;
+  md.mass = rectMass + discMass;
+  md.center = Real(0.5) * (capsule.center1 + capsule.center2);
+  md.rotationalInertia = rectMass * (length * length + 4 * r2) / Real(12) + discMass * (Real(0.5) * r2 - c * c) + discMass * d * d;
+  return md;
+}
+
+AABB ComputeAABB(const Capsule& capsule, Transform xf) {
+  const Vec2 p1 = TransformPoint(xf, capsule.center1), p2 = TransformPoint(xf, capsule.center2);
+  const Vec2 r{capsule.radius, capsule.radius};
+  return {Min(p1, p2) - r, Max(p1, p2) + r};
+}
+
 Real ComputeArea(const Polygon& polygon) {
   Real area = 0;
   const Vec2 o = polygon.vertices[0];

@@ -42,6 +42,12 @@ Manifold CollidePolygons(const Polygon& a, Transform xfA, const Polygon& b, Tran
 /// four-vertex pairs' SSE2 and AVX paths must match bit for bit: for the tests.
 Manifold CollidePolygonsGeneral(const Polygon& a, Transform xfA, const Polygon& b, Transform xfB, Real speculative);
 
+/// Capsule pairs (capsule_collide.cpp). CollideWithCapsule takes any pair with a capsule in it.
+Manifold CollideCapsuleAndCircle(const Capsule& a, Transform xfA, const Circle& b, Transform xfB, Real speculative);
+Manifold CollidePolygonAndCapsule(const Polygon& a, Transform xfA, const Capsule& b, Transform xfB, Real speculative);
+Manifold CollideCapsules(const Capsule& a, Transform xfA, const Capsule& b, Transform xfB, Real speculative);
+Manifold CollideWithCapsule(const ShapeDef& a, Transform xfA, const ShapeDef& b, Transform xfB, Real speculative);
+
 /// Dispatches on the shape types. For a circle A and polygon B it collides (B, A) and flips
 /// the normal so the result still points from A to B.
 Manifold Collide(const ShapeDef& a, Transform xfA, const ShapeDef& b, Transform xfB, Real speculative);

@@ -20,9 +20,59 @@ D2 PointD(const Transform& xf, Vec2 v) {
   return {r.x + xf.p.x, r.y + xf.p.y};
 }
 
+// Squared distance from p to the segment a-b.
+double PointSegmentSquared(D2 a, D2 b, D2 p) {
+  const D2 e{b.x - a.x, b.y - a.y};
+  const double ee = DotD(e, e);
+  const double u = ee > 0 ? std::clamp(DotD(D2{p.x - a.x, p.y - a.y}, e) / ee, 0.0, 1.0) : 0.0;
+  const D2 q{p.x - a.x - u * e.x, p.y - a.y - u * e.y};
+  return DotD(q, q);
+}
+
+// Squared distance between the segments a-b and c-d: 0 where they cross, else the nearest of
+// the four ends to the other segment.
+double SegmentsSquared(D2 a, D2 b, D2 c, D2 d) {
+  auto orient = [](D2 p, D2 q, D2 r) { return (q.x - p.x) * (r.y - p.y) - (q.y - p.y) * (r.x - p.x); };
+  const double o1 = orient(a, b, c), o2 = orient(a, b, d), o3 = orient(c, d, a), o4 = orient(c, d, b);
+  if (((o1 > 0 && o2 < 0) || (o1 < 0 && o2 > 0)) && ((o3 > 0 && o4 < 0) || (o3 < 0 && o4 > 0))) return 0;
+  return std::min(std::min(PointSegmentSquared(c, d, a), PointSegmentSquared(c, d, b)),
+                  std::min(PointSegmentSquared(a, b, c), PointSegmentSquared(a, b, d)));
+}
+
+// A capsule's segment core in world coordinates, its two sides' outward normals, its radius.
+struct CapsuleD {
+  D2 v[2];
+  D2 n[2];
+  double radius;
+};
+CapsuleD CapsuleWorld(const Capsule& c, const Transform& xf) {
+  CapsuleD w;
+  w.v[0] = PointD(xf, c.center1), w.v[1] = PointD(xf, c.center2);
+  const D2 e{w.v[1].x - w.v[0].x, w.v[1].y - w.v[0].y};
+  const double len = std::sqrt(DotD(e, e));
+  w.n[0] = {e.y / len, -e.x / len};
+  w.n[1] = {-w.n[0].x, -w.n[0].y};
+  w.radius = c.radius;
+  return w;
+}
+
+bool RayRoundedPolygon(const D2* v, const D2* n, int count, double radius, D2 p, D2 d, double& tOut, D2& normal);
+
 }  // namespace
 
 bool ShapeOverlapsBox(const ShapeDef& shape, const Transform& xf, const AABB& box) {
+  if (shape.type == ShapeType::kCapsule) {
+    // The segment within the radius of the box: an end inside, or the nearest of the box's edges.
+    const CapsuleD c = CapsuleWorld(shape.capsule, xf);
+    const D2 lo{box.lower.x, box.lower.y}, hi{box.upper.x, box.upper.y};
+    for (const D2& v : c.v) {
+      if (v.x >= lo.x && v.x <= hi.x && v.y >= lo.y && v.y <= hi.y) return true;
+    }
+    const D2 corners[4] = {lo, {hi.x, lo.y}, hi, {lo.x, hi.y}};
+    double best = INFINITY;
+    for (int k = 0; k < 4; ++k) best = std::min(best, SegmentsSquared(c.v[0], c.v[1], corners[k], corners[(k + 1) % 4]));
+    return best <= c.radius * c.radius;
+  }
   if (shape.type == ShapeType::kCircle) {
     const D2 c = PointD(xf, shape.circle.center);
     const double qx = std::clamp(c.x, double(box.lower.x), double(box.upper.x));
@@ -52,6 +102,16 @@ bool ShapeOverlapsBox(const ShapeDef& shape, const Transform& xf, const AABB& bo
 
 bool RayCastShape(const ShapeDef& shape, const Transform& xf, Vec2 p1, Vec2 p2, RayHit& hit) {
   const D2 d{double(p2.x) - p1.x, double(p2.y) - p1.y};
+  if (shape.type == ShapeType::kCapsule) {
+    const CapsuleD c = CapsuleWorld(shape.capsule, xf);
+    double t = 0;
+    D2 normal{0, 0};
+    if (!RayRoundedPolygon(c.v, c.n, 2, c.radius, ToD(p1), d, t, normal)) return false;
+    hit.fraction = Real(t);
+    hit.point = {Real(p1.x + t * d.x), Real(p1.y + t * d.y)};
+    hit.normal = {Real(normal.x), Real(normal.y)};
+    return true;
+  }
   if (shape.type == ShapeType::kCircle) {
     // |s + t d|^2 = r^2 with s = p1 - centre: the smaller root, if in [0, 1].
     const D2 c = PointD(xf, shape.circle.center);
@@ -107,9 +167,11 @@ D2 Scale(double s, D2 a) { return {s * a.x, s * a.y}; }
 double CrossD(D2 a, D2 b) { return a.x * b.y - a.y * b.x; }
 
 // A shape's outline in world coordinates, in double: a polygon's vertices and outward normals,
-// or a circle's centre and radius.
+// a circle's centre and radius, or a capsule's two centres (count 2, its sides' normals) and
+// radius.
 struct WorldShape {
   bool circle = false;
+  bool capsule = false;
   D2 centre{0, 0};
   double radius = 0;
   D2 v[kMaxPolygonVertices];
@@ -123,6 +185,14 @@ WorldShape ToWorld(const ShapeDef& shape, const Transform& xf) {
     w.circle = true;
     w.centre = PointD(xf, shape.circle.center);
     w.radius = shape.circle.radius;
+    return w;
+  }
+  if (shape.type == ShapeType::kCapsule) {
+    const CapsuleD c = CapsuleWorld(shape.capsule, xf);
+    w.capsule = true;
+    w.count = 2;
+    w.v[0] = c.v[0], w.v[1] = c.v[1], w.n[0] = c.n[0], w.n[1] = c.n[1];
+    w.radius = c.radius;
     return w;
   }
   w.count = shape.polygon.count;
@@ -273,6 +343,26 @@ void SetHit(RayHit& hit, double t, D2 point, D2 normal) {
 
 bool ShapesOverlap(const ShapeDef& a, const Transform& xfA, const ShapeDef& b, const Transform& xfB) {
   const WorldShape sa = ToWorld(a, xfA), sb = ToWorld(b, xfB);
+  if (sa.capsule || sb.capsule) {
+    // The cores' distance against the radii: a circle's core is its centre, a capsule's its
+    // segment, a polygon's itself (a core inside it is at distance 0).
+    const WorldShape& cap = sa.capsule ? sa : sb;
+    const WorldShape& other = sa.capsule ? sb : sa;
+    const double reach = cap.radius + other.radius;
+    double d2 = 0;
+    if (other.circle) {
+      d2 = PointSegmentSquared(cap.v[0], cap.v[1], other.centre);
+    } else if (other.capsule) {
+      d2 = SegmentsSquared(cap.v[0], cap.v[1], other.v[0], other.v[1]);
+    } else if (PolygonSeparation(other.v, other.n, other.count, cap.v[0]) > 0 &&
+               PolygonSeparation(other.v, other.n, other.count, cap.v[1]) > 0) {
+      d2 = INFINITY;
+      for (int k = 0; k < other.count; ++k) {
+        d2 = std::min(d2, SegmentsSquared(cap.v[0], cap.v[1], other.v[k], other.v[(k + 1) % other.count]));
+      }
+    }
+    return d2 <= reach * reach;
+  }
   if (sa.circle && sb.circle) {
     const D2 d = Sub(sb.centre, sa.centre);
     const double r = sa.radius + sb.radius;
@@ -300,6 +390,7 @@ bool ShapesOverlap(const ShapeDef& a, const Transform& xfA, const ShapeDef& b, c
 bool ShapeContainsPoint(const ShapeDef& shape, const Transform& xf, Vec2 point) {
   const WorldShape s = ToWorld(shape, xf);
   const D2 p = ToD(point);
+  if (s.capsule) return PointSegmentSquared(s.v[0], s.v[1], p) <= s.radius * s.radius;
   if (s.circle) {
     const D2 d = Sub(p, s.centre);
     return DotD(d, d) <= s.radius * s.radius;
@@ -315,6 +406,8 @@ bool CastCircleShape(const ShapeDef& shape, const Transform& xf, Vec2 p1, Vec2 p
   D2 normal{0, 0};
   if (s.circle) {
     if (!RayCircle(s.centre, s.radius + r, p, d, t, normal)) return false;
+  } else if (s.capsule) {
+    if (!RayRoundedPolygon(s.v, s.n, 2, s.radius + r, p, d, t, normal)) return false;
   } else if (!RayRoundedPolygon(s.v, s.n, s.count, r, p, d, t, normal)) {
     return false;
   }
@@ -355,6 +448,17 @@ bool CastPolygonShape(const ShapeDef& shape, const Transform& xf, const Polygon&
     const D2 e = Sub(hull[(k + 1) % h], hull[k]);
     const double len = std::sqrt(DotD(e, e));
     hn[k] = {e.y / len, -e.x / len};
+  }
+  if (s.capsule) {
+    // S + (-P) is the hull of the segment's ends less P's vertices, grown by the radius; the
+    // contact is the moved P's point furthest against the normal (the middle of an edge).
+    if (!RayRoundedPolygon(hull, hn, h, s.radius, D2{0, 0}, d, t, normal)) return false;
+    D2 moved[kMaxPolygonVertices];
+    for (int k = 0; k < m; ++k) moved[k] = Add(pv[k], Scale(t, d));
+    const D2 tangent{-normal.y, normal.x};
+    const Support onP = SupportAlong(moved, m, Scale(-1, normal), tangent);
+    SetHit(hit, t, Add(Scale(-onP.along, normal), Scale(0.5 * (onP.lo + onP.hi), tangent)), normal);
+    return true;
   }
   if (!RayRoundedPolygon(hull, hn, h, 0, D2{0, 0}, d, t, normal)) return false;
   // The contact: S's points furthest along the normal meet the moved P's furthest against it.

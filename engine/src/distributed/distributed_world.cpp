@@ -462,6 +462,9 @@ void DistributedWorld::Load(std::span<const BodyDef> bodies) {
     // Its ranks find pairs on their own and collide every one (FindContacts).
     Require(!bodies[i].shape.isSensor, "DistributedWorld::Load: sensor shapes are not supported (body " +
                                            std::to_string(i) + ")");
+    // A rank's record carries a circle or a polygon (ToRecord).
+    Require(bodies[i].shape.type != ShapeType::kCapsule, "DistributedWorld::Load: capsule shapes are not supported (body " +
+                                                            std::to_string(i) + ")");
     AppendBody(row, bodies[i], w.def, static_cast<uint32_t>(i));
     const Record r = Impl::ToRecord(row, 0, static_cast<uint32_t>(i));
     if (r.type == BodyType::kStatic) {

@@ -111,6 +111,8 @@ ShapeDef ValidateBodyDef(const BodyDef& def) {
     const int count = shape.polygon.count;
     Require(count >= 3 && count <= kMaxPolygonVertices, "polygon vertex count must be in [3, 8], got " + std::to_string(count));
     shape.polygon = MakePolygon(std::span<const Vec2>(shape.polygon.vertices.data(), size_t(count)));
+  } else if (shape.type == ShapeType::kCapsule) {
+    ValidateCapsule(shape.capsule);
   } else {
     throw Error("ShapeDef.type is unknown");
   }
@@ -119,8 +121,12 @@ ShapeDef ValidateBodyDef(const BodyDef& def) {
 }
 
 MassData ShapeMass(const ShapeDef& shape) {
-  return shape.type == ShapeType::kCircle ? ComputeMass(shape.circle, shape.density)
-                                          : ComputeMass(shape.polygon, shape.density);
+  switch (shape.type) {
+    case ShapeType::kCircle: return ComputeMass(shape.circle, shape.density);
+    case ShapeType::kCapsule: return ComputeMass(shape.capsule, shape.density);
+    case ShapeType::kPolygon: break;
+  }
+  return ComputeMass(shape.polygon, shape.density);
 }
 
 void RequireDynamicMass(const ShapeDef& shape, const std::string& prefix) {

@@ -48,6 +48,14 @@ ShapeDef ShapeDef::Box(Real hx, Real hy, Vec2 center, Real angle) {
   return s;
 }
 
+ShapeDef ShapeDef::MakeCapsule(Vec2 center1, Vec2 center2, Real radius) {
+  ShapeDef s;
+  s.type = ShapeType::kCapsule;
+  s.capsule = Capsule{center1, center2, radius};
+  ValidateCapsule(s.capsule);
+  return s;
+}
+
 ShapeDef ShapeDef::FromPolygon(const Polygon& polygon) {
   ShapeDef s;
   s.type = ShapeType::kPolygon;
@@ -221,9 +229,14 @@ int AppendBody(Bodies& b, const BodyDef& def, const WorldDef& worldDef, uint32_t
 
   MassData md{};
   Real boundRadius = 0;
+  Require(worldDef.scheme != ParallelScheme::kQuadrants || shape.type != ShapeType::kCapsule,
+          "CreateBody: a capsule needs ParallelScheme::kDeterministic");
   if (shape.type == ShapeType::kCircle) {
     md = ComputeMass(shape.circle, shape.density);
     boundRadius = shape.circle.radius;
+  } else if (shape.type == ShapeType::kCapsule) {
+    md = ComputeMass(shape.capsule, shape.density);
+    boundRadius = Real(0.5) * Length(shape.capsule.center2 - shape.capsule.center1) + shape.capsule.radius;
   } else {
     md = ComputeMass(shape.polygon, shape.density);
     for (int k = 0; k < shape.polygon.count; ++k) {
@@ -553,7 +566,7 @@ void World::Impl::PrepareQueries() {
   queryBoxes.resize(n);
   for (int i = 0; i < n; ++i) {
     const ShapeDef& s = bodies.shape[i];
-    AABB box = s.type == ShapeType::kCircle ? ComputeAABB(s.circle, bodies.xf[i]) : ComputeAABB(s.polygon, bodies.xf[i]);
+    AABB box = ComputeShapeAABB(s, bodies.xf[i]);
     const Real far = std::max(std::max(std::abs(box.lower.x), std::abs(box.lower.y)),
                               std::max(std::abs(box.upper.x), std::abs(box.upper.y)));
     const Real m = Real(1e-3) + Real(1e-6) * far;
@@ -749,7 +762,7 @@ AABB World::GetAABB(BodyId id) const {
   const int i = impl_->Dense(id);
   const ShapeDef& s = impl_->bodies.shape[i];
   const Transform& xf = impl_->bodies.xf[i];
-  return s.type == ShapeType::kCircle ? ComputeAABB(s.circle, xf) : ComputeAABB(s.polygon, xf);
+  return ComputeShapeAABB(s, xf);
 }
 const ShapeDef& World::GetShape(BodyId id) const { return impl_->bodies.shape[impl_->Dense(id)]; }
 
@@ -1193,6 +1206,8 @@ void World::Draw(DebugDraw& draw, uint32_t flags) const {
       const Transform& xf = b.xf[i];
       if (s.type == ShapeType::kCircle) {
         draw.DrawCircle(TransformPoint(xf, s.circle.center), s.circle.radius, quadrant::GetAngle(xf.q), color);
+      } else if (s.type == ShapeType::kCapsule) {
+        draw.DrawCapsule(TransformPoint(xf, s.capsule.center1), TransformPoint(xf, s.capsule.center2), s.capsule.radius, color);
       } else {
         Vec2 v[kMaxPolygonVertices];
         for (int k = 0; k < s.polygon.count; ++k) v[k] = TransformPoint(xf, s.polygon.vertices[k]);
@@ -1203,8 +1218,7 @@ void World::Draw(DebugDraw& draw, uint32_t flags) const {
   if (flags & kDrawAABBs) {
     for (int i = 0; i < n; ++i) {
       const ShapeDef& s = b.shape[i];
-      draw.DrawAABB(s.type == ShapeType::kCircle ? ComputeAABB(s.circle, b.xf[i]) : ComputeAABB(s.polygon, b.xf[i]),
-                    kAABBColor);
+      draw.DrawAABB(ComputeShapeAABB(s, b.xf[i]), kAABBColor);
     }
   }
   if (flags & kDrawContacts) {

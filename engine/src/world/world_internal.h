@@ -109,6 +109,7 @@ int AppendBody(Bodies& bodies, const BodyDef& def, const WorldDef& worldDef, uin
     const Vec2 r{s.circle.radius, s.circle.radius};
     return {p - r, p + r};
   }
+  if (s.type == ShapeType::kCapsule) [[unlikely]] return ComputeAABB(s.capsule, xf);
   const Polygon& poly = s.polygon;
   Vec2 lower = TransformPoint(xf, poly.vertices[0]);
   Vec2 upper = lower;
@@ -118,6 +119,16 @@ int AppendBody(Bodies& bodies, const BodyDef& def, const WorldDef& worldDef, uin
     upper = Max(upper, v);
   }
   return {lower, upper};
+}
+
+// The shape's box, out of the hot loops (queries, drawing, GetAABB).
+inline AABB ComputeShapeAABB(const ShapeDef& s, const Transform& xf) {
+  switch (s.type) {
+    case ShapeType::kCircle: return ComputeAABB(s.circle, xf);
+    case ShapeType::kCapsule: return ComputeAABB(s.capsule, xf);
+    case ShapeType::kPolygon: break;
+  }
+  return ComputeAABB(s.polygon, xf);
 }
 
 // `sweep` is the time the box is swept over: the step's dt, or 0 for only the base margin.
