@@ -4,6 +4,7 @@
 // loop measures Box2D and nothing of ours.
 #include <box2d/box2d.h>
 
+#include <cmath>
 #include <memory>
 #include <string>
 #include <unordered_map>
@@ -102,9 +103,23 @@ class Box2dAdapter final : public Adapter {
       b2CircleShape circle;
       b2PolygonShape polygon;
       b2FixtureDef fixture;
+      // A capsule is Box2D 2.4's way: a box along its segment and a circle on each end, on one
+      // body, with the capsule's exact mass set after (the three fixtures' own overlap).
+      b2PolygonShape capsuleBox;
+      b2CircleShape capsuleEnds[2];
       if (desc.shape == ShapeKind::kCircle) {
         circle.m_radius = static_cast<float>(desc.radius);
         fixture.shape = &circle;
+      } else if (desc.shape == ShapeKind::kCapsule) {
+        const Vec2 c1 = desc.vertices[0], c2 = desc.vertices[1];
+        const Vec2 axis = c2 - c1;
+        capsuleBox.SetAsBox(0.5f * static_cast<float>(Length(axis)), static_cast<float>(desc.radius), ToB2(Real(0.5) * (c1 + c2)),
+                            std::atan2(static_cast<float>(axis.y), static_cast<float>(axis.x)));
+        fixture.shape = &capsuleBox;
+        for (int e = 0; e < 2; ++e) {
+          capsuleEnds[e].m_radius = static_cast<float>(desc.radius);
+          capsuleEnds[e].m_p = ToB2(desc.vertices[e]);
+        }
       } else {
         std::vector<b2Vec2> points;
         points.reserve(desc.vertices.size());
@@ -117,6 +132,21 @@ class Box2dAdapter final : public Adapter {
       fixture.restitution = fx.restitution ? static_cast<float>(desc.restitution) : 0.0f;
       fixture.restitutionThreshold = static_cast<float>(scene.restitutionThreshold);
       body->CreateFixture(&fixture);
+      if (desc.shape == ShapeKind::kCapsule) {
+        for (b2CircleShape& end : capsuleEnds) {
+          fixture.shape = &end;
+          body->CreateFixture(&fixture);
+        }
+        if (desc.dynamic) {
+          const MassProperties mp = ComputeMassProperties(desc);
+          b2MassData md;
+          md.mass = static_cast<float>(mp.mass);
+          md.center = ToB2(mp.localCenter);
+          // Box2D's I is about the body origin.
+          md.I = static_cast<float>(mp.inertia + mp.mass * Dot(mp.localCenter, mp.localCenter));
+          body->SetMassData(&md);
+        }
+      }
 
       // Set after the fixture: b2BodyDef's velocity would be taken as the origin's and shifted
       // when the centre of mass moves, while the scene gives the centre of mass's.

@@ -155,6 +155,12 @@ class BulletAdapter final : public Adapter {
     // step, not by a velocity; the scene API drives kinematic bodies by velocity (SetVelocity).
     for (const BodyDesc& b : scene.bodies) {
       if (b.kinematic) throw Unsupported("bullet: kinematic bodies move by transform in Bullet, not by velocity");
+      // btCapsuleShapeX lies along the body's x axis, centred on its origin; anything else would
+      // need a compound shape, which the plane constraint (btConvex2dShape) cannot wrap.
+      if (b.shape == ShapeKind::kCapsule &&
+          (b.vertices.size() != 2 || b.vertices[0].y != 0 || b.vertices[1].y != 0 || b.vertices[0].x != -b.vertices[1].x)) {
+        throw Unsupported("bullet: a capsule must lie along its body's x axis, centred on the origin (btCapsuleShapeX)");
+      }
     }
     // Built aside and swapped in at the end, so a throwing Load keeps the previous world.
     auto next = std::make_unique<BulletWorld>();
@@ -283,6 +289,11 @@ class BulletAdapter final : public Adapter {
     if (desc.shape == ShapeKind::kCircle) {
       innerRadius = desc.radius;
       w.shapes.push_back(std::make_unique<btSphereShape>(desc.radius));
+      return w.shapes.back().get();
+    }
+    if (desc.shape == ShapeKind::kCapsule) {  // along x, centred (DoLoad checked)
+      innerRadius = desc.radius;
+      w.shapes.push_back(std::make_unique<btCapsuleShapeX>(desc.radius, 2 * std::abs(desc.vertices[1].x)));
       return w.shapes.back().get();
     }
     std::vector<Vec2> centred(desc.vertices.size());

@@ -187,6 +187,9 @@ class ChipmunkAdapter final : public Adapter {
       cpShape* shape;
       if (desc.shape == ShapeKind::kCircle) {
         shape = cpCircleShapeNew(body, cpFloat(desc.radius), cpvzero);
+      } else if (desc.shape == ShapeKind::kCapsule) {
+        // Chipmunk's segment with a radius is a capsule.
+        shape = cpSegmentShapeNew(body, ToCp(desc.vertices[0]), ToCp(desc.vertices[1]), cpFloat(desc.radius));
       } else {
         std::vector<cpVect> verts;
         verts.reserve(desc.vertices.size());

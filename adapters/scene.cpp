@@ -63,6 +63,16 @@ BodyDesc MakeBoxBody(Vec2 position, Real hx, Real hy, bool dynamic) {
   return b;
 }
 
+BodyDesc MakeCapsuleBody(Vec2 position, Real halfLength, Real radius, bool dynamic) {
+  BodyDesc b;
+  b.dynamic = dynamic;
+  b.shape = ShapeKind::kCapsule;
+  b.vertices = {{-halfLength, 0}, {halfLength, 0}};
+  b.radius = radius;
+  b.position = position;
+  return b;
+}
+
 BodyDef ToBodyDef(const BodyDesc& b) {
   BodyDef bd;
   bd.type = b.dynamic ? BodyType::kDynamic : b.kinematic ? BodyType::kKinematic : BodyType::kStatic;
@@ -75,6 +85,10 @@ BodyDef ToBodyDef(const BodyDesc& b) {
   if (b.shape == ShapeKind::kCircle) {
     bd.shape.type = ShapeType::kCircle;
     bd.shape.circle = Circle{{0, 0}, b.radius};
+  } else if (b.shape == ShapeKind::kCapsule) {
+    if (b.vertices.size() != 2) throw Error("a capsule has 2 centres, got " + std::to_string(b.vertices.size()));
+    bd.shape.type = ShapeType::kCapsule;
+    bd.shape.capsule = Capsule{b.vertices[0], b.vertices[1], b.radius};
   } else {
     if (b.vertices.size() > size_t(kMaxPolygonVertices)) {
       throw Error("a polygon has at most 8 vertices, got " + std::to_string(b.vertices.size()));
@@ -90,9 +104,9 @@ BodyDef ToBodyDef(const BodyDesc& b) {
 }
 
 MassProperties ComputeMassProperties(const BodyDesc& body) {
-  MassData md = body.shape == ShapeKind::kCircle
-                    ? ComputeMass(Circle{{0, 0}, body.radius}, body.density)
-                    : ComputeMass(MakePolygon(body.vertices), body.density);
+  MassData md = body.shape == ShapeKind::kCircle    ? ComputeMass(Circle{{0, 0}, body.radius}, body.density)
+                : body.shape == ShapeKind::kCapsule ? ComputeMass(ToBodyDef(body).shape.capsule, body.density)
+                                                    : ComputeMass(MakePolygon(body.vertices), body.density);
   return {md.mass, md.rotationalInertia, md.center};
 }
 

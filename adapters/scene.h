@@ -15,7 +15,7 @@
 
 namespace quadrant::scene {
 
-enum class ShapeKind : uint8_t { kCircle, kPolygon };
+enum class ShapeKind : uint8_t { kCircle, kPolygon, kCapsule };
 
 /// Effects a scene calls for: the engine's own type (quadrant/world.h), so the scene API and the
 /// engine cannot drift (scene.h had a copy). An adapter whose engine cannot honour one that is on
@@ -39,8 +39,9 @@ struct BodyDesc {
   /// Adapters of engines without kinematic bodies report the scene as unsupported.
   bool kinematic = false;
   ShapeKind shape = ShapeKind::kCircle;
-  Real radius = Real(0.5);          ///< circles (m), centred on the body origin
-  std::vector<Vec2> vertices;       ///< polygons: convex, counter-clockwise, body coordinates
+  Real radius = Real(0.5);          ///< circles (m), centred on the body origin; capsules' radius
+  /// Polygons: convex, counter-clockwise, body coordinates. Capsules: the two centres.
+  std::vector<Vec2> vertices;
   Vec2 position;                    ///< body origin (m)
   Real angle = 0;                   ///< rad
   Vec2 velocity;                    ///< m/s
@@ -81,6 +82,9 @@ BodyDesc MakeCircleBody(Vec2 position, Real radius, bool dynamic = true);
 /// An axis-aligned box body of half-widths hx, hy at `position`, vertices counter-clockwise
 /// (other fields at their defaults).
 BodyDesc MakeBoxBody(Vec2 position, Real hx, Real hy, bool dynamic = true);
+
+/// A capsule body: centres (-halfLength, 0) and (halfLength, 0), `radius`, at `position`.
+BodyDesc MakeCapsuleBody(Vec2 position, Real halfLength, Real radius, bool dynamic = true);
 
 /// Exact mass (kg) and rotational inertia about the centre of mass (kg m^2) of a body as the
 /// scene defines it; every adapter gives its engine these values where the engine lets it.

@@ -81,6 +81,17 @@ std::vector<Row> Rows() {
        "scene body 1: the body's mass or rotational inertia is not a positive finite number"},
       {"density 1e-40 (mass underflows)", body(kBall, [](BodyDesc& b) { b.density = Real(1e-40); }),
        "mass or rotational inertia is not a positive finite number"},
+      {"capsule with 3 centres", body(kBall, [](BodyDesc& b) {
+         b.shape = ShapeKind::kCapsule;
+         b.vertices = {{0, 0}, {1, 0}, {2, 0}};
+       }),
+       "scene body 2: a capsule has 2 centres, got 3"},
+      {"capsule centres 1 mm apart", body(kBall, [](BodyDesc& b) {
+         b.shape = ShapeKind::kCapsule;
+         b.vertices = {{0, 0}, {Real(0.001), 0}};
+         b.radius = Real(0.2);
+       }),
+       "scene body 2: capsule length (centre to centre) must be at least 0.005 m"},
       {"density 0 (dynamic)", body(kBox, [](BodyDesc& b) { b.density = 0; }), "scene body 1: a dynamic body needs ShapeDef.density > 0"},
       {"density -1", body(kBall, [](BodyDesc& b) { b.density = -1; }), "ShapeDef.density must be finite and >= 0"},
       {"density NaN", body(kBox, [](BodyDesc& b) { b.density = kNaN; }), "ShapeDef.density must be finite and >= 0"},

@@ -389,5 +389,18 @@ TEST(BulletAdapter, DriverRunsBeforeEachStep) {
   EXPECT_NEAR(st.position.x, (1.0 + 2.0 + 3.0) * kDt, 1e-5);
 }
 
+TEST(BulletAdapter, AnOffCentreCapsuleIsUnsupportedAndKeepsTheWorld) {
+  // btCapsuleShapeX lies along the body's x axis about its origin; another capsule is refused
+  // before the loaded world is replaced.
+  Scene s;
+  s.bodies = {MakeCapsuleBody({0, 2}, Real(0.5), Real(0.25))};
+  auto a = MakeBulletAdapter();
+  a->Load(s, 1);
+  Scene skewed = s;
+  skewed.bodies[0].vertices = {{0, 0}, {1, Real(0.5)}};
+  EXPECT_THROW(a->Load(skewed, 1), Unsupported);
+  EXPECT_EQ(a->BodyCount(), 1);
+}
+
 }  // namespace
 }  // namespace quadrant::scene
