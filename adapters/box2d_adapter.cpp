@@ -94,6 +94,7 @@ class Box2dAdapter final : public Adapter {
       def.position = ToB2(desc.position);
       def.angle = static_cast<float>(desc.angle);
       def.allowSleep = fx.sleep;
+      def.awake = desc.awake;
       def.fixedRotation = !fx.rotation;
       // Box2D 2.4's damping law is the scene's own: 1 / (1 + dt c) per step.
       def.linearDamping = fx.damping ? static_cast<float>(desc.linearDamping) : 0.0f;

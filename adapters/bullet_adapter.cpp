@@ -365,6 +365,7 @@ class BulletAdapter final : public Adapter {
       }
     }
     if (!fx.sleep) body->setActivationState(DISABLE_DEACTIVATION);
+    if (!desc.awake) body->setActivationState(ISLAND_SLEEPING);  // woken by a collision with an awake body
     w.world->addRigidBody(body.get());
     w.bodies.push_back(std::move(body));
     w.localCenters.push_back(lc);

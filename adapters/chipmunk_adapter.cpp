@@ -201,6 +201,7 @@ class ChipmunkAdapter final : public Adapter {
       cpShapeSetFriction(shape, fx.friction ? cpFloat(desc.friction) : 0.0);
       cpShapeSetElasticity(shape, fx.restitution ? cpFloat(desc.restitution) : 0.0);
       cpSpaceAddShape(space_, shape);
+      if (!desc.awake) cpBodySleep(body);  // after its shape: a sleeping body keeps its shapes' bounds
     }
   }
 

@@ -80,6 +80,7 @@ BodyDef ToBodyDef(const BodyDesc& b) {
   bd.angle = b.angle;
   bd.linearVelocity = b.velocity;
   bd.angularVelocity = b.angularVelocity;
+  bd.isAwake = b.awake;
   bd.linearDamping = b.linearDamping;  // the engine applies them only with effects.damping
   bd.angularDamping = b.angularDamping;
   if (b.shape == ShapeKind::kCircle) {
@@ -126,6 +127,9 @@ void ValidateScene(const Scene& scene) {
   for (int i = 0; i < static_cast<int>(scene.bodies.size()); ++i) {
     const BodyDesc& b = scene.bodies[i];
     if (b.dynamic && b.kinematic) Fail(i, "a body is either dynamic or kinematic, not both");
+    if (!b.awake && !(b.dynamic && scene.effects.sleep)) {
+      Fail(i, "a body created asleep (awake = false) must be dynamic, in a scene with the sleep effect");
+    }
     if (b.shape == ShapeKind::kPolygon && (b.vertices.size() < 3 || b.vertices.size() > size_t(kMaxPolygonVertices))) {
       // MakePolygon's own messages for both (ToBodyDef cannot hold more than 8).
       try {

@@ -54,6 +54,9 @@ struct BodyDesc {
   /// another law (Bullet, Chipmunk) convert the rate so one step gives that same factor.
   Real linearDamping = 0;
   Real angularDamping = 0;
+  /// false: created asleep (a dynamic body in a scene with the sleep effect), as Box2D 3's
+  /// isAwake; it wakes when an awake body touches it.
+  bool awake = true;
 };
 
 class Adapter;

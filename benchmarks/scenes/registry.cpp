@@ -9,7 +9,7 @@ namespace quadrant::scene {
 
 std::vector<std::string> SceneNames() {
   return {"circle_stress", "polygon_stress", "circle_stress_clumped", "polygon_stress_clumped",
-          "many_pyramids", "tumbler",
+          "many_pyramids", "tumbler", "junkyard", "smash",
           // The hard cases (hard_cases.cpp): fixed size except pyramid, where `count` is the
           // number of boxes and the base the largest b with b (b + 1) / 2 <= count (210 -> base
           // 20, 5050 -> base 100).
@@ -38,6 +38,8 @@ Scene MakeScene(std::string_view name, int count, uint64_t seed) {
   }
   if (name == "many_pyramids") return MakeManyPyramids(count);
   if (name == "tumbler") return MakeTumbler(count);
+  if (name == "junkyard") return MakeJunkyard(count);
+  if (name == "smash") return MakeSmash(count);
   if (name == "vertical_stack") return MakeVerticalStack();
   if (name == "mass_ratio_100") return MakeMassRatio(100);
   if (name == "mass_ratio_400") return MakeMassRatio(400);
@@ -58,7 +60,7 @@ Scene MakeScene(std::string_view name, int count, uint64_t seed) {
 }
 
 bool IsDenseScene(std::string_view name) {
-  return name == "pyramid" || name == "many_pyramids" || name == "tumbler";
+  return name == "pyramid" || name == "many_pyramids" || name == "tumbler" || name == "junkyard" || name == "smash";
 }
 
 std::vector<std::string> DefaultBenchScenes() {
@@ -76,6 +78,9 @@ std::vector<int> DefaultBenchCounts(std::string_view name) {
   if (name == "pyramid") return {1275, 5050};
   if (name == "many_pyramids") return {1375, 2750};
   if (name == "tumbler") return {1024, 2025};
+  // Box2D 3's sizes and a quarter of them (not in the default run).
+  if (name == "junkyard") return {2000, 8000};
+  if (name == "smash") return {2400, 9600};
   throw Error("no default bench counts for scene '" + std::string(name) + "'");
 }
 

@@ -45,10 +45,22 @@ Scene MakeManyPyramids(int count);
 /// report it unsupported.
 Scene MakeTumbler(int count);
 
+// ---- Box2D 3's benchmark scenes beyond the dense ones (box2d3.cpp) ---------------------------
+
+/// Box2D 3's "junkyard" (800 steps there): a 4 x 8 m kinematic pusher (body 0) driven to x = 60
+/// sin(0.2 t) by velocity, 261 static 1 m ground and wall boxes, and `count` pentagons of
+/// circumradius 0.25 in 200 columns (count / 200 rows, 200 <= count <= 200000) dropped from 15 m;
+/// sleep on. Box2D 3 runs 8000. Bullet reports it unsupported (kinematic bodies by velocity).
+Scene MakeJunkyard(int count);
+/// Box2D 3's "smash" (300 steps there): zero gravity, an 8 m box of density 8 at 40 m/s (body 0)
+/// into a wall of touching 0.4 m boxes created asleep, 80 rows of count / 80 columns
+/// (80 <= count <= 1000000); sleep on. Box2D 3 runs 9600.
+Scene MakeSmash(int count);
+
 /// Scene names known to the suite: the stress scenes, the dense scenes and the hard cases.
 std::vector<std::string> SceneNames();
 
-/// Whether `name` is a dense, solver-bound scene (pyramid, many_pyramids, tumbler) rather than a
+/// Whether `name` is a dense, solver-bound scene (pyramid, many_pyramids, tumbler, junkyard, smash) rather than a
 /// sparse one (the stress scenes: about 4 % of the bodies touch at any moment).
 bool IsDenseScene(std::string_view name);
 

@@ -62,6 +62,8 @@ TEST(DenseScenes, RegistryAndBenchDefaults) {
   EXPECT_TRUE(IsDenseScene("pyramid"));
   EXPECT_TRUE(IsDenseScene("many_pyramids"));
   EXPECT_TRUE(IsDenseScene("tumbler"));
+  EXPECT_TRUE(IsDenseScene("junkyard"));
+  EXPECT_TRUE(IsDenseScene("smash"));
   EXPECT_FALSE(IsDenseScene("circle_stress"));
   EXPECT_THROW(DefaultBenchCounts("newtons_cradle"), Error);
   EXPECT_EQ(MakeScene("tumbler", 2025).bodies.size(), 4u + 2025u);
@@ -104,6 +106,67 @@ TEST(DenseScenes, TumblerTurnsInEveryEngineThatRunsIt) {
   // Bullet moves kinematic bodies by transform, not velocity: it says so instead of running.
   auto bullet = MakeAdapter("bullet");
   EXPECT_THROW(bullet->Load(MakeTumbler(16), 1), Unsupported);
+}
+
+// Box2D 3's junkyard (box2d3.cpp): the pusher follows x = 60 sin(0.2 t) (the driver's velocity
+// reaches each step's target), the pentagons fall onto the ground and stay between the walls.
+void ExpectJunkyard(const std::string& engine) {
+  SCOPED_TRACE(engine);
+  const Scene s = MakeJunkyard(400);
+  ASSERT_NO_THROW(ValidateScene(s));
+  auto adapter = MakeAdapter(engine);
+  adapter->Load(s, 1);
+  const int steps = 180;
+  for (int i = 0; i < steps; ++i) adapter->Step();
+  std::vector<BodyState> st;
+  adapter->ReadBodies(st);
+  EXPECT_NEAR(double(st[0].position.x), 60.0 * std::sin(0.2 * steps / 60.0), 1e-3);
+  EXPECT_NEAR(double(st[0].position.y), 4.0, 1e-4);
+  int outside = 0;
+  for (size_t i = 262; i < st.size(); ++i) {
+    const double x = st[i].position.x, y = st[i].position.y;
+    if (!(std::abs(x) < 80 && y > 0.4 && y < 40)) ++outside;
+  }
+  EXPECT_EQ(outside, 0);
+}
+
+TEST(Box2d3Scenes, JunkyardPusherFollowsItsTargetInEveryEngineThatRunsIt) {
+  EXPECT_EQ(MakeScene("junkyard", 8000).bodies.size(), 1u + 261u + 8000u);  // Box2D 3's size
+  ExpectJunkyard("quadrant");
+  ExpectJunkyard("box2d");
+  ExpectJunkyard("chipmunk");
+  auto bullet = MakeAdapter("bullet");
+  EXPECT_THROW(bullet->Load(MakeJunkyard(200), 1), Unsupported);
+}
+
+// Box2D 3's smash: the wall of boxes is created asleep; the ram wakes and scatters the boxes it
+// reaches, while the far end of the wall still sleeps (velocity 0) when the ram has just hit.
+void ExpectSmash(const std::string& engine) {
+  SCOPED_TRACE(engine);
+  const Scene s = MakeSmash(1600);  // 20 columns of 80
+  ASSERT_NO_THROW(ValidateScene(s));
+  auto adapter = MakeAdapter(engine);
+  adapter->Load(s, 1);
+  std::vector<BodyState> st;
+  // The ram's front starts 45.8 m from the wall: it arrives after about 69 steps.
+  for (int i = 0; i < 60; ++i) adapter->Step();
+  adapter->ReadBodies(st);
+  for (size_t i = 1; i < st.size(); ++i) ASSERT_EQ(Length(st[i].velocity), 0) << "box " << i << " moved before the hit";
+  for (int i = 0; i < 30; ++i) adapter->Step();
+  adapter->ReadBodies(st);
+  int moving = 0;
+  for (size_t i = 1; i < st.size(); ++i) moving += Length(st[i].velocity) > 1 ? 1 : 0;
+  EXPECT_GT(moving, 80);  // at least the first column flies
+  EXPECT_LT(double(st[0].velocity.x), 40.0);  // the ram has given momentum away
+}
+
+TEST(Box2d3Scenes, SmashWakesTheSleepingWallInEveryEngine) {
+  EXPECT_EQ(MakeScene("smash", 9600).bodies.size(), 1u + 9600u);  // Box2D 3's size
+  for (const char* engine : {"quadrant", "quadrant:pgs", "box2d", "chipmunk", "bullet"}) ExpectSmash(engine);
+  // A body created asleep needs the sleep effect.
+  Scene awake = MakeSmash(80);
+  awake.effects.sleep = false;
+  EXPECT_THROW(ValidateScene(awake), Error);
 }
 
 }  // namespace

@@ -257,5 +257,44 @@ TEST(SleepTest, BadSleepSettingsAreRefused) {
   EXPECT_EQ(AwakeCount(world, boxes), int(boxes.size()));
 }
 
+TEST(SleepTest, ABodyCreatedAsleepStaysPutUntilAnAwakeBodyTouchesIt) {
+  // BodyDef::isAwake = false (Box2D 3's smash): no gravity acts on it while it sleeps; a box
+  // thrown at it wakes it and moves it.
+  World world(SleepDef());
+  BodyDef def;
+  def.type = BodyType::kDynamic;
+  def.position = {0, 5};
+  def.shape = ShapeDef::Box(Real(0.5), Real(0.5));
+  def.isAwake = false;
+  const BodyId asleep = world.CreateBody(def);
+  EXPECT_FALSE(world.IsAwake(asleep));
+  for (int i = 0; i < 30; ++i) world.Step(kDt);
+  EXPECT_EQ(world.GetPosition(asleep).y, 5);
+  EXPECT_FALSE(world.IsAwake(asleep));
+  BodyDef thrown = def;
+  thrown.isAwake = true;
+  thrown.position = {-3, 5};
+  thrown.linearVelocity = {10, 0};
+  thrown.gravityScale = 0;
+  world.CreateBody(thrown);
+  for (int i = 0; i < 30; ++i) world.Step(kDt);
+  EXPECT_TRUE(world.IsAwake(asleep));
+  EXPECT_GT(world.GetPosition(asleep).x, 0.5);
+}
+
+TEST(SleepTest, ABodyCreatedAsleepNeedsSleepAndADynamicBody) {
+  for (bool sleep : {false, true}) {
+    WorldDef wd = SleepDef();
+    wd.effects.sleep = sleep;
+    World world(wd);
+    BodyDef def;
+    def.type = sleep ? BodyType::kStatic : BodyType::kDynamic;  // each refusal in turn
+    def.shape = ShapeDef::Box(Real(0.5), Real(0.5));
+    def.isAwake = false;
+    EXPECT_THROW(world.CreateBody(def), Error);
+    EXPECT_EQ(world.GetBodyCount(), 0);
+  }
+}
+
 }  // namespace
 }  // namespace quadrant

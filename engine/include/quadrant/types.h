@@ -107,6 +107,10 @@ struct BodyDef {
   /// impulse changes its angular velocity, which stays 0; World::GetRotationalInertia reads 0).
   /// angularVelocity must then be 0. Default false.
   bool fixedRotation = false;
+  /// false: the body is created asleep (Box2D 3's isAwake), as a settled pile or a wall of boxes
+  /// waiting to be hit is; it wakes like any sleeping body when an awake one touches it. Needs a
+  /// dynamic body in a world with effects.sleep. Default true.
+  bool isAwake = true;
   /// Continuous collision for this body where the world's effects.continuous is off: its
   /// broad-phase box is swept over the step and its speculative contacts kept as far as it can
   /// close within the step, as every body's are with continuous on, so a fast bullet does not pass

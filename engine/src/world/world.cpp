@@ -231,6 +231,8 @@ int AppendBody(Bodies& b, const BodyDef& def, const WorldDef& worldDef, uint32_t
   Real boundRadius = 0;
   Require(worldDef.scheme != ParallelScheme::kQuadrants || shape.type != ShapeType::kCapsule,
           "CreateBody: a capsule needs ParallelScheme::kDeterministic");
+  Require(def.isAwake || (def.type == BodyType::kDynamic && worldDef.effects.sleep),
+          "CreateBody: BodyDef.isAwake = false needs a dynamic body and WorldDef.effects.sleep");
   if (shape.type == ShapeType::kCircle) {
     md = ComputeMass(shape.circle, shape.density);
     boundRadius = shape.circle.radius;
@@ -299,7 +301,12 @@ BodyId World::CreateBody(const BodyDef& def) {
   w.gravityScaled += def.gravityScale == 1 ? 0 : 1;
   w.sensorCount += def.shape.isSensor ? 1 : 0;
   w.queryStale = true;
-  w.WakeAround(i);  // a body created touching a sleeping pile wakes it
+  if (def.isAwake) {
+    w.WakeAround(i);  // a body created touching a sleeping pile wakes it
+  } else {
+    Islands::Sleep(w.bodies, i, slot);  // an island of its own, until something awake touches it
+    w.UpdateAABB(i, 0);
+  }
   return BodyId{slot, w.generation[slot]};
 }
 

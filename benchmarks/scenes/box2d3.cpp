@@ -1,0 +1,123 @@
+// Box2D 3's "junkyard" and "smash" benchmark scenes (its shared/benchmarks.c, 800 and 300 steps
+// there) in the scene API, at its sizes by default; the code is this project's. Box2D 3 builds
+// its static ground as one body of many boxes, here each box is a static body of its own (the
+// same surfaces; Quadrant bodies carry one shape). Box2D 3 moves junkyard's pusher with
+// b2Body_SetTargetTransform, which sets the velocity that reaches the target in one step; the
+// scene's driver does the same through Adapter::SetVelocity.
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "adapter.h"
+#include "quadrant/error.h"
+#include "scenes.h"
+
+namespace quadrant::scene {
+namespace {
+
+constexpr int kJunkyardColumns = 200;
+constexpr int kSmashRows = 80;
+
+Scene Box2d3Base(const char* name) {
+  Scene s;
+  s.name = name;
+  s.gravity = {0, Real(-10)};
+  s.timeStep = Real(1.0 / 60.0);
+  s.velocityIterations = 8;
+  s.positionIterations = 3;
+  s.restitutionThreshold = 1;
+  s.effects.gravity = true;
+  s.effects.friction = true;
+  s.effects.restitution = false;
+  s.effects.rotation = true;
+  s.effects.warmStarting = true;
+  s.effects.sleep = true;  // Box2D 3's benchmark worlds sleep (b2DefaultWorldDef)
+  s.effects.continuous = false;
+  s.effects.damping = false;
+  return s;
+}
+
+BodyDesc StaticBox(Vec2 centre, Real hx, Real hy) { return MakeBoxBody(centre, hx, hy, /*dynamic=*/false); }
+
+}  // namespace
+
+Scene MakeJunkyard(int count) {
+  if (count < kJunkyardColumns || count > 200000) {
+    throw Error("junkyard: count must be in [" + std::to_string(kJunkyardColumns) + ", 200000] pentagons, got " +
+                std::to_string(count));
+  }
+  Scene s = Box2d3Base("junkyard");
+  // The pusher first (body 0, the driver's): a 4 x 8 m kinematic box, its centre 4 m up.
+  BodyDesc pusher = MakeBoxBody({0, 4}, 2, 4, /*dynamic=*/false);
+  pusher.kinematic = true;
+  s.bodies.push_back(pusher);
+  // The ground: 161 boxes 1.1 x 1 m along y = 0 from x = -80, and two walls of 50 boxes 1 x 1.1 m
+  // up from y = 1 at x = -80 and x = 80.
+  for (int i = 0; i < 161; ++i) s.bodies.push_back(StaticBox({Real(-80 + i), 0}, Real(0.55), Real(0.5)));
+  for (int side : {-80, 80}) {
+    for (int i = 0; i < 50; ++i) s.bodies.push_back(StaticBox({Real(side), Real(1 + i)}, Real(0.5), Real(0.55)));
+  }
+  // Pentagons of circumradius 0.25: five points of a Fibonacci spiral on the circle, as their
+  // convex hull (counter-clockwise, by angle).
+  const double radius = 0.25, phi = std::numbers::pi * (std::sqrt(5.0) - 1.0);
+  std::vector<std::pair<double, Vec2>> byAngle;
+  for (int i = 0; i < 5; ++i) {
+    const double theta = std::remainder(phi * i, 2 * std::numbers::pi);
+    byAngle.push_back({theta, Vec2{Real(radius * std::cos(phi * i)), Real(radius * std::sin(phi * i))}});
+  }
+  std::sort(byAngle.begin(), byAngle.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::vector<Vec2> pentagon;
+  for (const auto& p : byAngle) pentagon.push_back(p.second);
+  const int rows = count / kJunkyardColumns;
+  double side = -0.1;
+  for (int i = 0; i < kJunkyardColumns; ++i) {
+    const double x = 1.5 * (2.0 * i - kJunkyardColumns) * radius;
+    for (int j = 0; j < rows; ++j) {
+      BodyDesc b;
+      b.shape = ShapeKind::kPolygon;
+      b.vertices = pentagon;
+      b.position = {Real(x + side), Real(4.0 * j * radius + 15.0)};
+      side = -side;
+      s.bodies.push_back(b);
+    }
+  }
+  s.bounds = {{-81, -1}, {81, Real(15 + rows + 1)}};
+  // Target x = 60 sin(0.2 t) at the end of each step: the velocity that gets there in one step.
+  const Real dt = s.timeStep;
+  s.driver = [dt](int step, Adapter& adapter) {
+    const double from = 60.0 * std::sin(0.2 * double(step) * dt), to = 60.0 * std::sin(0.2 * double(step + 1) * dt);
+    adapter.SetVelocity(0, {Real((to - from) / dt), 0}, 0);
+  };
+  return s;
+}
+
+Scene MakeSmash(int count) {
+  if (count < kSmashRows || count > 1000000) {
+    throw Error("smash: count must be in [" + std::to_string(kSmashRows) + ", 1000000] boxes, got " + std::to_string(count));
+  }
+  Scene s = Box2d3Base("smash");
+  s.gravity = {0, 0};
+  s.effects.gravity = false;
+  // An 8 m box of density 8 at 40 m/s (body 0) into a wall of touching 0.4 m boxes created asleep,
+  // 80 rows high: count / 80 columns from x = 30.
+  BodyDesc ram = MakeBoxBody({-20, 0}, 4, 4);
+  ram.density = 8;
+  ram.velocity = {40, 0};
+  s.bodies.push_back(ram);
+  const double d = 0.4;
+  const int columns = count / kSmashRows;
+  for (int i = 0; i < columns; ++i) {
+    for (int j = 0; j < kSmashRows; ++j) {
+      BodyDesc b = MakeBoxBody({Real(i * d + 30.0), Real((j - kSmashRows / 2.0) * d)}, Real(0.5 * d), Real(0.5 * d));
+      b.awake = false;
+      s.bodies.push_back(b);
+    }
+  }
+  s.bounds = {{-25, Real(-0.5 * kSmashRows * d - 1)}, {Real(30 + columns * d + 1), Real(0.5 * kSmashRows * d + 1)}};
+  return s;
+}
+
+}  // namespace quadrant::scene
