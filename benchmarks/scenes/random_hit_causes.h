@@ -9,17 +9,19 @@
 // engine and solver.
 //
 // Cause of a difference d > 5 % between a run R and Box2D B (the first rule that holds):
-//   restitution threshold - a contact after the first separation approaches at 0.8-1.25 m/s in
+//   restitution threshold - a point arriving after the first step approaches at 0.8-1.25 m/s in
 //                           either engine (e > 0): one engine bounces, the other does not;
-//   re-contact            - either engine meets the body again after the first separation, and
-//                           the two still agree (<= 5 %) when both first separate;
-//   speculative contact   - at some step of the first contact R's touching points differ from
-//                           B's and R's touching plus speculative (separation > 0) points match;
-//   skin                  - at some step of the first contact the engines count different
-//                           touching points otherwise (a second point inside one's skin only);
+//   after both first separate, if they still agree then (<= 5 %), at the step the difference
+//   first exceeds 5 %:
+//     re-contact          - either engine has a touching contact;
+//     speculative contact - neither has: a speculative row acted before the shapes touched;
+//   otherwise, during the first contact:
+//   speculative contact   - R's point beyond the skin pushed where Box2D had no touching point;
+//   skin                  - the engines count different touching points (a second point inside
+//                           one's skin only);
 //   order of points       - both hold two points at once, and R or B moves by more than 5 % when
-//                           the scene lists its two bodies the other way round (which reverses
-//                           the manifold's reference shape and the order its points are solved);
+//                           the scene is mirrored (x -> -x, which reverses the order of the
+//                           manifold's points);
 //   simultaneous points   - both hold two points at once, insensitive to that order: the split
 //                           of the impulse between two points has no single answer;
 //   solver difference     - one point throughout in both: the solvers themselves differ.
@@ -53,13 +55,14 @@ std::string CauseName(HitCause c);
 struct HitTrace {
   std::vector<std::vector<BodyState>> states;  ///< states[k]: after k steps (k = 0..kRandomHitSteps)
   std::vector<int> touching;                   ///< [k-1]: touching points after step k
-  std::vector<int> speculative;                ///< [k-1]: points with separation > 0 after step k
+  std::vector<int> speculative;                ///< [k-1]: points beyond the skin that pushed in step k
   std::vector<Vec2> normal;                    ///< [k-1]: the contact's normal, from body 0 to body 1
   std::vector<Vec2> point, point2;             ///< [k-1]: its first and second point (the first if one)
 };
 /// Runs the hit on an engine ("box2d", "quadrant:<variant>"), recording every step. With
-/// `swapped`, the scene lists the target first; states come back in the hit's order anyway.
-HitTrace TraceRandomHit(const RandomHit& hit, std::string_view engine, bool swapped = false);
+/// `mirrored`, the scene is mirrored (x -> -x, polygons wound the other way round, which reverses
+/// the order of a manifold's points); states come back mirrored to the hit's frame.
+HitTrace TraceRandomHit(const RandomHit& hit, std::string_view engine, bool mirrored = false);
 
 struct CauseDiagnosis {
   HitCause cause = HitCause::kSolver;
