@@ -34,6 +34,15 @@ std::string Percent(double v) {
   return b;
 }
 
+// The machine's load averages (1, 5, 15 min) as the report is written: the report is not a
+// timing, but the project records the load with every run.
+std::string LoadAverage() {
+  std::ifstream in("/proc/loadavg");
+  std::string one, five, fifteen;
+  if (!(in >> one >> five >> fifteen)) return "unknown";
+  return one + " " + five + " " + fifteen;
+}
+
 // Momentum and energy balance per run over all hits.
 struct Balance {
   double maxMomentum = 0;
@@ -369,7 +378,7 @@ std::string Json(const qs::Campaign& c, const std::vector<qs::CampaignRow>& rows
   o << "{\"hits\": " << c.hits.size() << ", \"seed\": " << c.seed << ", \"machine\": "
     << JsonString(Env("QUADRANT_MACHINE", "unknown")) << ", \"commit\": " << JsonString(Env("QUADRANT_COMMIT", "unknown"))
     << ", \"date\": " << JsonString(UtcNow()) << ", \"compiler\": " << JsonString(__VERSION__)
-    << ",\n \"settings\": {\"gravity\": 0, \"dt\": 0.0166666667, \"velocity_iterations\": 8, \"position_iterations\": 3, "
+    << ", \"load_average\": " << JsonString(LoadAverage()) << ",\n \"settings\": {\"gravity\": 0, \"dt\": 0.0166666667, \"velocity_iterations\": 8, \"position_iterations\": 3, "
        "\"restitution_threshold\": 1, \"steps\": "
     << qs::kRandomHitSteps << ", \"sleep\": false, \"continuous\": false, \"warm_starting\": true},\n"
     << " \"difference\": \"largest over both bodies of |v - v_box2d| and |w - w_box2d| x circumradius after the "
@@ -472,7 +481,8 @@ std::string Markdown(const qs::Campaign& c, const std::vector<qs::CampaignRow>& 
   for (bool s : c.singlePoint) single += s;
   o << "# Contact responses against Box2D 2.4.1: the random campaign\n\n"
     << "Machine `" << Env("QUADRANT_MACHINE", "unknown") << "`, commit `" << Env("QUADRANT_COMMIT", "unknown") << "`, "
-    << UtcNow() << ", compiler " << __VERSION__ << ". Written by `tools/quadrant validate --random " << hitsPerSeed
+    << UtcNow() << ", compiler " << __VERSION__ << ", load average " << LoadAverage()
+    << ". Written by `tools/quadrant validate --random " << hitsPerSeed
     << " --seed " << c.seed << " --seeds " << all.seeds.size() << "` (benchmarks/validate_random.cpp; hits in benchmarks/scenes/random_hits.cpp, the "
     << "analytic impact in benchmarks/scenes/impact_analytic.cpp). Not a timing: the numbers do not depend on the "
        "machine's load.\n\n"
