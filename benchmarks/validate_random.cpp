@@ -287,7 +287,7 @@ void SeedsMarkdown(std::ostringstream& o, const qs::Campaign& c, const Seeds& al
     << all.seeds.size() << " seeds (";
   for (size_t k = 0; k < all.seeds.size(); ++k) o << (k ? ", " : "") << all.seeds[k];
   o << ") of " << hitsPerSeed << " hits each. A figure \"m (a-b)\" is the median over the seeds of the per-seed p90, "
-       "and its range.\n\n"
+       "and its range, in percent.\n\n"
     << "**Ambiguous hits** (the same rule for every engine and solver): a hit whose Box2D 2.4.1 response moves by "
        "more than 5 % (the tolerance itself) when the mover is moved by 1e-4 m in x or y or turned by 1e-4 rad, "
        "either sign, has no single right answer at that tolerance. "
@@ -305,6 +305,20 @@ void SeedsMarkdown(std::ostringstream& o, const qs::Campaign& c, const Seeds& al
     o << "\n";
   };
   for (const SeedRunSummary& s : all.compatible) runRow(s, true);
+  o << "\nPer seed, the worst class p90 of each compatible setting outside the ambiguous hits (percent; bold: 5 % or "
+       "more):\n\n| seed | ambiguous hits |";
+  for (const SeedRunSummary& s : all.compatible) o << " " << s.engine << " |";
+  o << "\n|---:|---:|";
+  for (size_t k = 0; k < all.compatible.size(); ++k) o << "---:|";
+  o << "\n";
+  for (size_t k = 0; k < all.seeds.size(); ++k) {
+    o << "| " << all.seeds[k] << " | " << all.ambiguous[k] << " |";
+    for (const SeedRunSummary& s : all.compatible) {
+      const bool over = s.worst[k] >= qs::kCauseThreshold;
+      o << " " << (over ? "**" : "") << Pct(s.worst[k]) << (over ? "**" : "") << " (" << s.worstClass[k] << ") |";
+    }
+    o << "\n";
+  }
   o << "\n### Every run\n\n| engine | setting | worst class p90, clear hits: median (range) | worst class on its worst "
        "seed | worst class p90, all hits: median (range) |\n|---|---|---:|---|---:|\n";
   for (const SeedRunSummary& s : all.runs) runRow(s, false);
