@@ -145,7 +145,7 @@ program_parsers() {
   expect_help quadrant_accuracy --out --json --quick --settings --scenes --hard-cases --steps --repetitions --count
   expect_help quadrant_effects --out --quick --count --steps --warmup --repetitions
   expect_help quadrant_hardcases --out --peers --cases --soak-steps
-  expect_help quadrant_validate --out --cases --random --seed --runs
+  expect_help quadrant_validate --out --cases --random --seed --seeds --runs
   expect_help quadrant_figure13 OUT.csv bodies steps
   expect_help quadrant_icount --scene --count --steps --seed --engine --info
   expect_help quadrant_distributed --scene --count --per-rank --steps --warmup --tiles --iterations --owners
@@ -167,6 +167,7 @@ program_parsers() {
     --out "$OUT" --peers nosuchengine
   expect_value_refusal quadrant_validate --runs box2d "is not quadrant:<variant>" --out "$OUT" --random 1 --runs box2d
   expect_value_refusal quadrant_validate --seed x "an integer in [0, 2147483647]" --out "$OUT" --seed x
+  expect_value_refusal quadrant_validate --seeds 0 "an integer in [1, 1000]" --out "$OUT" --random 1 --seeds 0
   expect_value_refusal quadrant_figure13 bodies abc "an integer in [1, 10000000]" "$OUT/f.csv" abc
   expect_value_refusal quadrant_icount --scene nosuch "unknown scene 'nosuch'" --scene nosuch --count 1 --steps 1
   expect_value_refusal quadrant_icount --engine quadrant:bogus "unknown quadrant variant 'bogus'" --info --engine quadrant:bogus
@@ -216,6 +217,7 @@ first_hour() {
   nobuild() { PATH="$path" "$@"; }
 
   expect_refusal "--seed '-1' is not an integer in [0, 2147483647]" nobuild "$DRIVER" validate --seed -1
+  expect_refusal "--seeds '0' is not an integer in [1, 1000]" nobuild "$DRIVER" validate --random 5 --seeds 0
   expect_refusal "build: unknown preset 'nope' (accepted: release, debug" nobuild "$DRIVER" build nope
   expect_refusal "test: unknown preset 'nope' (accepted: release, debug" nobuild "$DRIVER" test --preset nope
   expect_refusal "unknown quadrant variant 'bogus' in 'quadrant:bogus' (accepted: tokens joined by '+': thesis" \
@@ -247,7 +249,7 @@ first_hour() {
     done
     case "$cmd" in
       hardcases) want="--soak-steps --peers --cases"; ((lines < 60)) || fail "hardcases --help: $lines lines" ;;
-      validate) want="--random --seed --runs --cases"; ((lines < 30)) || fail "validate --help: $lines lines" ;;
+      validate) want="--random --seed --seeds --runs --cases"; ((lines < 30)) || fail "validate --help: $lines lines" ;;
       compare) want="--min-repetitions --allow-load --all --threshold"; ((lines < 40)) || fail "compare --help: $lines lines" ;;
       bench) want="--engines --repetitions --busy"; ((lines < 116)) || fail "bench --help: $lines lines" ;;
       *) want=""; ((lines < 20)) || fail "$cmd --help: $lines lines" ;;
