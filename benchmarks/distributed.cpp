@@ -118,6 +118,10 @@ int main(int argc, char** argv) {
     for (int i = 0; i < warmup; ++i) dw.Step(s.timeStep);
     double bytes = 0, shadows = 0, imbalance = 0;
     int rounds = 0;
+    // Per stage, this rank's ms summed over the timed steps (DistributedStats).
+    constexpr int kStages = 8;
+    const char* stageNames[kStages] = {"halo", "migrate", "shadows", "collide", "solve", "exchange", "rest", "wait"};
+    double stageMs[kStages] = {};
     MPI_Barrier(MPI_COMM_WORLD);
     const double t0 = MPI_Wtime();
     for (int i = 0; i < steps; ++i) {
@@ -130,10 +134,23 @@ int main(int argc, char** argv) {
       shadows += sum[1];
       imbalance += st.imbalance;  // the same on every rank
       rounds = st.rounds;
+      const double stage[kStages] = {st.haloMs, st.migrateMs, st.shadowsMs, st.collideMs, st.solveMs, st.exchangeMs, st.restMs, st.waitMs};
+      for (int k = 0; k < kStages; ++k) stageMs[k] += stage[k];
     }
     const double mine = MPI_Wtime() - t0;
     double slowest = 0;
     MPI_Allreduce(&mine, &slowest, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+    // The profile of the slowest rank (the one whose step time the run reports) and the mean.
+    double stageMax[kStages], stageSum[kStages];
+    MPI_Allreduce(stageMs, stageMax, kStages, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+    MPI_Allreduce(stageMs, stageSum, kStages, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
+    std::string profile;
+    for (int k = 0; k < kStages; ++k) {
+      char cell[96];
+      std::snprintf(cell, sizeof cell, "%s\"%s\": [%.4f, %.4f]", k ? ", " : "", stageNames[k], stageSum[k] / size / steps,
+                    stageMax[k] / steps);
+      profile += cell;
+    }
     const uint64_t hash = dw.StateHash();
     // Memory: peak resident size summed over the ranks (each rank also holds the whole scene's
     // BodyDefs, as Load takes them, and the MPI library's buffers).
@@ -179,12 +196,12 @@ int main(int argc, char** argv) {
           "\"iterations\": %d, \"weak\": %s, \"ms_per_step\": %.4f, \"rounds_per_step\": %d, \"bytes_per_step\": %.1f, "
           "\"bytes_per_boundary_body\": %.1f, \"shadow_fraction\": %.5f, \"imbalance\": %.4f, "
           "\"state_hash\": \"%016llx\", \"oversubscribed\": %s, \"cores\": %u, \"peak_rss_mb\": %.1f, "
-          "\"rss_bytes_per_body\": %.0f}\n",
+          "\"rss_bytes_per_body\": %.0f, \"stage_ms\": {%s}}\n",
           sceneName.c_str(), size, bodies.size(), steps, warmup, tiles, iterations, perRank ? "true" : "false",
           1000.0 * slowest / steps, rounds, bytes / steps, shadows > 0 ? bytes / shadows : 0.0,
           shadows / steps / double(bodies.size()), imbalance / steps, (unsigned long long)hash,
           unsigned(size) > cores ? "true" : "false", cores, rssTotalKb / 1024.0,
-          1024.0 * double(rssTotalKb) / double(bodies.size()));
+          1024.0 * double(rssTotalKb) / double(bodies.size()), profile.c_str());
     }
   } catch (const Error& e) {
     std::fprintf(stderr, "quadrant_distributed: rank %d: error: %s\n", rank, e.what());

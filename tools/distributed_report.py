@@ -4,11 +4,13 @@
 Usage: distributed_report.py RUNS.jsonl --machine M --commit C --load L --json OUT.json --md OUT.md
 
 distributed.json: {"context": {...}, "runs": [{"scene", "ranks", "bodies", "ms_per_step",
-"rounds_per_step", "bytes_per_step", "shadow_fraction", "imbalance", "state_hash", ...}]}.
+"rounds_per_step", "bytes_per_step", "shadow_fraction", "imbalance", "state_hash", "stage_ms":
+{stage: [mean over ranks, slowest rank] ms a step}, ...}]}.
 distributed.md: one table per kind of run (weak scaling, strong scaling per scene) with the
 weak-scaling efficiency (1-rank ms / R-rank ms at equal bodies per rank) and the strong-scaling
-speed-up; oversubscribed rows (more ranks than cores) are marked, and rows whose state hash
-differs from the 1-rank run of the same scene and size are flagged (they must not exist).
+speed-up, and under each a per-stage profile of the step; oversubscribed rows (more ranks than
+cores) are marked, and rows whose state hash differs from the 1-rank run of the same scene and
+size are flagged (they must not exist).
 """
 import argparse
 import json
@@ -73,6 +75,21 @@ def main():
             out.append(f"| {ranks} | {r['bodies']} | {r['ms_per_step']:.2f} | {figure} | {r['rounds_per_step']} | "
                        f"{r['bytes_per_step']:.0f} | {r['bytes_per_boundary_body']:.0f} | {r['shadow_fraction']:.4f} | "
                        f"{r['imbalance']:.3f} | {r.get('peak_rss_mb', 0):.0f} | `{r['state_hash']}`{same} |")
+        # Where the step went, stage by stage (DistributedStats): the slowest rank's ms a step
+        # (the mean over the ranks in brackets where they differ). wait is part of the rounds'
+        # stages (migrate, shadows, exchange), not a stage of its own.
+        if all("stage_ms" in r for r in rows):
+            names = list(rows[0]["stage_ms"].keys())
+            out.append("\nWhere the step went (ms a step, slowest rank; mean over ranks in brackets; "
+                       "`wait`: the part of the rounds spent in MPI receive and completion):\n")
+            out.append("| ranks | " + " | ".join(names) + " |")
+            out.append("|---:|" + "---:|" * len(names))
+            for r in rows:
+                cells = []
+                for n in names:
+                    mean, most = r["stage_ms"][n]
+                    cells.append(f"{most:.3f}" + (f" ({mean:.3f})" if abs(most - mean) > 0.0005 else ""))
+                out.append(f"| {r['ranks']}{'*' if r.get('oversubscribed') else ''} | " + " | ".join(cells) + " |")
     with open(args.md, "w") as f:
         f.write("\n".join(out) + "\n")
     if args.png:

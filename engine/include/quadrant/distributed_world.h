@@ -62,6 +62,14 @@ struct DistributedStats {
   /// Load imbalance of the step: max / mean over ranks of the work (owned bodies plus their
   /// contacts), the same on every rank.
   double imbalance = 1;
+  /// Where this rank's step went (ms, wall clock), stage by stage; they add up to the step. halo:
+  /// the reach reduction; migrate and shadows: those rounds with their packing; collide: the
+  /// local arrays, pairs and contacts; solve: the Jacobi work; exchange: the velocity rounds
+  /// between iterations with their packing; rest: the warm-start cache, the hand-back and the
+  /// counts' reduction. wait: the part of all rounds spent in MPI receive and completion calls
+  /// (waiting for the slowest neighbour, and the transfer).
+  double haloMs = 0, migrateMs = 0, shadowsMs = 0, collideMs = 0, solveMs = 0, exchangeMs = 0, restMs = 0;
+  double waitMs = 0;
 };
 
 /// One body's state as gathered from its owner.
