@@ -49,6 +49,15 @@ std::string SettingsText(const Scene& s) {
   return buffer;
 }
 
+// Progress lines during a case (HardCaseOptions::progressSeconds), set by RunHardCase for the
+// case it runs: a 60-s window of a slow peer takes longer than the 10 s between lines.
+struct Progress {
+  double seconds = 0;  // 0: no lines
+  std::string label;   // "case engine"
+  std::chrono::steady_clock::time_point last;
+};
+thread_local Progress progress;
+
 // One engine running one scene. Holds the scene itself: adapters may keep pointers into it.
 // Records the scene's settings in the result before loading, so a refused scene has them too.
 class Sim {
@@ -66,6 +75,15 @@ class Sim {
     while (steps_ < step) {
       adapter_->Step();
       ++steps_;
+      if (progress.seconds > 0 && steps_ % 100 == 0) {  // the clock read every 100 steps only
+        const auto now = std::chrono::steady_clock::now();
+        if (std::chrono::duration<double>(now - progress.last).count() >= progress.seconds) {
+          progress.last = now;
+          std::fprintf(stderr, "  %s: step %d (%.0f s simulated)\n", progress.label.c_str(), steps_,
+                       double(steps_) / kStepsPerSecond);
+          std::fflush(stderr);
+        }
+      }
     }
     adapter_->ReadBodies(states_);
     finite_ = finite_ && Finite();
@@ -768,6 +786,8 @@ HardCaseResult RunHardCase(std::string_view name, std::string_view engine, const
   r.name = entry->name;
   r.engine = std::string(engine);
   const auto t0 = std::chrono::steady_clock::now();
+  // The soak prints its own progress lines (with a rate and an ETA).
+  progress = {name == "soak" ? 0.0 : options.progressSeconds, std::string(name) + " " + std::string(engine), t0};
   try {
     entry->fn(engine, options, r);
   } catch (const Unsupported& e) {

@@ -39,7 +39,7 @@ struct HardCaseResult {
 
 struct HardCaseOptions {
   int soakSteps = 100000;  ///< steps of the polygon_stress soak (N = 1000)
-  /// Seconds between progress lines on stderr during a soak (steps done, rate, ETA); 0 for none
+  /// Seconds between progress lines on stderr during a case (the soak: steps done, rate, ETA); 0 for none
   /// (the tests). The soaks take minutes (Bullet's 100000 steps: 16 min on the 2-core VM).
   double progressSeconds = 0;
 };
