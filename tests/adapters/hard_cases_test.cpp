@@ -38,7 +38,7 @@ void ExpectPasses(const std::string& name, const std::string& engine) {
 }
 
 // Known failures over the 60-s windows (issue #26, open): the default engine topples the 30- and
-// 50-box tall stacks (the 30-box top passes 0.05 m at step 907; it had passed the old 10-s window
+// 50-box tall stacks (the 30-box top passes 0.05 m at step 761; it had passed the old 10-s window
 // at 0.034 m). They are asserted to fail below, so a fix must move them back here.
 bool DefaultKnownFailure(const std::string& name) { return name == "tall_stack" || name == "tall_stack_50"; }
 

@@ -137,14 +137,14 @@ inline V MaxSeparation(const Quad& n, const Quad& v, const Quad& w, V* edge) {
 }
 
 // A clip vertex in every lane: its point and its feature (ClipVertex::feature as a float: the
-// incident vertex 0-3 it is or, for a crossing, cuts off).
+// incident vertex 0-3, or 0x80 | side).
 struct Clip {
   V x, y, feature;
 };
 
 // ClipToTwo: keeps the part of (in0, in1) where Dot(n, p) <= offset. Lanes where the scalar
 // code gives up (fewer than two points) are cleared in *ok.
-inline void ClipToTwo(Clip& out0, Clip& out1, const Clip& in0, const Clip& in1, V nx, V ny, V offset, V* ok) {
+inline void ClipToTwo(Clip& out0, Clip& out1, const Clip& in0, const Clip& in1, V nx, V ny, V offset, float side, V* ok) {
   const V d0 = Sub(Add(Mul(nx, in0.x), Mul(ny, in0.y)), offset);
   const V d1 = Sub(Add(Mul(nx, in1.x), Mul(ny, in1.y)), offset);
   const V keep0 = Cmp<_CMP_LE_OQ>(d0, Splat(0)), keep1 = Cmp<_CMP_LE_OQ>(d1, Splat(0));
@@ -152,11 +152,10 @@ inline void ClipToTwo(Clip& out0, Clip& out1, const Clip& in0, const Clip& in1, 
   const V cross = Cmp<_CMP_LT_OQ>(Mul(d0, d1), Splat(0));
   *ok = And(*ok, Or(both, cross));
   const V t = _mm256_div_ps(d0, Sub(d0, d1));
-  // Both ends kept: (in0, in1). One kept: the kept end, then the crossing, with the feature of the
-  // end it cuts off (narrow_phase.cpp, ClipVertex, says why).
+  // Both ends kept: (in0, in1). One kept: the kept end, then the crossing.
   out0 = {Pick(in1.x, in0.x, keep0), Pick(in1.y, in0.y, keep0), Pick(in1.feature, in0.feature, keep0)};
   out1 = {Pick(Add(in0.x, Mul(t, Sub(in1.x, in0.x))), in1.x, both), Pick(Add(in0.y, Mul(t, Sub(in1.y, in0.y))), in1.y, both),
-          Pick(Pick(in0.feature, in1.feature, keep0), in1.feature, both)};
+          Pick(Splat(float(0x80u | unsigned(side))), in1.feature, both)};
 }
 
 }  // namespace
@@ -259,8 +258,8 @@ static void CollideBoxBatchVex(const BoxPair* pairs, int count, Manifold* out) {
   const V tx = Pick(Mul(ddx, inv), Splat(0), tiny), ty = Pick(Mul(ddy, inv), Splat(0), tiny);
   // Two clips: against the side plane at r1 (normal -tangent), then at r2 (normal tangent).
   Clip c1a, c1b, c2a, c2b;
-  ClipToTwo(c1a, c1b, in0, in1, Neg(tx), Neg(ty), Neg(Add(Mul(tx, r1x), Mul(ty, r1y))), &ok);
-  ClipToTwo(c2a, c2b, c1a, c1b, tx, ty, Add(Mul(tx, r2x), Mul(ty, r2y)), &ok);
+  ClipToTwo(c1a, c1b, in0, in1, Neg(tx), Neg(ty), Neg(Add(Mul(tx, r1x), Mul(ty, r1y))), 0, &ok);
+  ClipToTwo(c2a, c2b, c1a, c1b, tx, ty, Add(Mul(tx, r2x), Mul(ty, r2y)), 1, &ok);
 
   // The manifold: the normal Rotate(refXf.q, flip ? -refNormal : refNormal); each clipped point's
   // separation from the reference face, kept when not above `speculative`, placed halfway between

@@ -59,17 +59,11 @@ Real MaxSeparation(const Polygon& a, const Vec2* bVerts, int bCount, int* edgeOu
 
 struct ClipVertex {
   Vec2 v;
-  // The incident vertex this point is or replaces: a crossing made by clipping takes the feature of
-  // the end it cuts off, so a point keeps its id (and its warm start) whether or not it was clipped.
-  // With 0x80 | side for crossings (Box2D 3 names a point by its vertex pair, clipped or not), a
-  // stack of exactly aligned boxes lost the warm start of a contact each time the sub-millimetre
-  // offset between two boxes changed sign: 351 of the 30-box stack's 9000 contact-steps in its
-  // first 300 steps (issue #26).
-  uint32_t feature;
+  uint32_t feature;  // incident vertex index, or 0x80 | side when created by clipping
 };
 
 // Keeps the part of segment (in[0], in[1]) where Dot(n, p) <= offset.
-[[gnu::always_inline]] inline int ClipSegment(ClipVertex out[2], const ClipVertex in[2], Vec2 n, Real offset) {
+[[gnu::always_inline]] inline int ClipSegment(ClipVertex out[2], const ClipVertex in[2], Vec2 n, Real offset, uint32_t side) {
   int count = 0;
   Real d0 = Dot(n, in[0].v) - offset;
   Real d1 = Dot(n, in[1].v) - offset;
@@ -78,7 +72,7 @@ struct ClipVertex {
   if (d0 * d1 < 0) {
     Real t = d0 / (d0 - d1);
     out[count].v = in[0].v + t * (in[1].v - in[0].v);
-    out[count].feature = d0 <= 0 ? in[1].feature : in[0].feature;  // the end cut off
+    out[count].feature = 0x80u | side;
     ++count;
   }
   return count;
@@ -91,7 +85,7 @@ struct ClipVertex {
 // inside, which is the product's sign test. Why: the arrays went through the stack (zeroed,
 // stored, reloaded) in the box-box collider, and the count's branches (base-100 pyramid).
 [[gnu::always_inline]] inline bool ClipToTwo(ClipVertex& out0, ClipVertex& out1, ClipVertex in0, ClipVertex in1, Vec2 n,
-                                             Real offset) {
+                                             Real offset, uint32_t side) {
   const Real d0 = Dot(n, in0.v) - offset;
   const Real d1 = Dot(n, in1.v) - offset;
   const bool keep0 = d0 <= 0, keep1 = d1 <= 0;
@@ -103,7 +97,7 @@ struct ClipVertex {
   if (!(d0 * d1 < 0)) return false;
   const Real t = d0 / (d0 - d1);
   out0 = keep0 ? in0 : in1;
-  out1 = {in0.v + t * (in1.v - in0.v), keep0 ? in1.feature : in0.feature};  // the end cut off
+  out1 = {in0.v + t * (in1.v - in0.v), 0x80u | side};
   return true;
 }
 
@@ -315,11 +309,11 @@ template <int kA, int kB>
   if constexpr (kA == 4 && kB == 4) {
     // Boxes: the two-point clip on values (the general path keeps ClipSegment, so the box paths'
     // comparison with it in NarrowPhaseBoxes checks this one too).
-    if (!ClipToTwo(clip1[0], clip1[1], incident[0], incident[1], -tangent, -Dot(tangent, r1))) return m;
-    if (!ClipToTwo(clip2[0], clip2[1], clip1[0], clip1[1], tangent, Dot(tangent, r2))) return m;
+    if (!ClipToTwo(clip1[0], clip1[1], incident[0], incident[1], -tangent, -Dot(tangent, r1), 0)) return m;
+    if (!ClipToTwo(clip2[0], clip2[1], clip1[0], clip1[1], tangent, Dot(tangent, r2), 1)) return m;
   } else {
-    if (ClipSegment(clip1, incident, -tangent, -Dot(tangent, r1)) < 2) return m;
-    if (ClipSegment(clip2, clip1, tangent, Dot(tangent, r2)) < 2) return m;
+    if (ClipSegment(clip1, incident, -tangent, -Dot(tangent, r1), 0) < 2) return m;
+    if (ClipSegment(clip2, clip1, tangent, Dot(tangent, r2), 1) < 2) return m;
   }
 
   m.normal = Rotate(refXf.q, flip ? -refNormal : refNormal);
