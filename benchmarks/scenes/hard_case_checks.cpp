@@ -361,10 +361,12 @@ SinkRun RunSink(Sim& sim, double seconds, size_t k, size_t other = size_t(-1)) {
   return run;
 }
 
-// The sink allowed grows with the square of the height (each contact sags by the load above it):
-// 0.35 m for 30 boxes (Box2D 3.2: 0.31 m), 0.97 m for 50 (Box2D 3.2: 0.87 m).
+// The sink allowed: 0.35 m for 30 boxes (issue #13), 1.2 m for 50. Box2D 3 (617d32ab, 4 sub-steps,
+// built from its source outside the suite, 3600 steps) sinks 0.323 m and 1.110 m, and its top
+// moves 0.025 m and 0.044 m sideways; each contact sags by the load above it, so the sink grows
+// faster than the height.
 void TallStack(std::string_view engine, HardCaseResult& r, int count) {
-  const double sinkLimit = 0.35 * (count / 30.0) * (count / 30.0);
+  const double sinkLimit = count == 30 ? 0.35 : 1.2;
   r.criterion = std::to_string(count) +
                 " boxes of 1 m exactly touching and aligned (friction 0.6), default budget: over 60 s (sampled "
                 "every 0.5 s) the top box moves less than 0.05 m sideways and sinks less than " +
@@ -376,9 +378,9 @@ void TallStack(std::string_view engine, HardCaseResult& r, int count) {
   Add(r, "top_max_sink_m", run.maxSink);
   Add(r, "top_y_at_60s_m", sim.states()[top].position.y);
   Add(r, "max_penetration_m", run.maxPenetration);
-  r.note = "Box2D 3.2 at its default 4 sub-steps, 3600 steps: the 30-box top moves at most 0.025 m sideways and "
-           "sinks 0.31 m, the 50-box top 0.044 m and 0.87 m (soft contacts); a toppled stack moves its top by "
-           "metres.";
+  r.note = "Box2D 3 (617d32ab) at its default 4 sub-steps, 3600 steps: the 30-box top moves at most 0.025 m "
+           "sideways and sinks 0.323 m, the 50-box top 0.044 m and 1.110 m (soft contacts); a toppled stack moves "
+           "its top by metres.";
   r.pass = sim.finite() && run.maxDx < 0.05 && run.maxSink < sinkLimit;
 }
 
