@@ -5,9 +5,11 @@
 //                      [--soak-steps N]
 //
 // The cases, their scenes and their criteria live in benchmarks/scenes (hard_cases.cpp,
-// hard_case_checks.cpp), shared with tests/adapters/hard_cases_test.cpp. Exit status: 0 when
-// every Quadrant case passes (all 16 are required of the default engine, issue #13's three
-// included), 1 when one fails (peers never change it), 2 on bad arguments.
+// hard_case_checks.cpp), shared with tests/adapters/hard_cases_test.cpp; every case but the soak
+// runs 60 s of simulated time. Exit status: 0 when every Quadrant case passes (all 18 are
+// required of the default engine), 1 when one fails (peers never change it), 2 on bad arguments.
+// A line per case and engine goes to stderr as each finishes (a case takes seconds; the soak
+// prints its progress every 10 s).
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
@@ -121,8 +123,8 @@ std::string Markdown(const std::vector<Row>& rows, const Args& args) {
     << "Machine `" << rp::Env("QUADRANT_MACHINE", "unknown") << "`, commit `" << rp::Env("QUADRANT_COMMIT", "unknown")
     << "`, " << rp::UtcNow() << ", compiler " << __VERSION__ << ". One thread per engine; every engine runs a "
     << "case with the same world settings (listed per case below: most cases at Box2D 2.4's 8 velocity and 3 "
-    << "position iterations, a few with the larger budget their scene sets); soak " << args.soakSteps
-    << " steps. Written by `tools/quadrant hardcases` "
+    << "position iterations, a few with the larger budget their scene sets); every case but the soak runs 60 s "
+    << "of simulated time and is checked over the whole window; soak " << args.soakSteps << " steps. Written by `tools/quadrant hardcases` "
     << "(benchmarks/hardcases.cpp); scenes in benchmarks/scenes/hard_cases.cpp, criteria in "
     << "benchmarks/scenes/hard_case_checks.cpp.\n\n"
     << "Materials are built per engine so that every engine simulates the same mixed coefficient: Box2D and "

@@ -1,6 +1,9 @@
 // The hard cases' runs and pass criteria (see hard_case_checks.h).
 //
 // Conventions shared by the cases:
+// - Every case runs kWindowSeconds (60 s of simulated time, 3600 steps at 60 Hz; the soak its
+//   soakSteps) and its criterion is checked over the whole run, at every sample, not only at the
+//   end: a pile that stands for 10 s and falls at 13 s fails (issue #26).
 // - "Standing" cases are judged from t = 1 s on: the first second lets every engine settle its
 //   spawn state (Box2D 2.4's 0.01 m polygon skin pushes bodies that spawn touching 0.015 m apart
 //   at every contact, which lifts a 10-row pile by 0.15 m; Bullet's margins do similar), which
@@ -25,6 +28,7 @@ namespace quadrant::scene {
 namespace {
 
 constexpr int kStepsPerSecond = 60;  // every hard case runs at dt = 1/60
+constexpr double kWindowSeconds = 60;  // every case's window (the soak: its own step count)
 
 std::string Fixed(double v, int digits) {
   char buffer[64];
@@ -45,6 +49,15 @@ std::string SettingsText(const Scene& s) {
   return buffer;
 }
 
+// Progress lines during a case (HardCaseOptions::progressSeconds), set by RunHardCase for the
+// case it runs: a 60-s window of a slow peer takes longer than the 10 s between lines.
+struct Progress {
+  double seconds = 0;  // 0: no lines
+  std::string label;   // "case engine"
+  std::chrono::steady_clock::time_point last;
+};
+thread_local Progress progress;
+
 // One engine running one scene. Holds the scene itself: adapters may keep pointers into it.
 // Records the scene's settings in the result before loading, so a refused scene has them too.
 class Sim {
@@ -62,6 +75,15 @@ class Sim {
     while (steps_ < step) {
       adapter_->Step();
       ++steps_;
+      if (progress.seconds > 0 && steps_ % 100 == 0) {  // the clock read every 100 steps only
+        const auto now = std::chrono::steady_clock::now();
+        if (std::chrono::duration<double>(now - progress.last).count() >= progress.seconds) {
+          progress.last = now;
+          std::fprintf(stderr, "  %s: step %d (%.0f s simulated)\n", progress.label.c_str(), steps_,
+                       double(steps_) / kStepsPerSecond);
+          std::fflush(stderr);
+        }
+      }
     }
     adapter_->ReadBodies(states_);
     finite_ = finite_ && Finite();
@@ -210,40 +232,57 @@ using CaseFn = void (*)(std::string_view engine, const HardCaseOptions& options,
 
 void Add(HardCaseResult& r, std::string name, double value) { r.measured.push_back({std::move(name), value}); }
 
-// Runs a standing pile from 0 to `seconds`, sampling penetration every 0.5 s; fills the drift of
-// the bodies [first, last) between t = 1 s and the end and the settling before t = 1 s.
+// Runs a standing pile from 0 to `seconds`, sampling every 0.5 s: penetration, and from t = 1 s
+// each body's displacement from where it was at t = 1 s (the largest over the samples, so a
+// body that wanders off and comes back still counts). Fills the drift of the bodies
+// [first, last), per body (`drift`) and their largest (`maxDrift`), and the settling before
+// t = 1 s.
 struct PileRun {
   double maxDrift = 0, settle = 0, maxPenetration = 0;
+  std::vector<double> drift;  // per body index, largest displacement from its t = 1 s pose
+  std::vector<double> dx, dy;  // per body index, largest |dx| and |dy| from its t = 1 s pose
   std::vector<BodyState> atOne, atEnd;
 };
 
 PileRun RunPile(Sim& sim, double seconds, size_t first, size_t last) {
   PileRun run;
   const std::vector<BodyState> start = sim.states();
+  const size_t n = start.size();
+  run.drift.assign(n, 0);
+  run.dx.assign(n, 0);
+  run.dy.assign(n, 0);
   const int end = int(std::lround(seconds * kStepsPerSecond));
   for (int step = kStepsPerSecond / 2; step <= end; step += kStepsPerSecond / 2) {
     sim.RunTo(step);
     run.maxPenetration = std::max(run.maxPenetration, MaxPenetrationOf(sim.scene(), sim.states()));
     if (step == kStepsPerSecond) run.atOne = sim.states();
+    if (step < kStepsPerSecond) continue;
+    for (size_t i = first; i < last; ++i) {
+      const BodyState& a = run.atOne[i];
+      const BodyState& b = sim.states()[i];
+      run.drift[i] = std::max(run.drift[i], Displacement(a, b));
+      run.dx[i] = std::max(run.dx[i], std::abs(double(b.position.x) - a.position.x));
+      run.dy[i] = std::max(run.dy[i], std::abs(double(b.position.y) - a.position.y));
+    }
   }
   sim.RunTo(end);
   run.atEnd = sim.states();
-  run.maxDrift = MaxDisplacement(run.atOne, run.atEnd, first, last);
+  for (size_t i = first; i < last; ++i) run.maxDrift = std::max(run.maxDrift, run.drift[i]);
   run.settle = MaxDisplacement(start, run.atOne, first, last);
   return run;
 }
 
 void VerticalStack(std::string_view engine, const HardCaseOptions&, HardCaseResult& r) {
-  r.criterion = "15 boxes of 1 m (friction 0.3, x offsets +-0.01 m): the top box's |dx| and |dy| between "
-                "t = 1 s and t = 10 s below 0.01 m each";
+  r.criterion = "15 boxes of 1 m (friction 0.3, x offsets +-0.01 m): the top box's |dx| and |dy| from its "
+                "pose at t = 1 s stay below 0.01 m each up to t = 60 s (sampled every 0.5 s)";
   Sim sim(r, engine, MakeVerticalStack(15, MixingOf(engine)));
   const size_t top = sim.scene().bodies.size() - 1;
-  PileRun run = RunPile(sim, 10, 1, top + 1);
-  const double dx = std::abs(double(run.atEnd[top].position.x) - run.atOne[top].position.x);
-  const double dy = std::abs(double(run.atEnd[top].position.y) - run.atOne[top].position.y);
-  Add(r, "top_dx_m", dx);
-  Add(r, "top_dy_m", dy);
-  Add(r, "top_x_at_10s_m", run.atEnd[top].position.x);
+  PileRun run = RunPile(sim, kWindowSeconds, 1, top + 1);
+  const double dx = run.dx[top];
+  const double dy = run.dy[top];
+  Add(r, "top_max_dx_m", dx);
+  Add(r, "top_max_dy_m", dy);
+  Add(r, "top_x_at_60s_m", run.atEnd[top].position.x);
   Add(r, "max_box_drift_m", run.maxDrift);
   Add(r, "max_penetration_m", run.maxPenetration);
   Add(r, "settle_0_to_1s_m", run.settle);
@@ -253,14 +292,14 @@ void VerticalStack(std::string_view engine, const HardCaseOptions&, HardCaseResu
 void Pyramid(std::string_view engine, HardCaseResult& r, Scene scene, bool far) {
   // Read-back is float in every engine here: at 1e5 m its resolution is 7.8 mm, so far from the
   // origin penetration is only known to about a centimetre and the drift alone decides.
-  r.criterion = far ? "base-20 pyramid of 1 m boxes (friction 0.6) at (1e5, -8e4): apex drift between t = 1 s and "
-                      "t = 10 s below 0.02 m (penetration reported only: float read-back resolves 7.8 mm there)"
-                    : "base-20 pyramid of 1 m boxes (friction 0.6): apex drift between t = 1 s and t = 10 s below "
-                      "0.02 m and largest penetration (sampled every 0.5 s) below 0.01 m";
+  r.criterion = far ? "base-20 pyramid of 1 m boxes (friction 0.6) at (1e5, -8e4): apex drift from t = 1 s stays "
+                      "below 0.02 m up to t = 60 s (penetration reported only: float read-back resolves 7.8 mm there)"
+                    : "base-20 pyramid of 1 m boxes (friction 0.6): apex drift from t = 1 s stays below 0.02 m up to "
+                      "t = 60 s and the largest penetration below 0.01 m (both sampled every 0.5 s)";
   Sim sim(r, engine, std::move(scene));
   const size_t apex = sim.scene().bodies.size() - 1;
-  PileRun run = RunPile(sim, 10, 1, apex + 1);
-  const double apexDrift = Displacement(run.atOne[apex], run.atEnd[apex]);
+  PileRun run = RunPile(sim, kWindowSeconds, 1, apex + 1);
+  const double apexDrift = run.drift[apex];
   Add(r, "apex_drift_m", apexDrift);
   Add(r, "max_box_drift_m", run.maxDrift);
   Add(r, "max_penetration_m", run.maxPenetration);
@@ -279,14 +318,14 @@ void FarFromOrigin(std::string_view engine, const HardCaseOptions&, HardCaseResu
 void MassRatio(std::string_view engine, HardCaseResult& r, int ratio) {
   r.criterion = ratio == 100
                     ? "a 100 kg box (1 m, density 100) on the apex of a base-10 pyramid of 1 kg boxes: no body moves "
-                      "more than 0.05 m between t = 1 s and t = 10 s, largest penetration below 0.02 m"
+                      "more than 0.05 m from its t = 1 s pose up to t = 60 s, largest penetration below 0.02 m"
                     : "a 20 m x 1 m plank of 400 kg on two 1 kg boxes (1 m, at x = +-9): no body moves more than "
-                      "0.05 m between t = 1 s and t = 10 s, largest penetration below 0.02 m";
+                      "0.05 m from its t = 1 s pose up to t = 60 s, largest penetration below 0.02 m";
   Sim sim(r, engine, MakeMassRatio(ratio, MixingOf(engine)));
   const size_t n = sim.scene().bodies.size();
-  PileRun run = RunPile(sim, 10, 1, n);
+  PileRun run = RunPile(sim, kWindowSeconds, 1, n);
   Add(r, "max_body_drift_m", run.maxDrift);
-  Add(r, "heavy_drift_m", Displacement(run.atOne[n - 1], run.atEnd[n - 1]));
+  Add(r, "heavy_drift_m", run.drift[n - 1]);
   Add(r, "max_penetration_m", run.maxPenetration);
   Add(r, "settle_0_to_1s_m", run.settle);
   r.pass = sim.finite() && run.maxDrift < 0.05 && run.maxPenetration < 0.02;
@@ -304,43 +343,57 @@ void MassRatio400(std::string_view engine, const HardCaseOptions&, HardCaseResul
 // 0.5 s over `seconds`, with the largest penetration over the same samples.
 struct SinkRun {
   double maxDx = 0, maxSink = 0, maxPenetration = 0;
+  double otherMaxSink = 0;  // the largest sink of body `other`, if one is given
 };
-SinkRun RunSink(Sim& sim, double seconds, size_t k) {
+SinkRun RunSink(Sim& sim, double seconds, size_t k, size_t other = size_t(-1)) {
   SinkRun run;
   const BodyState start = sim.states()[k];
+  const double otherStartY = other != size_t(-1) ? double(sim.states()[other].position.y) : 0;
   const int end = int(std::lround(seconds * kStepsPerSecond));
   for (int step = kStepsPerSecond / 2; step <= end; step += kStepsPerSecond / 2) {
     sim.RunTo(step);
     const BodyState& s = sim.states()[k];
     run.maxDx = std::max(run.maxDx, std::abs(double(s.position.x) - start.position.x));
     run.maxSink = std::max(run.maxSink, double(start.position.y) - s.position.y);
+    if (other != size_t(-1)) run.otherMaxSink = std::max(run.otherMaxSink, otherStartY - sim.states()[other].position.y);
     run.maxPenetration = std::max(run.maxPenetration, MaxPenetrationOf(sim.scene(), sim.states()));
   }
   return run;
 }
 
-void TallStack(std::string_view engine, const HardCaseOptions&, HardCaseResult& r) {
-  r.criterion = "30 boxes of 1 m exactly touching and aligned (friction 0.6), default budget: over 10 s (sampled "
-                "every 0.5 s) the top box moves less than 0.05 m sideways and sinks less than 0.35 m";
-  Sim sim(r, engine, MakeTallStack(30, MixingOf(engine)));
+// The sink allowed: 0.35 m for 30 boxes (issue #13), 1.2 m for 50. Box2D 3 (617d32ab, 4 sub-steps,
+// built from its source outside the suite, 3600 steps) sinks 0.323 m and 1.110 m, and its top
+// moves 0.025 m and 0.044 m sideways; each contact sags by the load above it, so the sink grows
+// faster than the height.
+void TallStack(std::string_view engine, HardCaseResult& r, int count) {
+  const double sinkLimit = count == 30 ? 0.35 : 1.2;
+  r.criterion = std::to_string(count) +
+                " boxes of 1 m exactly touching and aligned (friction 0.6), default budget: over 60 s (sampled "
+                "every 0.5 s) the top box moves less than 0.05 m sideways and sinks less than " +
+                Fixed(sinkLimit, 2) + " m";
+  Sim sim(r, engine, MakeTallStack(count, MixingOf(engine)));
   const size_t top = sim.scene().bodies.size() - 1;
-  const SinkRun run = RunSink(sim, 10, top);
+  const SinkRun run = RunSink(sim, kWindowSeconds, top);
   Add(r, "top_max_dx_m", run.maxDx);
   Add(r, "top_max_sink_m", run.maxSink);
-  Add(r, "top_y_at_10s_m", sim.states()[top].position.y);
+  Add(r, "top_y_at_60s_m", sim.states()[top].position.y);
   Add(r, "max_penetration_m", run.maxPenetration);
-  r.note = "Box2D 3.2 at its default 4 sub-steps: the top moves about 0.02 m sideways and sinks about 0.01 m per "
-           "box (soft contacts); a toppled stack moves its top by metres.";
-  r.pass = sim.finite() && run.maxDx < 0.05 && run.maxSink < 0.35;
+  r.note = "Box2D 3 (617d32ab) at its default 4 sub-steps, 3600 steps: the 30-box top moves at most 0.025 m "
+           "sideways and sinks 0.323 m, the 50-box top 0.044 m and 1.110 m (soft contacts); a toppled stack moves "
+           "its top by metres.";
+  r.pass = sim.finite() && run.maxDx < 0.05 && run.maxSink < sinkLimit;
 }
+
+void TallStack30(std::string_view engine, const HardCaseOptions&, HardCaseResult& r) { TallStack(engine, r, 30); }
+void TallStack50(std::string_view engine, const HardCaseOptions&, HardCaseResult& r) { TallStack(engine, r, 50); }
 
 void HeavyOnSupports(std::string_view engine, const HardCaseOptions&, HardCaseResult& r) {
   r.criterion = "a 20 m x 2 m box of 1000 kg on three 1 m boxes of 1 kg (1000:1, friction 0.6), default budget: "
-                "over 10 s (sampled every 0.5 s) the heavy box sinks less than 0.15 m and moves less than 0.1 m "
+                "over 60 s (sampled every 0.5 s) the heavy box sinks less than 0.15 m and moves less than 0.1 m "
                 "sideways";
   Sim sim(r, engine, MakeHeavyOnSupports(MixingOf(engine)));
   const size_t heavy = sim.scene().bodies.size() - 1;
-  const SinkRun run = RunSink(sim, 10, heavy);
+  const SinkRun run = RunSink(sim, kWindowSeconds, heavy);
   Add(r, "heavy_max_sink_m", run.maxSink);
   Add(r, "heavy_max_dx_m", run.maxDx);
   Add(r, "max_penetration_m", run.maxPenetration);
@@ -351,15 +404,14 @@ void HeavyOnSupports(std::string_view engine, const HardCaseOptions&, HardCaseRe
 
 void HeavyOnSlab(std::string_view engine, const HardCaseOptions&, HardCaseResult& r) {
   r.criterion = "a 2 m box of 1000 kg on one 4 m x 0.2 m slab of 1 kg on the ground (1000:1, friction 0.6), "
-                "default budget: over 10 s (sampled every 0.5 s) the heavy box sinks less than 0.1 m (half the "
-                "slab) and the slab less than 0.05 m";
+                "default budget: over 60 s (sampled every 0.5 s) the heavy box sinks less than 0.1 m (half the "
+                "slab) and the slab less than 0.05 m (at every sample)";
   Sim sim(r, engine, MakeHeavyOnSlab(MixingOf(engine)));
   const size_t slab = 1, heavy = 2;
-  const BodyState slabStart = sim.states()[slab];
-  const SinkRun run = RunSink(sim, 10, heavy);
-  const double slabSink = double(slabStart.position.y) - sim.states()[slab].position.y;
+  const SinkRun run = RunSink(sim, kWindowSeconds, heavy, slab);
+  const double slabSink = run.otherMaxSink;
   Add(r, "heavy_max_sink_m", run.maxSink);
-  Add(r, "slab_sink_at_10s_m", slabSink);
+  Add(r, "slab_max_sink_m", slabSink);
   Add(r, "max_penetration_m", run.maxPenetration);
   r.note = "Beyond the peers (issue #13 item 3): Box2D 2.4.1 and 3.2 both let the box fall through the slab.";
   r.pass = sim.finite() && run.maxSink < 0.1 && slabSink < 0.05;
@@ -367,13 +419,13 @@ void HeavyOnSlab(std::string_view engine, const HardCaseOptions&, HardCaseResult
 
 void Arch(std::string_view engine, const HardCaseOptions&, HardCaseResult& r) {
   r.criterion = "semicircular arch of 17 blocks (inner radius 4 m, outer 5 m, friction 0.6): no block moves more "
-                "than 0.05 m between t = 1 s and t = 11 s (10 s)";
+                "than 0.05 m from its t = 1 s pose up to t = 61 s (60 s, sampled every 0.5 s)";
   Sim sim(r, engine, MakeArch(MixingOf(engine)));
   const size_t n = sim.scene().bodies.size();
-  PileRun run = RunPile(sim, 11, 1, n);
+  PileRun run = RunPile(sim, 1 + kWindowSeconds, 1, n);
   const size_t crown = 1 + 8;  // the middle of 17 blocks
   Add(r, "max_block_drift_m", run.maxDrift);
-  Add(r, "crown_drop_m", double(run.atOne[crown].position.y) - run.atEnd[crown].position.y);
+  Add(r, "crown_drop_at_61s_m", double(run.atOne[crown].position.y) - run.atEnd[crown].position.y);
   Add(r, "max_penetration_m", run.maxPenetration);
   Add(r, "settle_0_to_1s_m", run.settle);
   r.note = "Box2D 2.4's 0.01 m polygon skin pushes the 18 spawned-touching joints (ground included) about "
@@ -384,12 +436,11 @@ void Arch(std::string_view engine, const HardCaseOptions&, HardCaseResult& r) {
 
 void CardHouse(std::string_view engine, const HardCaseOptions&, HardCaseResult& r) {
   r.criterion = "card house of 5 storeys, 40 cards of 1 m x 0.02 m (friction 0.7): the top pair's cards move "
-                "less than 0.05 m between t = 1 s and t = 6 s (5 s)";
+                "less than 0.05 m from their t = 1 s poses up to t = 61 s (60 s, sampled every 0.5 s)";
   Sim sim(r, engine, MakeCardHouse(5, MixingOf(engine)));
   const size_t n = sim.scene().bodies.size();
-  PileRun run = RunPile(sim, 6, 1, n);
-  const double top = std::max(Displacement(run.atOne[n - 1], run.atEnd[n - 1]),
-                              Displacement(run.atOne[n - 2], run.atEnd[n - 2]));
+  PileRun run = RunPile(sim, 1 + kWindowSeconds, 1, n);
+  const double top = std::max(run.drift[n - 1], run.drift[n - 2]);
   Add(r, "top_pair_drift_m", top);
   Add(r, "max_card_drift_m", run.maxDrift);
   Add(r, "max_penetration_m", run.maxPenetration);
@@ -403,14 +454,21 @@ void CardHouse(std::string_view engine, const HardCaseOptions&, HardCaseResult& 
 void FrictionRamp(std::string_view engine, const HardCaseOptions&, HardCaseResult& r) {
   const double angle = 0.25, g = 10, t = 2;
   r.criterion = "boxes at rest on a 0.25 rad ramp, mixed friction 0.75, 0.5, 0.35, 0.1, 0 (sticks iff mu >= "
-                "tan 0.25 = 0.2553): after 2 s a sticking box has moved less than 0.01 m, a sliding one "
-                "0.5 g (sin - mu cos) t^2 down the slope within 5 %";
+                "tan 0.25 = 0.2553): a sticking box moves less than 0.01 m at any step up to t = 60 s; a sliding "
+                "one has slid 0.5 g (sin - mu cos) t^2 down the slope within 5 % at t = 2 s (it leaves the "
+                "ramp at about 2.5-4 s)";
   const Mixing mixing = MixingOf(engine);
   Sim sim(r, engine, MakeFrictionRamp(mixing));
   const std::vector<BodyState> start = sim.states();
-  sim.RunTo(int(t * kStepsPerSecond));
-  const std::vector<BodyState>& end = sim.states();
   const double downX = -std::cos(angle), downY = -std::sin(angle);
+  // The sticking boxes' largest move from their spawn, at every step of the window.
+  std::array<double, 5> stuckMove{};
+  std::vector<BodyState> end;
+  while (sim.steps() < int(kWindowSeconds * kStepsPerSecond)) {
+    sim.StepOnce();
+    if (sim.steps() == int(t * kStepsPerSecond)) end = sim.states();
+    for (int k = 0; k < 5; ++k) stuckMove[k] = std::max(stuckMove[k], Displacement(start[2 * k + 1], sim.states()[2 * k + 1]));
+  }
   bool pass = sim.finite();
   for (int k = 0; k < 5; ++k) {
     const BodyDesc& ramp = sim.scene().bodies[2 * k];
@@ -421,8 +479,8 @@ void FrictionRamp(std::string_view engine, const HardCaseOptions&, HardCaseResul
     const double along = (double(b.position.x) - a.position.x) * downX + (double(b.position.y) - a.position.y) * downY;
     const std::string label = "mu_" + Fixed(mu, 2);
     if (mu >= std::tan(angle)) {
-      Add(r, label + "_moved_m", along);
-      pass = pass && std::abs(along) < 0.01;
+      Add(r, label + "_max_moved_m", stuckMove[k]);
+      pass = pass && stuckMove[k] < 0.01;
     } else {
       const double expected = 0.5 * g * (std::sin(angle) - mu * std::cos(angle)) * t * t;
       Add(r, label + "_slid_m", along);
@@ -439,7 +497,8 @@ void FrictionRamp(std::string_view engine, const HardCaseOptions&, HardCaseResul
 void RestitutionDrop(std::string_view engine, const HardCaseOptions&, HardCaseResult& r) {
   r.criterion = "balls (r = 0.5 m) dropped from 2 m (bottom to ground) with mixed restitution 0, 0.25, 0.5, 0.75, "
                 "1, threshold 0, no friction: first rebound height / 2 m within 5 % of e^2; for e = 0 the "
-                "rebound above the final resting height below 0.01 m";
+                "rebound above the final resting height below 0.01 m; over 60 s no ball rises above its first "
+                "rebound by more than 5 % of the drop (no energy gained)";
   const Mixing mixing = MixingOf(engine);
   Sim sim(r, engine, MakeRestitutionDrop(mixing));
   const Scene& scene = sim.scene();
@@ -450,7 +509,8 @@ void RestitutionDrop(std::string_view engine, const HardCaseOptions&, HardCaseRe
   std::vector<int> bounce(balls + 1, -1);
   std::vector<double> peak(balls + 1, -1e300);
   std::vector<double> prevVy(balls + 1, 0);
-  const int end = 3 * kStepsPerSecond;
+  std::vector<double> later(balls + 1, -1e300);  // highest point after the first rebound's window
+  const int end = int(kWindowSeconds * kStepsPerSecond);
   while (sim.steps() < end) {
     sim.StepOnce();
     for (int k = 1; k <= balls; ++k) {
@@ -458,6 +518,8 @@ void RestitutionDrop(std::string_view engine, const HardCaseOptions&, HardCaseRe
       if (bounce[k] < 0 && prevVy[k] < 0 && s.velocity.y >= 0) bounce[k] = sim.steps();
       if (bounce[k] >= 0 && sim.steps() <= bounce[k] + 3 * kStepsPerSecond / 2) {
         peak[k] = std::max(peak[k], double(s.position.y));
+      } else if (bounce[k] >= 0) {
+        later[k] = std::max(later[k], double(s.position.y));
       }
       prevVy[k] = s.velocity.y;
     }
@@ -471,6 +533,8 @@ void RestitutionDrop(std::string_view engine, const HardCaseOptions&, HardCaseRe
       pass = false;
       continue;
     }
+    Add(r, label + "_later_rise_m", std::max(0.0, later[k] - peak[k]));
+    pass = pass && later[k] - peak[k] <= 0.05 * drop;
     if (e == 0) {
       const double rest = sim.states()[k].position.y;
       Add(r, label + "_rebound_m", peak[k] - rest);
@@ -494,36 +558,38 @@ void RestitutionDrop(std::string_view engine, const HardCaseOptions&, HardCaseRe
 
 void OverlapRecovery(std::string_view engine, const HardCaseOptions&, HardCaseResult& r) {
   r.criterion = "base-10 pyramid of 1 m boxes spawned at 0.75 m pitch (25 % overlap, friction 0.6): after 60 "
-                "steps no pair overlaps by more than 0.02 m, and no body is faster than 2 m/s in the first 120 "
-                "steps";
+                "steps no pair overlaps by more than 0.02 m nor does later (checked every step up to t = 60 s), and "
+                "no body is faster than 2 m/s at any step";
   Sim sim(r, engine, MakeOverlapRecovery(10, MixingOf(engine)));
   const double initial = MaxPenetrationOf(sim.scene(), sim.states());
-  double maxSpeed = 0;
+  double maxSpeed = 0, laterOverlap = 0;
   int separatedAt = -1;
-  for (int step = 1; step <= 2 * kStepsPerSecond; ++step) {
+  for (int step = 1; step <= int(kWindowSeconds * kStepsPerSecond); ++step) {
     sim.StepOnce();
     maxSpeed = std::max(maxSpeed, MaxSpeed(sim.scene(), sim.states()));
     const double pen = MaxPenetrationOf(sim.scene(), sim.states());
     if (separatedAt < 0 && pen <= 0.02) separatedAt = step;
     if (step == kStepsPerSecond) Add(r, "max_overlap_at_60_steps_m", pen);
+    if (step >= kStepsPerSecond) laterOverlap = std::max(laterOverlap, pen);
   }
   Add(r, "initial_overlap_m", initial);
   Add(r, "first_step_overlap_le_0.02m", separatedAt);
   Add(r, "max_speed_mps", maxSpeed);
-  Add(r, "max_overlap_at_120_steps_m", MaxPenetrationOf(sim.scene(), sim.states()));
-  r.pass = sim.finite() && r.Get("max_overlap_at_60_steps_m") <= 0.02 && maxSpeed < 2;
+  Add(r, "max_overlap_after_60_steps_m", laterOverlap);
+  r.pass = sim.finite() && laterOverlap <= 0.02 && maxSpeed < 2;
 }
 
 void Confined(std::string_view engine, const HardCaseOptions&, HardCaseResult& r) {
   r.criterion = "625 circles (r = 0.5 m) spawned overlapping by 0.2 m in a closed 25 m box, zero gravity, at rest: "
                 "no NaN, every centre stays in the box, no body faster than 2 m/s, and after the push-out (t >= "
-                "1 s) the kinetic energy never rises above its value at t = 1 s by more than 1 % (+1e-6 J)";
+                "1 s) the kinetic energy never rises above its value at t = 1 s by more than 1 % (+1e-6 J); every "
+                "step up to t = 60 s";
   Sim sim(r, engine, MakeConfined(25, 42, MixingOf(engine)));
   const Scene& scene = sim.scene();
   const double half = 12.5;
   double maxSpeed = 0, peakKe = 0, keAtOne = 0, worstRise = 0, outside = 0;
   const double initial = MaxPenetrationOf(scene, sim.states());
-  const int end = 5 * kStepsPerSecond;
+  const int end = int(kWindowSeconds * kStepsPerSecond);
   for (int step = 1; step <= end; ++step) {
     sim.StepOnce();
     const double ke = sim.KE();
@@ -541,35 +607,71 @@ void Confined(std::string_view engine, const HardCaseOptions&, HardCaseResult& r
   Add(r, "peak_ke_J", peakKe);
   Add(r, "ke_at_1s_J", keAtOne);
   Add(r, "max_ke_rise_after_1s_J", worstRise);
-  Add(r, "ke_at_5s_J", sim.KE());
+  Add(r, "ke_at_60s_J", sim.KE());
   Add(r, "max_speed_mps", maxSpeed);
-  Add(r, "max_overlap_at_5s_m", MaxPenetrationOf(scene, sim.states()));
+  Add(r, "max_overlap_at_60s_m", MaxPenetrationOf(scene, sim.states()));
   Add(r, "most_outside_box_m", std::max(0.0, outside));
   r.note = "Engines that push overlap out through positions (Box2D, Chipmunk, Quadrant) create no kinetic energy "
-           "here at all; the overlap still left at 5 s is reported (max_overlap_at_5s_m), not judged.";
+           "here at all; the overlap still left at 60 s is reported (max_overlap_at_60s_m), not judged.";
   r.pass = sim.finite() && outside <= 0 && maxSpeed < 2 && worstRise <= 0.01 * keAtOne + 1e-6;
+}
+
+// Issue #26 item 4: every solver must bring a closed box of circles under gravity to rest.
+void ClosedBox(std::string_view engine, const HardCaseOptions&, HardCaseResult& r) {
+  r.criterion = "2000 circles (r = 0.5 m, friction 0.6, restitution 0) in a closed box at area fraction 0.85 "
+                "with gravity, spawned touching with random speeds up to 2.8 m/s: no centre ever leaves the "
+                "box, and at t = 60 s no body is faster than 0.5 m/s and the kinetic energy is below 1 % of "
+                "its peak";
+  Sim sim(r, engine, MakeClosedBox(2000, 42, MixingOf(engine)));
+  const Scene& scene = sim.scene();
+  const double half = double(scene.bounds.upper.x);
+  double peakKe = sim.KE(), outside = 0, maxSpeedLast10 = 0;
+  const int end = int(kWindowSeconds * kStepsPerSecond);
+  while (sim.steps() < end) {
+    sim.StepOnce();
+    peakKe = std::max(peakKe, sim.KE());
+    if (sim.steps() > end - 10 * kStepsPerSecond) maxSpeedLast10 = std::max(maxSpeedLast10, MaxSpeed(scene, sim.states()));
+    for (size_t i = 0; i < scene.bodies.size(); ++i) {
+      if (!scene.bodies[i].dynamic) continue;
+      const Vec2 p = sim.states()[i].position;
+      outside = std::max({outside, std::abs(double(p.x)) - half, std::abs(double(p.y)) - half});
+    }
+  }
+  const double keEnd = sim.KE(), speedEnd = MaxSpeed(scene, sim.states());
+  Add(r, "peak_ke_J", peakKe);
+  Add(r, "ke_at_60s_J", keEnd);
+  Add(r, "ke_fraction_at_60s", keEnd / peakKe);
+  Add(r, "max_speed_at_60s_mps", speedEnd);
+  Add(r, "max_speed_50_to_60s_mps", maxSpeedLast10);
+  Add(r, "most_outside_box_m", std::max(0.0, outside));
+  r.note = "The fastest body over the last 10 s is reported too (max_speed_50_to_60s_mps), not judged.";
+  r.pass = sim.finite() && outside <= 0 && speedEnd < 0.5 && keEnd < 0.01 * peakKe;
 }
 
 void NewtonsCradle(std::string_view engine, const HardCaseOptions&, HardCaseResult& r) {
   r.criterion = "five touching balls, zero gravity, friction 0, restitution 1, the first at 1 m/s: after 2 s the "
-                "last moves at 1 m/s within 5 %, momentum is conserved within 1e-3 (relative) and kinetic energy "
-                "has not grown (by more than 1e-3 relative)";
+                "last moves at 1 m/s within 5 %; at every step up to t = 60 s momentum is conserved within 1e-3 "
+                "(relative) and kinetic energy has not grown (by more than 1e-3 relative)";
   Sim sim(r, engine, MakeNewtonsCradle(MixingOf(engine)));
   const Scene& scene = sim.scene();
   const double v0 = scene.bodies[0].velocity.x;
   const Vec2 p0 = LinearMomentum(scene, sim.states());
   const double ke0 = sim.KE();
-  sim.RunTo(2 * kStepsPerSecond);
-  const Vec2 p1 = LinearMomentum(scene, sim.states());
-  const double ke1 = sim.KE();
-  const double vLast = sim.states()[4].velocity.x;
-  double others = 0;
-  for (int k = 0; k < 4; ++k) others = std::max(others, std::abs(double(sim.states()[k].velocity.x)));
-  const double dp = std::hypot(double(p1.x) - p0.x, double(p1.y) - p0.y) / std::hypot(double(p0.x), double(p0.y));
+  double vLast = 0, others = 0, dp = 0, ke1 = 0;
+  while (sim.steps() < int(kWindowSeconds * kStepsPerSecond)) {
+    sim.StepOnce();
+    const Vec2 p1 = LinearMomentum(scene, sim.states());
+    dp = std::max(dp, std::hypot(double(p1.x) - p0.x, double(p1.y) - p0.y) / std::hypot(double(p0.x), double(p0.y)));
+    ke1 = std::max(ke1, sim.KE());
+    if (sim.steps() == 2 * kStepsPerSecond) {
+      vLast = sim.states()[4].velocity.x;
+      for (int k = 0; k < 4; ++k) others = std::max(others, std::abs(double(sim.states()[k].velocity.x)));
+    }
+  }
   Add(r, "last_ball_vx_mps", vLast);
   Add(r, "max_other_ball_speed_mps", others);
-  Add(r, "momentum_rel_error", dp);
-  Add(r, "ke_ratio", ke1 / ke0);
+  Add(r, "max_momentum_rel_error", dp);
+  Add(r, "max_ke_ratio", ke1 / ke0);
   r.pass = sim.finite() && std::abs(vLast - v0) <= 0.05 * std::abs(v0) && dp <= 1e-3 && ke1 <= ke0 * (1 + 1e-3);
 }
 
@@ -646,8 +748,9 @@ constexpr CaseEntry kCases[] = {
     {"overlap_recovery", OverlapRecovery}, {"confined", Confined},
     {"far_from_origin", FarFromOrigin}, {"newtons_cradle", NewtonsCradle},
     {"soak", Soak},
-    {"tall_stack", TallStack},         {"heavy_on_supports", HeavyOnSupports},
-    {"heavy_on_slab", HeavyOnSlab},
+    {"tall_stack", TallStack30},       {"tall_stack_50", TallStack50},
+    {"heavy_on_supports", HeavyOnSupports},
+    {"heavy_on_slab", HeavyOnSlab},      {"closed_box", ClosedBox},
 };
 
 }  // namespace
@@ -685,6 +788,8 @@ HardCaseResult RunHardCase(std::string_view name, std::string_view engine, const
   r.name = entry->name;
   r.engine = std::string(engine);
   const auto t0 = std::chrono::steady_clock::now();
+  // The soak prints its own progress lines (with a rate and an ETA).
+  progress = {name == "soak" ? 0.0 : options.progressSeconds, std::string(name) + " " + std::string(engine), t0};
   try {
     entry->fn(engine, options, r);
   } catch (const Unsupported& e) {

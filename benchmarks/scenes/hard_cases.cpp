@@ -188,6 +188,7 @@ Scene MakeMassRatio(int ratio, Mixing mixing) {
 Scene MakeTallStack(int count, Mixing mixing) {
   RequireRange(count, 1, 1000, "tall stack box count");
   Scene s = BaseScene("tall_stack");
+  if (count != 30) s.name = "tall_stack_" + std::to_string(count);  // the hard case tall_stack_50
   // The default budget (8 velocity + 3 position iterations; soft_step 4 sub-steps): issue #13
   // asks for Box2D 3's level at its defaults, where a 30-box stack stands.
   const Real f = Coef(mixing, Real(0.6));
@@ -383,6 +384,38 @@ Scene MakeConfined(int side, uint64_t seed, Mixing mixing) {
       const double y = start + i * pitch + rng.Uniform(-0.02, 0.02);
       s.bodies.push_back(Ball({Real(x), Real(y)}, Real(0.5), f, 0));
     }
+  }
+  s.bounds = Bounds({Real(-half), Real(-half)}, {Real(half), Real(half)});
+  return s;
+}
+
+Scene MakeClosedBox(int count, uint64_t seed, Mixing mixing) {
+  RequireRange(count, 1, 100000, "closed box circle count");
+  Scene s = BaseScene("closed_box");
+  s.seed = seed;
+  const Real f = Coef(mixing, Real(0.6));
+  const double r = 0.5, fraction = 0.85;
+  const double side = std::sqrt(count * std::numbers::pi * r * r / fraction);
+  const double half = 0.5 * side;
+  auto wall = [&](double cx, double cy, double hx, double hy) {
+    s.bodies.push_back(Box({Real(cx), Real(cy)}, Real(hx), Real(hy), false, f, 0));
+  };
+  wall(0, -half - 0.5, half + 1, 0.5);
+  wall(0, half + 0.5, half + 1, 0.5);
+  wall(-half - 0.5, 0, 0.5, half);
+  wall(half + 0.5, 0, 0.5, half);
+  // A hexagonal lattice of touching circles (pitch 2r) from the floor up; rows alternate by r.
+  const double pitch = 2 * r + 1e-4, rowPitch = pitch * std::sqrt(3.0) / 2;
+  const int perRow = int((side - 2 * r - r) / pitch) + 1;  // room for the odd rows' shift
+  Random rng(seed);
+  for (int k = 0; k < count; ++k) {
+    const int row = k / perRow, col = k % perRow;
+    const double x = -half + r + col * pitch + (row % 2 ? r : 0);
+    const double y = -half + r + row * rowPitch;
+    if (y > half - r) throw Error("closed box: the lattice does not fit the box");
+    BodyDesc b = Ball({Real(x), Real(y)}, Real(r), f, 0);
+    b.velocity = {Real(rng.Uniform(-2, 2)), Real(rng.Uniform(-2, 2))};
+    s.bodies.push_back(b);
   }
   s.bounds = Bounds({Real(-half), Real(-half)}, {Real(half), Real(half)});
   return s;

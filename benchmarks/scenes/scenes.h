@@ -111,7 +111,8 @@ Scene MakePyramidField(int pyramids, int base, Mixing mixing = Mixing::kBox2d);
 Scene MakeMassRatio(int ratio, Mixing mixing = Mixing::kBox2d);
 /// Issue #13's stability cases, at the default budget (8 velocity + 3 position iterations):
 /// ground (100 m wide), then `count` 1 m boxes bottom to top, exactly touching and exactly aligned
-/// (centres at x = 0, y = 0.5 + i; friction 0.6). The last body is the top box.
+/// (centres at x = 0, y = 0.5 + i; friction 0.6). The last body is the top box. Named
+/// "tall_stack" for 30 boxes, "tall_stack_<count>" otherwise.
 Scene MakeTallStack(int count = 30, Mixing mixing = Mixing::kBox2d);
 /// Ground, then three 1 m boxes of 1 kg at x = -9, 0, 9, then a 20 m x 2 m box of 1000 kg
 /// (density 25) resting on them: 1000:1 on several supports. Friction 0.6.
@@ -138,6 +139,11 @@ Scene MakeOverlapRecovery(int base = 10, Mixing mixing = Mixing::kBox2d);
 /// 0.8 m pitch (each overlaps its neighbours by 0.2 m) with a seeded jitter of +-0.02 m; zero
 /// gravity, at rest, friction 0.6, restitution 0.
 Scene MakeConfined(int side = 25, uint64_t seed = 42, Mixing mixing = Mixing::kBox2d);
+/// Issue #26's closed box: `count` circles (r = 0.5 m, friction 0.6, restitution 0) in a closed
+/// square box of static walls sized for area fraction 0.85, gravity (0, -10), spawned touching on
+/// a hexagonal lattice from the floor up with random velocities up to 2 m/s (seeded). Walls first
+/// (4 bodies), then the circles.
+Scene MakeClosedBox(int count = 2000, uint64_t seed = 42, Mixing mixing = Mixing::kBox2d);
 /// MakePyramid(20) at (1e5, -8e4).
 Scene MakeFarFromOrigin(Mixing mixing = Mixing::kBox2d);
 /// Five touching balls (r = 0.5 m) in a row at x = 0, 1, 2, 3, 4, zero gravity, friction 0,
