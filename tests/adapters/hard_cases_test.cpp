@@ -111,14 +111,17 @@ double Figure(const HardCaseResult& r, const std::string& name) {
 // the plank's boxes sank into the ground (penetration 0.555 m). Measured: with no cap 0.076 m and
 // 0.088 m; with rigid rows below 0.01 m 0.097 m and 0.060 m (the plank drifts 0.53 m sideways).
 // (The box's penetration does not tell: 0.10 m with no cap, 0.092 m once it has fallen through.)
-// The bounds 0.25 m and 0.2 m were set on the old 10-s window; over the 60-s window (issue #26)
-// b3soft's box drifts 0.42 m and the plank reaches 0.36 m of penetration (it creeps sideways off
-// its supports): still far from falling through (12.2 m), but no longer at the 10-s figures. The
-// bounds below are the fall-through's figures, not a margin.
+// Over the old 10-s window the box drifted less than 0.25 m and the plank sank less than 0.2 m.
+// Over the 60-s window (issue #26) b3soft's box drifts 0.42 m and the plank reaches 0.36 m of
+// penetration (it creeps sideways off its supports). That is a known failure of issue #26,
+// asserted as such (a fix must turn these two into EXPECT_LT again); the guard against falling
+// through (12.2 m and 0.555 m without the cap) stays.
 TEST(HardCases, SoftStepHoldsHeavyBodiesAtDefaultSubSteps) {
   const HardCaseResult box = RunHardCase("mass_ratio_100", "quadrant:soft_step+b3soft+sub4");
+  EXPECT_GT(Figure(box, "heavy_drift_m"), 0.25) << "known failure fixed? " << Describe(box);
   EXPECT_LT(Figure(box, "heavy_drift_m"), 1.0) << Describe(box);
   const HardCaseResult plank = RunHardCase("mass_ratio_400", "quadrant:soft_step+b3soft+sub4");
+  EXPECT_GT(Figure(plank, "max_penetration_m"), 0.2) << "known failure fixed? " << Describe(plank);
   EXPECT_LT(Figure(plank, "max_penetration_m"), 0.5) << Describe(plank);
 }
 
