@@ -21,22 +21,11 @@ namespace {
 constexpr int kJunkyardColumns = 200;
 constexpr int kSmashRows = 80;
 
+// Box2D 3's benchmark worlds sleep (b2DefaultWorldDef); these two scenes need it (smash's wall
+// is created asleep).
 Scene Box2d3Base(const char* name) {
-  Scene s;
-  s.name = name;
-  s.gravity = {0, Real(-10)};
-  s.timeStep = Real(1.0 / 60.0);
-  s.velocityIterations = 8;
-  s.positionIterations = 3;
-  s.restitutionThreshold = 1;
-  s.effects.gravity = true;
-  s.effects.friction = true;
-  s.effects.restitution = false;
-  s.effects.rotation = true;
-  s.effects.warmStarting = true;
-  s.effects.sleep = true;  // Box2D 3's benchmark worlds sleep (b2DefaultWorldDef)
-  s.effects.continuous = false;
-  s.effects.damping = false;
+  Scene s = Box2d3BenchmarkBase(name);
+  s.effects.sleep = true;
   return s;
 }
 

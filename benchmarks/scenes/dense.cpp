@@ -17,7 +17,18 @@ constexpr int kPyramidBase = 10;                                    // Box2D 3: 
 constexpr int kPyramidBoxes = kPyramidBase * (kPyramidBase + 1) / 2;
 constexpr int kTumblerMaxGrid = 46;  // 46 x 46 boxes at 0.4 m pitch still fit inside the walls
 
-Scene DenseBase(const char* name) {
+
+BodyDesc Box(Vec2 position, Real hx, Real hy, bool dynamic) {
+  BodyDesc b = MakeBoxBody(position, hx, hy, dynamic);
+  b.density = dynamic ? 1 : 0;
+  b.friction = Real(0.6);
+  b.restitution = 0;
+  return b;
+}
+
+}  // namespace
+
+Scene Box2d3BenchmarkBase(const char* name) {
   Scene s;
   s.name = name;
   s.gravity = {0, Real(-10)};
@@ -37,22 +48,12 @@ Scene DenseBase(const char* name) {
   return s;
 }
 
-BodyDesc Box(Vec2 position, Real hx, Real hy, bool dynamic) {
-  BodyDesc b = MakeBoxBody(position, hx, hy, dynamic);
-  b.density = dynamic ? 1 : 0;
-  b.friction = Real(0.6);
-  b.restitution = 0;
-  return b;
-}
-
-}  // namespace
-
 Scene MakeManyPyramids(int count) {
   if (count < kPyramidBoxes || count > 1000000) {
     throw Error("many_pyramids: count must be in [" + std::to_string(kPyramidBoxes) + ", 1000000] boxes, got " +
                 std::to_string(count));
   }
-  Scene s = DenseBase("many_pyramids");
+  Scene s = Box2d3BenchmarkBase("many_pyramids");
   const int pyramids = count / kPyramidBoxes;
   const int columns = int(std::ceil(std::sqrt(double(pyramids))));
   const int rows = (pyramids + columns - 1) / columns;
@@ -85,7 +86,7 @@ Scene MakeTumbler(int count) {
     throw Error("tumbler: count must be in [1, " + std::to_string(kTumblerMaxGrid * kTumblerMaxGrid) +
                 "] boxes, got " + std::to_string(count));
   }
-  Scene s = DenseBase("tumbler");
+  Scene s = Box2d3BenchmarkBase("tumbler");
   // Box2D 3's tumbler: a 20 m square of 1 m thick walls centred 10 m up, turning at 25 degrees
   // per second, with small boxes (0.25 m) tumbling inside. Box2D 3 turns one body of four
   // shapes with a motor joint; the scene API has one shape per body and no joints, so here four

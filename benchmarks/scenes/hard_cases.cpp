@@ -357,6 +357,17 @@ Scene MakeOverlapRecovery(int base, Mixing mixing) {
   return s;
 }
 
+// Four static 1 m thick walls around the square [-half, half]^2 (friction f, restitution 0).
+static void AddClosingWalls(Scene& s, double half, Real f) {
+  auto wall = [&](double cx, double cy, double hx, double hy) {
+    s.bodies.push_back(Box({Real(cx), Real(cy)}, Real(hx), Real(hy), false, f, 0));
+  };
+  wall(0, -half - 0.5, half + 1, 0.5);
+  wall(0, half + 0.5, half + 1, 0.5);
+  wall(-half - 0.5, 0, 0.5, half);
+  wall(half + 0.5, 0, 0.5, half);
+}
+
 Scene MakeConfined(int side, uint64_t seed, Mixing mixing) {
   RequireRange(side, 1, 100, "confined grid side");
   Scene s = BaseScene("confined");
@@ -367,13 +378,7 @@ Scene MakeConfined(int side, uint64_t seed, Mixing mixing) {
   // Inner side 25 m for 25 x 25 circles: area fraction 0.785, so they can all separate (random
   // close packing of discs is about 0.82) but end up crowded.
   const double half = 0.5 * side;
-  auto wall = [&](double cx, double cy, double hx, double hy) {
-    s.bodies.push_back(Box({Real(cx), Real(cy)}, Real(hx), Real(hy), false, f, 0));
-  };
-  wall(0, -half - 0.5, half + 1, 0.5);
-  wall(0, half + 0.5, half + 1, 0.5);
-  wall(-half - 0.5, 0, 0.5, half);
-  wall(half + 0.5, 0, 0.5, half);
+  AddClosingWalls(s, half, f);
   Random rng(seed);
   const double pitch = 0.8;
   const double start = -0.5 * (side - 1) * pitch;
@@ -397,13 +402,7 @@ Scene MakeClosedBox(int count, uint64_t seed, Mixing mixing) {
   const double r = 0.5, fraction = 0.85;
   const double side = std::sqrt(count * std::numbers::pi * r * r / fraction);
   const double half = 0.5 * side;
-  auto wall = [&](double cx, double cy, double hx, double hy) {
-    s.bodies.push_back(Box({Real(cx), Real(cy)}, Real(hx), Real(hy), false, f, 0));
-  };
-  wall(0, -half - 0.5, half + 1, 0.5);
-  wall(0, half + 0.5, half + 1, 0.5);
-  wall(-half - 0.5, 0, 0.5, half);
-  wall(half + 0.5, 0, 0.5, half);
+  AddClosingWalls(s, half, f);
   // A hexagonal lattice of touching circles (pitch 2r) from the floor up; rows alternate by r.
   const double pitch = 2 * r + 1e-4, rowPitch = pitch * std::sqrt(3.0) / 2;
   const int perRow = int((side - 2 * r - r) / pitch) + 1;  // room for the odd rows' shift

@@ -33,6 +33,10 @@ Scene MakeStressScene(const StressParams& params);
 
 // ---- Dense, solver-bound scenes (dense.cpp; `pyramid` is the third) ------------------------
 
+/// The world settings of Box2D 3's benchmark scenes in the scene API: gravity, friction, 8/3
+/// iterations, no restitution, warm starting, no sleep, no continuous collision, 60 Hz.
+Scene Box2d3BenchmarkBase(const char* name);
+
 /// Box2D 3's "many pyramids": `count` 1 m boxes (rounded down to a multiple of 55, at least 55) as
 /// base-10 pyramids of touching boxes, in a near-square grid of rows, each row on its own thin
 /// static shelf 11 m above the one below; friction 0.6, gravity, 8/3 iterations, no sleep.
