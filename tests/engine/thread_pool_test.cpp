@@ -345,9 +345,11 @@ TEST(ThreadPoolTest, WorkersWokenAfterAPauseGetTheirWholeAffinityBack) {
     for (int h : hits) ASSERT_EQ(h, 1);
   }
   std::this_thread::sleep_for(std::chrono::milliseconds(20));  // the worker is up and asleep again
+  // This thread, the worker, and any thread of the runtime (ThreadSanitizer has one): all with
+  // the process's mask.
   const std::vector<std::string> lists = ThreadAffinities();
-  ASSERT_EQ(lists.size(), 2u);  // this thread and the worker
-  EXPECT_EQ(lists[0], lists[1]);
+  ASSERT_GE(lists.size(), 2u);
+  for (const std::string& list : lists) EXPECT_EQ(list, lists[0]);
 }
 
 TEST(ThreadPoolTest, APoolWithoutWorkersRunsAloneAndStepsGiveTheOneThreadHash) {
