@@ -311,7 +311,7 @@ TEST(Islands, ConnectedBodiesSleepTogetherAndWakeTogether) {
   bodies.vel[7].v = {1, 0};  // a moving kinematic body keeps what it touches awake
   bodies.vel[5].v = {1, 0};  // 5 moves: its island {4, 5} stays awake
   const Real dt = Real(0.1);
-  for (int step = 0; step < 6; ++step) islands.Update(bodies, contacts, def, dt);  // 0.6 s > 0.5 s
+  for (int step = 0; step < 6; ++step) islands.Update(bodies, contacts, {}, def, dt);  // 0.6 s > 0.5 s
   for (int i : {1, 2, 3}) EXPECT_TRUE(Islands::IsSleeping(bodies, i)) << i;
   for (int i : {4, 5, 6}) EXPECT_FALSE(Islands::IsSleeping(bodies, i)) << i;
   EXPECT_EQ(bodies.islandOf[1], bodies.islandOf[2]);

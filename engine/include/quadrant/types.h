@@ -217,6 +217,11 @@ struct WorldDef {
   /// they are done by then (rise 0.008 J of 247 J) and the tall stack still holds (top 0.035 m).
   /// The stack and the confined circles are both near their limits around it (docs/soft_step.md).
   Real contactDampingRatio = 5;
+  /// soft_step joint stiffness (Hz, > 0) and damping ratio (>= 0) of the joints' rigid rows
+  /// (joints.h), as Box2D 3.0's defaults; the stiffness is capped at a quarter of the sub-step rate
+  /// as the contacts' is.
+  Real jointHertz = 60;
+  Real jointDampingRatio = 2;
   Real contactPushMaxVelocity = 3;      ///< soft_step fastest push-out of penetration (m/s), > 0
   /// soft_step: the deepest penetration at which its contacts are soft (m), > 0; deeper points are
   /// rigid rows pushing out at the rate they have at this depth, and the rest of the overlap is

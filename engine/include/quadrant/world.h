@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "quadrant/debug_draw.h"
+#include "quadrant/joints.h"
 #include "quadrant/types.h"
 
 namespace quadrant {
@@ -66,6 +67,35 @@ class World {
   /// Throws quadrant::Error for a stale or null id.
   void DestroyBody(BodyId id);
   bool IsValid(BodyId id) const;
+
+  // Joints (quadrant/joints.h). Each Create validates its definition fully before adding anything
+  // and throws quadrant::Error on bad input, a stale body id, or a world that cannot solve joints
+  // (solver other than soft_step, ParallelScheme::kQuadrants). Creating or destroying a joint wakes
+  // both bodies. DestroyBody destroys the body's joints with it (their ids turn stale).
+  JointId CreateRevoluteJoint(const RevoluteJointDef& def);
+  JointId CreateDistanceJoint(const DistanceJointDef& def);
+  JointId CreateWeldJoint(const WeldJointDef& def);
+  /// Throws quadrant::Error for a stale or null id.
+  void DestroyJoint(JointId id);
+  bool IsValid(JointId id) const;
+  int GetJointCount() const;
+  JointType GetJointType(JointId id) const;
+  BodyId GetJointBodyA(JointId id) const;
+  BodyId GetJointBodyB(JointId id) const;
+  /// A revolute or weld joint's angle: bodyB's angle minus bodyA's minus referenceAngle, in
+  /// [-pi, pi]. A distance joint's current length between its anchors (m).
+  Real GetJointAngle(JointId id) const;
+  Real GetJointLength(JointId id) const;
+  /// A revolute joint's motor speed (rad/s; throws for other joint types or a non-finite speed).
+  void SetMotorSpeed(JointId id, Real speed);
+  /// The impulses the joint applied to bodyB over the last step (N s; the point's linear impulse,
+  /// and the angular or axial impulse): divide by the step's dt for the force.
+  Vec2 GetJointLinearImpulse(JointId id) const;
+  Real GetJointAngularImpulse(JointId id) const;
+
+  /// A world point in body `id`'s frame (relative to its origin), for joint anchors, and back.
+  Vec2 GetLocalPoint(BodyId id, Vec2 worldPoint) const;
+  Vec2 GetWorldPoint(BodyId id, Vec2 localPoint) const;
 
   /// Advances by dt seconds: one pass of the whole pipeline (broad phase, narrow phase, solver,
   /// integration). The solver's own sub-steps are a setting of the world

@@ -58,7 +58,8 @@ int Islands::Find(int i) {
 // awake neighbour within speculative reach and be woken again at once, every step.
 // Static and kinematic bodies do not join islands (a pile on the ground is not one island with
 // every other pile on the ground); a moving kinematic body keeps the bodies it touches awake.
-void Islands::Update(Bodies& bodies, std::span<const Contact> contacts, const WorldDef& def, Real dt) {
+void Islands::Update(Bodies& bodies, std::span<const Contact> contacts, std::span<const Joint> joints,
+                     const WorldDef& def, Real dt) {
   changed_.clear();
   const int n = bodies.Count();
   parent_.resize(n);
@@ -81,18 +82,20 @@ void Islands::Update(Bodies& bodies, std::span<const Contact> contacts, const Wo
   auto movingKinematic = [&](int i) {
     return bodies.type[i] == BodyType::kKinematic && (bodies.vel[i].v.x != 0 || bodies.vel[i].v.y != 0 || bodies.vel[i].w != 0);
   };
-  for (const Contact& c : contacts) {
-    const bool inA = parent_[c.a] >= 0, inB = parent_[c.b] >= 0;
+  auto link = [&](int a, int b) {
+    const bool inA = parent_[a] >= 0, inB = parent_[b] >= 0;
     if (inA && inB) {
       // Union by index: the smaller root stays the root, whatever order the unions come in.
-      const int ra = Find(c.a), rb = Find(c.b);
+      const int ra = Find(a), rb = Find(b);
       if (ra != rb) parent_[std::max(ra, rb)] = std::min(ra, rb);
-    } else if (inA && movingKinematic(c.b)) {
-      bodies.sleepTime[c.a] = 0;
-    } else if (inB && movingKinematic(c.a)) {
-      bodies.sleepTime[c.b] = 0;
+    } else if (inA && movingKinematic(b)) {
+      bodies.sleepTime[a] = 0;
+    } else if (inB && movingKinematic(a)) {
+      bodies.sleepTime[b] = 0;
     }
-  }
+  };
+  for (const Contact& c : contacts) link(c.a, c.b);
+  for (const Joint& j : joints) link(j.a, j.b);
   // The island's time is its least rested body's.
   islandTime_.resize(n);
   for (int i = 0; i < n; ++i) {

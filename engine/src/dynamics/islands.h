@@ -17,7 +17,9 @@ class Islands {
   /// `contacts` and puts every island whose bodies have all been slow for def.timeToSleep to
   /// sleep. Serial and in contact order, so the result does not depend on the thread count.
   /// The bodies put to sleep are listed in Changed() (their AABBs need a refresh).
-  void Update(Bodies& bodies, std::span<const Contact> contacts, const WorldDef& def, Real dt);
+  /// Joined bodies (`joints`) are in one island as touching ones are.
+  void Update(Bodies& bodies, std::span<const Contact> contacts, std::span<const Joint> joints, const WorldDef& def,
+              Real dt);
 
   /// After the narrow phase: wakes the island of every sleeping body that has a contact with
   /// a simulated one. Returns the number of bodies woken; they are listed in Changed().

@@ -58,6 +58,23 @@ inline Softness MakeSoftness(Real hertz, Real zeta, Real h) {
   return {omega / a1, a2 * a3, a3};
 }
 
+// One joint's data for this step, in colour order.
+struct SoftJointRow {
+  int joint;            // index into joints_
+  int a, b;             // dense body indices
+  bool dynA, dynB;      // whether the row writes that body's state
+  JointType type;
+  Vec2 frameA, frameB;  // anchors relative to the centres of mass, in world axes at the step's start
+  Vec2 deltaCenter;     // centre of B minus centre of A at the step's start
+  Real deltaAngle;      // the joint angle at the step's start (relative angle minus reference)
+  Real mA, mB, iA, iB;
+  Real axialMass;       // 1 / (iA + iB), the angular rows' mass (0 if neither turns)
+  Softness spring, angularSpring;
+  // Accumulated impulses (per sub-step), loaded from the joint and stored back after the step.
+  Vec2 linearImpulse;
+  Real angularImpulse, springImpulse, motorImpulse, lowerImpulse, upperImpulse;
+};
+
 class SoftStepSolver final : public Solver {
  public:
   const char* Name() const override { return "soft_step"; }
@@ -110,6 +127,29 @@ class SoftStepSolver final : public Solver {
     if constexpr (kSupported) {
       if (a >= 0 && b < 0) std::atomic_ref<uint32_t>(supported_[a]).store(stamp_, std::memory_order_relaxed);
       if (b >= 0 && a < 0) std::atomic_ref<uint32_t>(supported_[b]).store(stamp_, std::memory_order_relaxed);
+    }
+  }
+
+  // The joints (soft_step_joints.cpp): coloured and prepared per step, solved in each sub-step
+  // before the contacts (warm start, solve with bias, relax), their impulses stored after it.
+  void PrepareJoints(const StepContext& ctx, Real h);
+  void WarmStartJoints(int begin, int end);
+  void SolveJoints(int begin, int end, bool useBias);
+  void StoreJoints();
+  // fn(begin, end) over the joint rows, a stage per joint colour, queued in the sub-step's region.
+  static constexpr int kJointGrain = 32;
+  template <class Fn>
+  void JointPass(Fn fn) {
+    if (jointRows_.empty()) return;
+    const int pass = static_cast<int>(regionFns_.size());
+    regionFns_.emplace_back(fn);
+    for (int c = 0; c <= ConstraintGraph::kColors; ++c) {
+      const int first = jointColorStart_[size_t(c)], count = jointColorStart_[size_t(c) + 1] - first;
+      if (count == 0) continue;
+      // The overflow colour's joints may share bodies: one chunk, in order.
+      regionPlan_.push_back({count, c == ConstraintGraph::kColors ? count : kJointGrain});
+      regionFirst_.push_back(first);
+      regionPass_.push_back(pass);
     }
   }
 
@@ -251,7 +291,14 @@ class SoftStepSolver final : public Solver {
   std::vector<Vec2> center0_;                     // LoadStates: where the rows' bodies start
   std::vector<Rot> rot0_;
   ConstraintGraph graph_;
-  ContactConstraints constraints_;  // kept only with restitution (Run: lean)
+  ContactConstraints constraints_;
+  std::span<Joint> joints_;                 // this step's
+  std::vector<SoftJointRow> jointRows_;         // in colour order
+  std::vector<int> jointColorStart_;        // per colour: its first row (and one past the last)
+  std::vector<uint64_t> jointBodyColors_;   // per body: the joint colours it holds (zero between steps)
+  std::vector<int> jointColorOf_;
+  Softness jointSoft_;                      // the rigid rows' softness this step
+  Real jointInvH_ = 0;  // kept only with restitution (Run: lean)
 };
 
 }  // namespace quadrant

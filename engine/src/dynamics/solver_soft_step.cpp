@@ -75,6 +75,9 @@ void SoftStepSolver::Run(StepContext& ctx) {
     graph_.Color(run, ctx, /*clearLater=*/true, [this](int a, int b) { MarkRow<false>(a, b); });
   }
   step.m = graph_.Count();
+  // The joints' colouring; it marks their dynamic bodies as in rows, for LoadStates.
+  PrepareJoints(ctx, step.h);
+  jointInvH_ = step.invH;
   if (def.effects.restitution) constraints_.Resize(step.m);  // only restitution reads the list
   contacts_ = ctx.contacts;
   gravityScaled_ = ctx.gravityScaled;
@@ -93,7 +96,7 @@ void SoftStepSolver::Run(StepContext& ctx) {
   auto rows = [&] { SolveContacts<kRotation, kFriction>(ctx, step, integrateMs); };
   constexpr int kRowCost = 16;
   const int count = bodies.Count();
-  if (int64_t(kRowCost) * step.m <= count) {
+  if (int64_t(kRowCost) * (step.m + int64_t(jointRows_.size())) <= count) {
     run.Beside(Stage::kSolve, rows, count, run.MinItems(), [&](int b, int e) { MoveFreeBodies(bodies, def, ctx.dt, b, e); });
   } else {
     rows();
@@ -161,6 +164,7 @@ void SoftStepSolver::SolveContacts(StepContext& ctx, const StepPlan& step, doubl
   }
   // Lean, the last relax pass stored the impulses (RelaxPasses; WorldDef validation keeps
   // softSubSteps and softRelaxIterations >= 1, so that pass always runs).
+  if (!jointRows_.empty()) StoreJoints();
   if (!step.lean) {
     StoreRowImpulses(run);
     run.For(Stage::kSolve, m, run.MinHeavyItems(), [&](int b, int e, int) { constraints_.StoreImpulses(ctx.contacts, b, e); });
@@ -178,16 +182,21 @@ void SoftStepSolver::SubStep(StepContext& ctx, const StepPlan& step, int sub, co
   const bool simd = step.simd;
   BeginRegion();
   IntegrateStateVelocities(run, *ctx.bodies, def, step.h, sub == 0 ? ctx.dt : Real(0));
+  // Joints before contacts in each pass, as Box2D 3: a joint's correction is then seen by the
+  // contacts it pushes into. Every joint's row reads and writes only its own bodies' states.
+  if (def.effects.warmStarting) JointPass([this](int b, int e) { WarmStartJoints(b, e); });
   if (def.effects.warmStarting) {
     ForEachGroup(run, simd, [&](auto lanes, SoftRowGroup& g, int lane) {
       WarmStartRows<decltype(lanes), kRotation>(states_.data(), g, lane);
     });
   }
+  JointPass([this](int b, int e) { SolveJoints(b, e, true); });
   ForEachGroup(run, simd, [&](auto lanes, SoftRowGroup& g, int lane) {
     SolveRows<decltype(lanes), kRotation, kFriction, true>(states_.data(), g, lane, prm);
   });
   // The rotation guard is per world step (ctx.dt): per sub-step it allowed n times the turn.
   IntegrateStatePositions(run, *ctx.bodies, def, step.h, ctx.dt);
+  JointPass([this](int b, int e) { SolveJoints(b, e, false); });
   const bool last = sub == step.n - 1;
   RelaxPasses<kRotation, kFriction>(run, def, simd, last ? lastPrm : prm, prm, step.lean && last);
   EndRegion(run);

@@ -18,6 +18,8 @@ void ValidateWorldDef(const WorldDef& d) {
   Require(d.softSubSteps <= kMaxIterations, "WorldDef.softSubSteps must be <= 1000");
   Require(IsFinite(d.contactHertz) && d.contactHertz > 0, "WorldDef.contactHertz must be > 0");
   Require(IsFinite(d.contactDampingRatio) && d.contactDampingRatio >= 0, "WorldDef.contactDampingRatio must be >= 0");
+  Require(IsFinite(d.jointHertz) && d.jointHertz > 0, "WorldDef.jointHertz must be > 0");
+  Require(IsFinite(d.jointDampingRatio) && d.jointDampingRatio >= 0, "WorldDef.jointDampingRatio must be >= 0");
   Require(IsFinite(d.contactPushMaxVelocity) && d.contactPushMaxVelocity > 0,
           "WorldDef.contactPushMaxVelocity must be > 0");
   Require(IsFinite(d.contactPushMaxDepth) && d.contactPushMaxDepth > 0, "WorldDef.contactPushMaxDepth must be > 0");

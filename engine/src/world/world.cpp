@@ -20,6 +20,7 @@
 #include "quadrant/world.h"
 #include "dynamics/solver.h"
 #include "parallel/stage_clock.h"
+#include "world/joint_set.h"
 #include "world/validation.h"
 #include "world/world_internal.h"
 
@@ -81,6 +82,7 @@ struct World::Impl {
   WorkerLists<Contact> workerContacts;  // the narrow phase's output, per worker
   ContactCache cache;
   Islands islands;  // only used when def.effects.sleep is on
+  JointSet joints;
   std::vector<CandidatePair> pairs;
   std::vector<Contact> contacts;
   ContactSorter sorter;
@@ -185,6 +187,26 @@ struct World::Impl {
     return def.effects.sleep ? Islands::AwakeInverseMass(bodies, i) : bodies.inv[i];
   }
   void AddForce(int i, const char* call, double fx, double fy, double torque);
+
+  // Joints: the world's checks (a solver that solves them, live and distinct bodies), then added.
+  JointId AddJoint(const Joint& j, const std::string& call) {
+    Require(def.solver == SolverType::kSoftStep,
+            call + ": joints need SolverType::kSoftStep (the pgs, thesis and jacobi solvers do not solve joints)");
+    Require(def.scheme == ParallelScheme::kDeterministic, call + ": joints need ParallelScheme::kDeterministic");
+    Require(IsLive(j.idA), call + ": bodyA is a stale or invalid BodyId");
+    Require(IsLive(j.idB), call + ": bodyB is a stale or invalid BodyId");
+    if (def.effects.sleep) {
+      islands.WakeIslandOf(bodies, denseOf[j.idA.index]);
+      islands.WakeIslandOf(bodies, denseOf[j.idB.index]);
+    }
+    return joints.Add(j);
+  }
+  bool IsLive(BodyId id) const {
+    return id.generation != 0 && id.index < generation.size() && generation[id.index] == id.generation &&
+           denseOf[id.index] >= 0;
+  }
+  // Joint j's two bodies' current dense indices (the joint's own are refreshed only per step).
+  std::pair<int, int> JointBodies(const Joint& j) const { return {denseOf[j.idA.index], denseOf[j.idB.index]}; }
 };
 
 namespace {
@@ -314,6 +336,14 @@ void World::DestroyBody(BodyId id) {
   Impl& w = *impl_;
   const int i = w.Dense(id);
   w.WakeAround(i);  // what rested on the body falls again
+  // Its joints go with it, from the last one down (RemoveAt moves the last joint into the gap).
+  const std::vector<int> onBody = w.joints.OnBody(id.index);
+  for (auto it = onBody.rbegin(); it != onBody.rend(); ++it) {
+    const Joint& j = w.joints.All()[size_t(*it)];
+    if (w.def.effects.sleep) w.islands.WakeIslandOf(w.bodies, w.denseOf[(j.idA.index == id.index ? j.idB : j.idA).index]);
+    w.joints.RemoveAt(*it);
+  }
+  w.joints.MarkStale();  // dense indices move below
   const int last = w.bodies.Count() - 1;
   Bodies& b = w.bodies;
   w.customFilters -= b.filter[i] == Filter{} ? 0 : 1;
@@ -396,6 +426,7 @@ void World::Impl::FindPairs(const BroadPhase::BoxUpdate* update) {
                   pairs.end());
     });
   }
+  if (joints.Filters()) run->Serial(Stage::kBroadPhase, [&] { joints.FilterPairs(pairs); });
   if (sensorCount > 0) SplitSensorPairs();
 }
 
@@ -587,6 +618,7 @@ void World::Impl::PrepareQueries() {
 
 void World::Impl::RunPipeline(Real dt) {
   const int n = bodies.Count();
+  if (joints.Count() > 0) joints.Prepare(denseOf, n);
   auto t0 = Clock::now();
   const bool sleepOn = def.effects.sleep;
   // The boxes of [begin, end): sleeping bodies keep the box they fell asleep with (awake is 0
@@ -654,6 +686,7 @@ void World::Impl::RunPipeline(Real dt) {
   ctx.def = &def;
   ctx.bodies = &bodies;
   ctx.contacts = contacts;
+  ctx.joints = joints.All();
   ctx.profile = &profile;
   ctx.run = run.get();
   ctx.gravityScaled = solverScalesGravity;
@@ -662,7 +695,7 @@ void World::Impl::RunPipeline(Real dt) {
     // Timed as part of the solve: Box2D 2.4 also builds its islands in the solve.
     const auto ts = Clock::now();
     run->Serial(Stage::kSolve, [&] {
-      islands.Update(bodies, contacts, def, dt);
+      islands.Update(bodies, contacts, joints.All(), def, dt);
       // A sleeping body keeps its box until it wakes: the tight one at rest, not this step's sweep.
       for (int i : islands.Changed()) UpdateAABB(i, 0);
     });
@@ -1277,6 +1310,91 @@ std::vector<int> World::GetOwners() const {
   std::vector<int> owners = impl_->quadrants->Owners();
   owners.resize(impl_->bodies.Count(), 0);  // bodies created since the last step: not yet assigned
   return owners;
+}
+
+JointId World::CreateRevoluteJoint(const RevoluteJointDef& def) {
+  return impl_->AddJoint(MakeJoint(def), "CreateRevoluteJoint");
+}
+JointId World::CreateDistanceJoint(const DistanceJointDef& def) {
+  return impl_->AddJoint(MakeJoint(def), "CreateDistanceJoint");
+}
+JointId World::CreateWeldJoint(const WeldJointDef& def) { return impl_->AddJoint(MakeJoint(def), "CreateWeldJoint"); }
+
+void World::DestroyJoint(JointId id) {
+  Impl& w = *impl_;
+  const int j = w.joints.Dense(id);
+  if (w.def.effects.sleep) {
+    const auto [a, b] = w.JointBodies(w.joints.All()[size_t(j)]);
+    w.islands.WakeIslandOf(w.bodies, a);
+    w.islands.WakeIslandOf(w.bodies, b);
+  }
+  w.joints.RemoveAt(j);
+}
+
+bool World::IsValid(JointId id) const { return impl_->joints.IsValid(id); }
+int World::GetJointCount() const { return impl_->joints.Count(); }
+JointType World::GetJointType(JointId id) const { return impl_->joints.All()[size_t(impl_->joints.Dense(id))].type; }
+BodyId World::GetJointBodyA(JointId id) const { return impl_->joints.All()[size_t(impl_->joints.Dense(id))].idA; }
+BodyId World::GetJointBodyB(JointId id) const { return impl_->joints.All()[size_t(impl_->joints.Dense(id))].idB; }
+
+Real World::GetJointAngle(JointId id) const {
+  const Impl& w = *impl_;
+  const Joint& j = w.joints.All()[size_t(w.joints.Dense(id))];
+  Require(j.type != JointType::kDistance, "GetJointAngle: a distance joint has no angle (GetJointLength)");
+  const auto [a, b] = w.JointBodies(j);
+  const Rot qa = w.bodies.xf[a].q, qb = w.bodies.xf[b].q;
+  Real angle = std::atan2(qa.c * qb.s - qa.s * qb.c, qa.c * qb.c + qa.s * qb.s) - j.referenceAngle;
+  const Real pi = Real(3.14159265358979323846);
+  if (angle > pi) angle -= 2 * pi;
+  if (angle < -pi) angle += 2 * pi;
+  return angle;
+}
+
+Real World::GetJointLength(JointId id) const {
+  const Impl& w = *impl_;
+  const Joint& j = w.joints.All()[size_t(w.joints.Dense(id))];
+  Require(j.type == JointType::kDistance, "GetJointLength: only a distance joint has a length");
+  const auto [a, b] = w.JointBodies(j);
+  return Length(TransformPoint(w.bodies.xf[b], j.localAnchorB) - TransformPoint(w.bodies.xf[a], j.localAnchorA));
+}
+
+void World::SetMotorSpeed(JointId id, Real speed) {
+  Impl& w = *impl_;
+  const int d = w.joints.Dense(id);
+  Joint& j = w.joints.All()[size_t(d)];
+  Require(j.type == JointType::kRevolute, "SetMotorSpeed: only a revolute joint has a motor");
+  Require(IsFinite(speed), "SetMotorSpeed: speed must be finite");
+  j.motorSpeed = speed;
+  if (w.def.effects.sleep) {
+    const auto [a, b] = w.JointBodies(j);
+    w.islands.WakeIslandOf(w.bodies, a);
+    w.islands.WakeIslandOf(w.bodies, b);
+  }
+}
+
+Vec2 World::GetJointLinearImpulse(JointId id) const {
+  const Joint& j = impl_->joints.All()[size_t(impl_->joints.Dense(id))];
+  return j.linearImpulse;
+}
+
+Real World::GetJointAngularImpulse(JointId id) const {
+  const Joint& j = impl_->joints.All()[size_t(impl_->joints.Dense(id))];
+  switch (j.type) {
+    case JointType::kRevolute: return j.springImpulse + j.motorImpulse + j.lowerImpulse - j.upperImpulse;
+    case JointType::kDistance: return j.angularImpulse + j.springImpulse + j.lowerImpulse - j.upperImpulse;
+    case JointType::kWeld: break;
+  }
+  return j.angularImpulse;
+}
+
+Vec2 World::GetLocalPoint(BodyId id, Vec2 worldPoint) const {
+  Require(IsFinite(worldPoint), "GetLocalPoint: worldPoint must be finite");
+  return InvTransformPoint(impl_->bodies.xf[impl_->Dense(id)], worldPoint);
+}
+
+Vec2 World::GetWorldPoint(BodyId id, Vec2 localPoint) const {
+  Require(IsFinite(localPoint), "GetWorldPoint: localPoint must be finite");
+  return TransformPoint(impl_->bodies.xf[impl_->Dense(id)], localPoint);
 }
 
 AABB World::GetPartitionRegion() const { return impl_->quadrants ? impl_->quadrants->Region() : AABB{}; }

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "collision/narrow_phase.h"
+#include "dynamics/joint.h"
 #include "quadrant/types.h"
 #include "parallel/stage_runner.h"
 
@@ -171,6 +172,9 @@ struct StepContext {
   const WorldDef* def = nullptr;
   Bodies* bodies = nullptr;
   std::span<Contact> contacts;
+  /// The world's joints (soft_step solves them; the world refuses joints with the other solvers),
+  /// their dense body indices current.
+  std::span<Joint> joints;
   Profile* profile = nullptr;
   StageRunner* run = nullptr;
   /// Some body's gravity scale is not 1 (Bodies::gravityScale) and the solver applies the scales

@@ -1,0 +1,329 @@
+// The soft step's joints (soft_step.h; the definitions in quadrant/joints.h). Per step the joints
+// are coloured so that no two of one colour share a dynamic body (greedy, in joint order: the
+// same colouring for any thread count) and prepared once: each anchor relative to its body's
+// centre of mass, turned to world axes at the step's start, and the centres' offset. In each
+// sub-step the joints are warm-started and solved before the contacts and relaxed before them,
+// on the bodies' solver states: an anchor is its start offset turned by the body's rotation since
+// the step began (dq), and a separation is the start offset plus the bodies' motion since then
+// (dp), so no transform is rebuilt inside the sub-steps (Box2D 3's formulation; Catto, "Solver2D").
+//
+// Rigid rows are soft springs of WorldDef::jointHertz and jointDampingRatio while the bias acts
+// (the solve) and plain velocity rows in the relax pass; a limit that is still open is
+// speculative (it lets the gap close within the sub-step, no further). Accumulated impulses are
+// per sub-step and re-applied by each sub-step's warm start, as the contacts' are.
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <numbers>
+
+#include "dynamics/soft_step.h"
+
+namespace quadrant {
+namespace {
+
+constexpr Real kPi = std::numbers::pi_v<Real>;
+constexpr int kLimitRounds = 4;
+
+Real Wrap(Real angle) {
+  if (angle > kPi) angle -= 2 * kPi;
+  if (angle < -kPi) angle += 2 * kPi;
+  return angle;
+}
+
+// The angle of rotation r (its sine and cosine) relative to q: the angle of q^T r.
+Real RelativeAngle(Rot q, Rot r) { return std::atan2(q.c * r.s - q.s * r.c, q.c * r.c + q.s * r.s); }
+
+Vec2 Solve22(Real k11, Real k12, Real k22, Vec2 b) {
+  Real det = k11 * k22 - k12 * k12;
+  if (det != 0) det = Real(1) / det;
+  return {det * (k22 * b.x - k12 * b.y), det * (k11 * b.y - k12 * b.x)};
+}
+
+}  // namespace
+
+// Colours and prepares the joints, and marks their dynamic bodies as in rows (LoadStates then
+// gives them states). Serial: a joint's colour depends on every earlier one that shares a body;
+// a few nanoseconds a joint.
+void SoftStepSolver::PrepareJoints(const StepContext& ctx, Real h) {
+  joints_ = ctx.joints;
+  jointRows_.clear();
+  if (joints_.empty()) return;  // a world without joints pays these three lines a step
+  jointColorStart_.assign(ConstraintGraph::kColors + 2, 0);
+  const Bodies& bodies = *ctx.bodies;
+  const WorldDef& def = *ctx.def;
+  const bool rotation = def.effects.rotation;
+  const int n = static_cast<int>(joints_.size());
+  jointBodyColors_.resize(size_t(bodies.Count()), 0);
+  std::vector<int>& colorOf = jointColorOf_;
+  colorOf.assign(size_t(n), ConstraintGraph::kColors);
+  for (int k = 0; k < n; ++k) {
+    const Joint& j = joints_[size_t(k)];
+    const bool dynA = bodies.inv[j.a].invMass > 0, dynB = bodies.inv[j.b].invMass > 0;
+    if (!dynA && !dynB) {
+      colorOf[size_t(k)] = -1;  // nothing to move: no row
+      continue;
+    }
+    const uint64_t used = (dynA ? jointBodyColors_[j.a] : 0) | (dynB ? jointBodyColors_[j.b] : 0);
+    const int color = used == ~uint64_t(0) ? ConstraintGraph::kColors : std::countr_one(used);
+    colorOf[size_t(k)] = color;
+    if (color < ConstraintGraph::kColors) {
+      if (dynA) jointBodyColors_[j.a] |= uint64_t(1) << color;
+      if (dynB) jointBodyColors_[j.b] |= uint64_t(1) << color;
+    }
+    ++jointColorStart_[size_t(color) + 1];
+    if (dynA) inRows_[j.a] = 1;
+    if (dynB) inRows_[j.b] = 1;
+  }
+  for (int c = 0; c <= ConstraintGraph::kColors; ++c) jointColorStart_[size_t(c) + 1] += jointColorStart_[size_t(c)];
+  jointRows_.resize(size_t(jointColorStart_[ConstraintGraph::kColors + 1]));
+  std::vector<int> fill(jointColorStart_.begin(), jointColorStart_.end() - 1);
+  const Real hertz = std::min(def.jointHertz, Real(0.25) / h);
+  const Softness rigid = MakeSoftness(hertz, def.jointDampingRatio, h);
+  jointSoft_ = rigid;
+  for (int k = 0; k < n; ++k) {
+    const Joint& j = joints_[size_t(k)];
+    if (colorOf[size_t(k)] < 0) continue;
+    // The masks back to zero for the next step, as the rows are made.
+    jointBodyColors_[j.a] = 0;
+    jointBodyColors_[j.b] = 0;
+    SoftJointRow& r = jointRows_[size_t(fill[size_t(colorOf[size_t(k)])]++)];
+    r.joint = k;
+    r.a = j.a;
+    r.b = j.b;
+    r.type = j.type;
+    const BodyInverseMass ia = bodies.inv[j.a], ib = bodies.inv[j.b];
+    r.dynA = ia.invMass > 0;
+    r.dynB = ib.invMass > 0;
+    r.mA = ia.invMass;
+    r.mB = ib.invMass;
+    r.iA = rotation ? ia.invInertia : 0;
+    r.iB = rotation ? ib.invInertia : 0;
+    const Rot qA = bodies.xf[j.a].q, qB = bodies.xf[j.b].q;
+    r.frameA = Rotate(qA, j.localAnchorA - bodies.localCenter[j.a]);
+    r.frameB = Rotate(qB, j.localAnchorB - bodies.localCenter[j.b]);
+    r.deltaCenter = bodies.center[j.b] - bodies.center[j.a];
+    r.deltaAngle = Wrap(RelativeAngle(qA, qB) - j.referenceAngle);
+    const Real turning = r.iA + r.iB;
+    r.axialMass = turning > 0 ? Real(1) / turning : Real(0);
+    r.spring = j.enableSpring || j.type == JointType::kWeld ? MakeSoftness(j.hertz, j.dampingRatio, h) : Softness{};
+    r.angularSpring = j.type == JointType::kWeld ? MakeSoftness(j.angularHertz, j.angularDampingRatio, h) : Softness{};
+    const bool warm = def.effects.warmStarting;
+    r.linearImpulse = warm ? j.linearImpulse : Vec2{};
+    r.angularImpulse = warm ? j.angularImpulse : 0;
+    r.springImpulse = warm ? j.springImpulse : 0;
+    r.motorImpulse = warm ? j.motorImpulse : 0;
+    r.lowerImpulse = warm ? j.lowerImpulse : 0;
+    r.upperImpulse = warm ? j.upperImpulse : 0;
+  }
+}
+
+// The joints' impulses back into them, for the next step's warm start and the read-back.
+void SoftStepSolver::StoreJoints() {
+  for (const SoftJointRow& r : jointRows_) {
+    Joint& j = joints_[size_t(r.joint)];
+    j.linearImpulse = r.linearImpulse;
+    j.angularImpulse = r.angularImpulse;
+    j.springImpulse = r.springImpulse;
+    j.motorImpulse = r.motorImpulse;
+    j.lowerImpulse = r.lowerImpulse;
+    j.upperImpulse = r.upperImpulse;
+  }
+}
+
+namespace {
+
+struct Ends {
+  Vec2 vA, vB;
+  Real wA, wB;
+};
+
+// A row along `axis` (unit) or an angular row: applies impulse P at the anchors.
+inline void ApplyLinear(Ends& e, Vec2 rA, Vec2 rB, Vec2 P, Real mA, Real mB, Real iA, Real iB) {
+  e.vA = e.vA - mA * P;
+  e.wA -= iA * Cross(rA, P);
+  e.vB = e.vB + mB * P;
+  e.wB += iB * Cross(rB, P);
+}
+
+// A one-sided angular or axial limit row: C >= 0 holds. Speculative while open (the gap may close
+// within the sub-step), a soft spring while violated and the bias acts, plain in the relax pass.
+inline Real LimitImpulse(Real C, Real Cdot, Real mass, Real& accumulated, bool useBias, const Softness& rigid,
+                         Real invH) {
+  Real bias = 0, massScale = 1, impulseScale = 0;
+  if (C > 0) {
+    bias = C * invH;
+  } else if (useBias) {
+    bias = rigid.biasRate * C;
+    massScale = rigid.massScale;
+    impulseScale = rigid.impulseScale;
+  }
+  Real impulse = -mass * massScale * (Cdot + bias) - impulseScale * accumulated;
+  const Real next = std::max(accumulated + impulse, Real(0));
+  impulse = next - accumulated;
+  accumulated = next;
+  return impulse;
+}
+
+}  // namespace
+
+void SoftStepSolver::WarmStartJoints(int begin, int end) {
+  SolverBody* s = states_.data();
+  for (int k = begin; k < end; ++k) {
+    const SoftJointRow& r = jointRows_[size_t(k)];
+    SolverBody& A = s[r.a];
+    SolverBody& B = s[r.b];
+    const Vec2 rA = Rotate(A.dq, r.frameA), rB = Rotate(B.dq, r.frameB);
+    Vec2 P = r.linearImpulse;
+    Real axial = 0;
+    switch (r.type) {
+      case JointType::kRevolute: axial = r.springImpulse + r.motorImpulse + r.lowerImpulse - r.upperImpulse; break;
+      case JointType::kWeld: axial = r.angularImpulse; break;
+      case JointType::kDistance: {
+        const Vec2 d = (B.dp - A.dp) + r.deltaCenter + (rB - rA);
+        P = (r.angularImpulse + r.springImpulse + r.lowerImpulse - r.upperImpulse) * Normalize(d);
+        break;
+      }
+    }
+    if (r.dynA) {
+      A.v = A.v - r.mA * P;
+      A.w -= r.iA * (Cross(rA, P) + axial);
+    }
+    if (r.dynB) {
+      B.v = B.v + r.mB * P;
+      B.w += r.iB * (Cross(rB, P) + axial);
+    }
+  }
+}
+
+void SoftStepSolver::SolveJoints(int begin, int end, bool useBias) {
+  SolverBody* s = states_.data();
+  const Real invH = jointInvH_;
+  const Softness rigid = jointSoft_;
+  for (int k = begin; k < end; ++k) {
+    SoftJointRow& r = jointRows_[size_t(k)];
+    const Joint& j = joints_[size_t(r.joint)];
+    SolverBody& A = s[r.a];
+    SolverBody& B = s[r.b];
+    Ends e{A.v, B.v, A.w, B.w};
+    const Real mA = r.mA, mB = r.mB, iA = r.iA, iB = r.iB;
+    const Vec2 rA = Rotate(A.dq, r.frameA), rB = Rotate(B.dq, r.frameB);
+    const Vec2 dcA = A.dp, dcB = B.dp;
+    auto angle = [&] { return Wrap(r.deltaAngle + RelativeAngle(A.dq, B.dq)); };
+    // The point rows (revolute and weld): the anchors' relative velocity to zero, the separation
+    // pushed out softly while the bias acts (or always, for a weld's linear spring).
+    auto point = [&](const Softness& soft, bool bias) {
+      const Vec2 cdot = (e.vB + Cross(e.wB, rB)) - (e.vA + Cross(e.wA, rA));
+      Vec2 b{};
+      Real massScale = 1, impulseScale = 0;
+      if (bias) {
+        const Vec2 sep = (dcB - dcA) + (rB - rA) + r.deltaCenter;
+        b = soft.biasRate * sep;
+        massScale = soft.massScale;
+        impulseScale = soft.impulseScale;
+      }
+      const Real k11 = mA + mB + rA.y * rA.y * iA + rB.y * rB.y * iB;
+      const Real k12 = -rA.y * rA.x * iA - rB.y * rB.x * iB;
+      const Real k22 = mA + mB + rA.x * rA.x * iA + rB.x * rB.x * iB;
+      const Vec2 x = Solve22(k11, k12, k22, cdot + b);
+      const Vec2 P = -massScale * x - impulseScale * r.linearImpulse;
+      r.linearImpulse = r.linearImpulse + P;
+      ApplyLinear(e, rA, rB, P, mA, mB, iA, iB);
+    };
+    auto turn = [&](Real impulse) {
+      e.wA -= iA * impulse;
+      e.wB += iB * impulse;
+    };
+    switch (r.type) {
+      case JointType::kRevolute: {
+        point(rigid, useBias);
+        if (j.enableSpring && j.hertz > 0 && r.axialMass > 0) {
+          const Real C = angle();
+          const Real impulse = -r.spring.massScale * r.axialMass * (e.wB - e.wA + r.spring.biasRate * C) -
+                               r.spring.impulseScale * r.springImpulse;
+          r.springImpulse += impulse;
+          turn(impulse);
+        }
+        if (j.enableMotor && r.axialMass > 0) {
+          const Real most = j.maxMotorTorque / invH;
+          const Real old = r.motorImpulse;
+          r.motorImpulse = std::clamp(old - r.axialMass * (e.wB - e.wA - j.motorSpeed), -most, most);
+          turn(r.motorImpulse - old);
+        }
+        // With a limit the point and the limit rows are coupled (stopping the turn moves the
+        // anchor), so they take a few Gauss-Seidel rounds together: a bar pinned at its end and
+        // stopped by its limit kept 12 % of its speed as a bounce after one round, 1.3 % after four.
+        if (j.enableLimit && r.axialMass > 0) {
+          const Real a = angle();
+          for (int round = 0; round < kLimitRounds; ++round) {
+            if (round > 0) point(rigid, false);
+            turn(LimitImpulse(a - j.lower, e.wB - e.wA, r.axialMass, r.lowerImpulse, useBias, rigid, invH));
+            turn(-LimitImpulse(j.upper - a, e.wA - e.wB, r.axialMass, r.upperImpulse, useBias, rigid, invH));
+          }
+        }
+        break;
+      }
+      case JointType::kWeld: {
+        if (r.axialMass > 0) {
+          const bool spring = j.angularHertz > 0;
+          const Softness& soft = spring ? r.angularSpring : rigid;
+          Real bias = 0, massScale = 1, impulseScale = 0;
+          if (spring || useBias) {
+            bias = soft.biasRate * angle();
+            massScale = soft.massScale;
+            impulseScale = soft.impulseScale;
+          }
+          const Real impulse = -r.axialMass * massScale * (e.wB - e.wA + bias) - impulseScale * r.angularImpulse;
+          r.angularImpulse += impulse;
+          turn(impulse);
+        }
+        const bool spring = j.hertz > 0;
+        point(spring ? r.spring : rigid, spring || useBias);
+        break;
+      }
+      case JointType::kDistance: {
+        const Vec2 d = (dcB - dcA) + r.deltaCenter + (rB - rA);
+        const Real length = Length(d);
+        const Vec2 axis = length > 0 ? (Real(1) / length) * d : Vec2{1, 0};
+        const Real crA = Cross(rA, axis), crB = Cross(rB, axis);
+        const Real kAxial = mA + mB + iA * crA * crA + iB * crB * crB;
+        const Real mass = kAxial > 0 ? Real(1) / kAxial : Real(0);
+        auto cdot = [&] { return Dot(axis, (e.vB + Cross(e.wB, rB)) - (e.vA + Cross(e.wA, rA))); };
+        auto push = [&](Real impulse) { ApplyLinear(e, rA, rB, impulse * axis, mA, mB, iA, iB); };
+        if (j.enableSpring) {
+          if (j.hertz > 0) {
+            const Real C = length - j.length;
+            const Real impulse = -r.spring.massScale * mass * (cdot() + r.spring.biasRate * C) -
+                                 r.spring.impulseScale * r.springImpulse;
+            r.springImpulse += impulse;
+            push(impulse);
+          }
+          if (j.enableLimit) {
+            push(LimitImpulse(length - j.lower, cdot(), mass, r.lowerImpulse, useBias, rigid, invH));
+            push(-LimitImpulse(j.upper - length, -cdot(), mass, r.upperImpulse, useBias, rigid, invH));
+          }
+        } else {
+          Real bias = 0, massScale = 1, impulseScale = 0;
+          if (useBias) {
+            bias = rigid.biasRate * (length - j.length);
+            massScale = rigid.massScale;
+            impulseScale = rigid.impulseScale;
+          }
+          const Real impulse = -massScale * mass * (cdot() + bias) - impulseScale * r.angularImpulse;
+          r.angularImpulse += impulse;
+          push(impulse);
+        }
+        break;
+      }
+    }
+    if (r.dynA) {
+      A.v = e.vA;
+      A.w = e.wA;
+    }
+    if (r.dynB) {
+      B.v = e.vB;
+      B.w = e.wB;
+    }
+  }
+}
+
+}  // namespace quadrant
