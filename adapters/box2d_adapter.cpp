@@ -71,6 +71,14 @@ class Box2dAdapter final : public Adapter {
     // Refuse before touching the current world, so a refused Load leaves it usable.
     for (int i = 0; i < static_cast<int>(scene.bodies.size()); ++i) {
       if (scene.bodies[i].shape == ShapeKind::kPolygon) RequireWeldSafePolygon(scene.bodies[i], i);
+      // With every category in 16 bits, a mask's upper bits never match one: Box2D's 16-bit
+      // masks give the same pairs.
+      if (scene.bodies[i].categoryBits > 0xFFFFu) {
+        throw Unsupported("Box2D 2.4.1's collision categories hold 16 bits; scene body " + std::to_string(i) + " uses more");
+      }
+    }
+    for (const JointDesc& d : scene.joints) {
+      if (d.enableSpring) throw Unsupported("Box2D 2.4.1's revolute joint has no spring");
     }
 
     bodies_.clear();
@@ -132,6 +140,8 @@ class Box2dAdapter final : public Adapter {
       fixture.friction = fx.friction ? static_cast<float>(desc.friction) : 0.0f;
       fixture.restitution = fx.restitution ? static_cast<float>(desc.restitution) : 0.0f;
       fixture.restitutionThreshold = static_cast<float>(scene.restitutionThreshold);
+      fixture.filter.categoryBits = static_cast<uint16>(desc.categoryBits);
+      fixture.filter.maskBits = static_cast<uint16>(desc.maskBits & 0xFFFFu);
       body->CreateFixture(&fixture);
       if (desc.shape == ShapeKind::kCapsule) {
         for (b2CircleShape& end : capsuleEnds) {
@@ -156,6 +166,20 @@ class Box2dAdapter final : public Adapter {
         body->SetAngularVelocity(fx.rotation ? static_cast<float>(desc.angularVelocity) : 0.0f);
       }
       bodies_.push_back(body);
+    }
+    // Revolute joints: b2RevoluteJointDef::Initialize takes the world anchor and the bodies'
+    // angles at load as the reference, as the scene does.
+    for (const JointDesc& d : scene.joints) {
+      b2RevoluteJointDef jd;
+      jd.Initialize(bodies_[size_t(d.bodyA)], bodies_[size_t(d.bodyB)], ToB2(d.anchor));
+      jd.collideConnected = d.collideConnected;
+      jd.enableLimit = d.enableLimit;
+      jd.lowerAngle = static_cast<float>(d.lowerAngle);
+      jd.upperAngle = static_cast<float>(d.upperAngle);
+      jd.enableMotor = d.enableMotor;
+      jd.motorSpeed = static_cast<float>(d.motorSpeed);
+      jd.maxMotorTorque = static_cast<float>(d.maxMotorTorque);
+      world_->CreateJoint(&jd);
     }
   }
 

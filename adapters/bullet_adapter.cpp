@@ -105,6 +105,7 @@ struct BulletWorld {
   std::unique_ptr<btDbvtBroadphase> broadphase;
   std::unique_ptr<btSequentialImpulseConstraintSolver> solver;
   std::vector<std::unique_ptr<btCollisionShape>> shapes;
+  bool filtered = false;  // some body has a non-default collision filter (AddBody)
   std::vector<std::unique_ptr<btRigidBody>> bodies;
   std::unique_ptr<btDiscreteDynamicsWorld> world;
 
@@ -162,8 +163,14 @@ class BulletAdapter final : public Adapter {
         throw Unsupported("bullet: a capsule must lie along its body's x axis, centred on the origin (btCapsuleShapeX)");
       }
     }
+    if (!scene.joints.empty()) {
+      throw Unsupported("bullet: the adapter does not load joints (Bullet's constraints are not mapped to the plane yet)");
+    }
     // Built aside and swapped in at the end, so a throwing Load keeps the previous world.
     auto next = std::make_unique<BulletWorld>();
+    next->filtered = std::any_of(scene.bodies.begin(), scene.bodies.end(), [](const BodyDesc& b) {
+      return b.categoryBits != 1 || b.maskBits != 0xFFFFFFFFu;
+    });
     BuildWorld(scene, *next);
     for (size_t i = 0; i < scene.bodies.size(); ++i) AddBody(scene, scene.bodies[i], *next);
     world_ = std::move(next);
@@ -366,7 +373,13 @@ class BulletAdapter final : public Adapter {
     }
     if (!fx.sleep) body->setActivationState(DISABLE_DEACTIVATION);
     if (!desc.awake) body->setActivationState(ISLAND_SLEEPING);  // woken by a collision with an awake body
-    w.world->addRigidBody(body.get());
+    if (w.filtered) {
+      // Bullet's broad-phase rule is Box2D's (each group in the other's mask); with any filter in
+      // the scene every body takes its own bits, so default bodies keep colliding with filtered ones.
+      w.world->addRigidBody(body.get(), int(desc.categoryBits), int(desc.maskBits));
+    } else {
+      w.world->addRigidBody(body.get());
+    }
     w.bodies.push_back(std::move(body));
     w.localCenters.push_back(lc);
     w.dynamic.push_back(desc.dynamic);

@@ -200,8 +200,41 @@ class ChipmunkAdapter final : public Adapter {
       shapes_.push_back(shape);
       cpShapeSetFriction(shape, fx.friction ? cpFloat(desc.friction) : 0.0);
       cpShapeSetElasticity(shape, fx.restitution ? cpFloat(desc.restitution) : 0.0);
+      // Chipmunk's filter rule is Box2D's (each category in the other's mask), without a group.
+      cpShapeSetFilter(shape, cpShapeFilterNew(CP_NO_GROUP, cpBitmask(desc.categoryBits), cpBitmask(desc.maskBits)));
       cpSpaceAddShape(space_, shape);
       if (!desc.awake) cpBodySleep(body);  // after its shape: a sleeping body keeps its shapes' bounds
+    }
+    // Revolute joints: a pivot, and for the limit, motor and spring Chipmunk's rotary limit
+    // (on the absolute angle difference, so offset by the one at load), simple motor (its rate
+    // drives wA - wB: the scene's speed negated) and damped rotary spring (stiffness and damping
+    // from hertz and damping ratio on the pair's reduced inertia).
+    for (const JointDesc& d : scene.joints) {
+      // A joint of two bodies that never move does nothing in any engine; Chipmunk aborts on its
+      // infinite mass ("Unsolvable constraint"), so it is not made.
+      if (!scene.bodies[size_t(d.bodyA)].dynamic && !scene.bodies[size_t(d.bodyB)].dynamic) continue;
+      cpBody* a = bodies_[size_t(d.bodyA)];
+      cpBody* b = bodies_[size_t(d.bodyB)];
+      auto add = [&](cpConstraint* c) {
+        constraints_.push_back(c);
+        cpConstraintSetCollideBodies(c, d.collideConnected ? cpTrue : cpFalse);
+        cpSpaceAddConstraint(space_, c);
+        return c;
+      };
+      add(cpPivotJointNew(a, b, ToCp(d.anchor)));
+      const cpFloat reference = cpFloat(scene.bodies[size_t(d.bodyB)].angle - scene.bodies[size_t(d.bodyA)].angle);
+      if (d.enableLimit) add(cpRotaryLimitJointNew(a, b, reference + d.lowerAngle, reference + d.upperAngle));
+      if (d.enableMotor) cpConstraintSetMaxForce(add(cpSimpleMotorNew(a, b, -cpFloat(d.motorSpeed))), cpFloat(d.maxMotorTorque));
+      if (d.enableSpring && d.hertz > 0) {
+        auto inertia = [&](int i) {
+          const BodyDesc& bd = scene.bodies[size_t(i)];
+          return bd.dynamic ? cpFloat(ComputeMassProperties(bd).inertia) : INFINITY;
+        };
+        const cpFloat ia = inertia(d.bodyA), ib = inertia(d.bodyB);
+        const cpFloat reduced = std::isinf(ia) ? ib : std::isinf(ib) ? ia : ia * ib / (ia + ib);
+        const cpFloat omega = 2 * 3.14159265358979323846 * cpFloat(d.hertz);
+        add(cpDampedRotarySpringNew(a, b, reference, reduced * omega * omega, 2 * cpFloat(d.dampingRatio) * reduced * omega));
+      }
     }
   }
 
@@ -274,6 +307,8 @@ class ChipmunkAdapter final : public Adapter {
       }
       space_ = nullptr;
     }
+    for (cpConstraint* c : constraints_) cpConstraintFree(c);
+    constraints_.clear();
     for (cpShape* s : shapes_) cpShapeFree(s);
     for (cpBody* b : bodies_) cpBodyFree(b);
     shapes_.clear();
@@ -284,6 +319,7 @@ class ChipmunkAdapter final : public Adapter {
   bool hasty_ = false;
   std::vector<cpBody*> bodies_;  // scene body index -> Chipmunk body (owned)
   std::vector<cpShape*> shapes_;  // owned
+  std::vector<cpConstraint*> constraints_;  // owned
   cpFloat timeStep_ = 1.0 / 60.0;
   bool rotation_ = true;
 };

@@ -37,13 +37,43 @@ class QuadrantAdapter final : public Adapter {
     if (scene.effects.sleep && v_.scheme == ParallelScheme::kQuadrants) {
       throw Unsupported("quadrant's quadrants scheme has no sleeping (the deterministic scheme has)");
     }
-    auto world = std::make_unique<World>(v_.MakeWorldDef(scene, threads));
+    const WorldDef def = v_.MakeWorldDef(scene, threads);
+    if (!scene.joints.empty() && (def.solver != SolverType::kSoftStep || def.scheme != ParallelScheme::kDeterministic)) {
+      throw Unsupported("joints are solved by quadrant's soft_step solver with the deterministic scheme only");
+    }
+    if (def.scheme == ParallelScheme::kQuadrants) {
+      for (const BodyDesc& b : scene.bodies) {
+        if (b.categoryBits != 1 || b.maskBits != 0xFFFFFFFFu) {
+          throw Unsupported("quadrant's quadrants scheme has no collision filters (the deterministic scheme has)");
+        }
+      }
+    }
+    auto world = std::make_unique<World>(def);
     std::vector<BodyId> ids;
     ids.reserve(scene.bodies.size());
     for (size_t i = 0; i < scene.bodies.size(); ++i) {
       BodyDef bd = ToBodyDef(scene.bodies[i]);
       bd.userData = i;  // the scene index, for Contacts()
       ids.push_back(world->CreateBody(bd));
+    }
+    for (const JointDesc& d : scene.joints) {
+      RevoluteJointDef j;
+      j.bodyA = ids[size_t(d.bodyA)];
+      j.bodyB = ids[size_t(d.bodyB)];
+      j.localAnchorA = world->GetLocalPoint(j.bodyA, d.anchor);
+      j.localAnchorB = world->GetLocalPoint(j.bodyB, d.anchor);
+      j.referenceAngle = scene.bodies[size_t(d.bodyB)].angle - scene.bodies[size_t(d.bodyA)].angle;
+      j.collideConnected = d.collideConnected;
+      j.enableLimit = d.enableLimit;
+      j.lowerAngle = d.lowerAngle;
+      j.upperAngle = d.upperAngle;
+      j.enableMotor = d.enableMotor;
+      j.motorSpeed = d.motorSpeed;
+      j.maxMotorTorque = d.maxMotorTorque;
+      j.enableSpring = d.enableSpring;
+      j.hertz = d.hertz;
+      j.dampingRatio = d.dampingRatio;
+      world->CreateRevoluteJoint(j);
     }
     world_ = std::move(world);
     ids_ = std::move(ids);

@@ -101,6 +101,8 @@ BodyDef ToBodyDef(const BodyDesc& b) {
   bd.shape.density = b.density;
   bd.shape.friction = b.friction;
   bd.shape.restitution = b.restitution;
+  bd.filter.categoryBits = b.categoryBits;
+  bd.filter.maskBits = b.maskBits;
   return bd;
 }
 
@@ -144,6 +146,22 @@ void ValidateScene(const Scene& scene) {
       Fail(i, e.what());
     }
     if (b.shape == ShapeKind::kPolygon) ValidatePolygonOrder(b, i);
+  }
+  const int n = static_cast<int>(scene.bodies.size());
+  for (int j = 0; j < static_cast<int>(scene.joints.size()); ++j) {
+    const JointDesc& d = scene.joints[size_t(j)];
+    auto fail = [j](const std::string& what) { throw Error("scene joint " + std::to_string(j) + ": " + what); };
+    if (d.bodyA < 0 || d.bodyA >= n || d.bodyB < 0 || d.bodyB >= n) fail("body index out of range");
+    if (d.bodyA == d.bodyB) fail("bodyA and bodyB are the same body");
+    if (!IsFinite(d.anchor) || !IsFinite(d.lowerAngle) || !IsFinite(d.upperAngle) || !IsFinite(d.motorSpeed) ||
+        !IsFinite(d.maxMotorTorque) || !IsFinite(d.hertz) || !IsFinite(d.dampingRatio)) {
+      fail("a value is not finite");
+    }
+    const Real pi = Real(3.14159265358979323846);
+    if (d.lowerAngle > d.upperAngle || d.lowerAngle < -pi || d.upperAngle > pi) {
+      fail("lowerAngle <= upperAngle within [-pi, pi] required");
+    }
+    if (d.maxMotorTorque < 0 || d.hertz < 0 || d.dampingRatio < 0) fail("maxMotorTorque, hertz and dampingRatio must be >= 0");
   }
 }
 

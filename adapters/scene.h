@@ -57,6 +57,27 @@ struct BodyDesc {
   /// false: created asleep (a dynamic body in a scene with the sleep effect), as Box2D 3's
   /// isAwake; it wakes when an awake body touches it.
   bool awake = true;
+  /// Collision filter, Box2D's rule (quadrant::Filter): two bodies collide when each one's
+  /// category is in the other's mask. Box2D 2.4.1 holds 16 bits: an adapter refuses wider ones.
+  uint32_t categoryBits = 1;
+  uint32_t maskBits = 0xFFFFFFFFu;
+};
+
+/// A revolute joint between scene bodies bodyA and bodyB (indices), pinned at `anchor` (a world
+/// point at load), with an optional limit on bodyB's angle relative to bodyA's (from their angles
+/// at load), a motor and an angular spring (towards the load-time angle). Engines load it as
+/// Box2D 2.4.1's b2RevoluteJoint, Chipmunk's pivot with a rotary limit, simple motor and damped
+/// rotary spring; an adapter that cannot honour a part reports the scene unsupported.
+struct JointDesc {
+  int bodyA = 0, bodyB = 1;
+  Vec2 anchor;
+  bool collideConnected = false;
+  bool enableLimit = false;
+  Real lowerAngle = 0, upperAngle = 0;  ///< rad
+  bool enableMotor = false;
+  Real motorSpeed = 0, maxMotorTorque = 0;  ///< rad/s, N m
+  bool enableSpring = false;
+  Real hertz = 0, dampingRatio = 0;
 };
 
 class Adapter;
@@ -76,6 +97,7 @@ struct Scene {
   Effects effects = SceneEffects();
   AABB bounds;                        ///< region that holds every body (the box of stress scenes)
   std::vector<BodyDesc> bodies;
+  std::vector<JointDesc> joints;      ///< revolute joints, loaded after the bodies
   Driver driver;                      ///< optional
   uint64_t seed = 0;                  ///< the seed it was generated with (0 = hand-built)
 };
@@ -110,6 +132,9 @@ BodyDef ToBodyDef(const BodyDesc& body);
 /// engine refuse the same bodies, message prefixed with "scene body <i>: "), plus what only a
 /// scene can get wrong: dynamic and kinematic both set, polygon vertices not in
 /// counter-clockwise convex order (the engine re-orders them; other engines need the order).
+/// Joints: body indices in range and distinct, finite values, lowerAngle <= upperAngle within
+/// [-pi, pi], maxMotorTorque, hertz and dampingRatio >= 0 ("scene joint <j>: ..."), the engine's
+/// own rules (quadrant::MakeJoint's) for the rest.
 void ValidateScene(const Scene& scene);
 
 }  // namespace quadrant::scene

@@ -1,4 +1,4 @@
-// Box2D 3's "junkyard" and "smash" benchmark scenes (its shared/benchmarks.c, 800 and 300 steps
+// Box2D 3's "joint_grid", "junkyard" and "smash" benchmark scenes (its shared/benchmarks.c, 800 and 300 steps
 // there) in the scene API, at its sizes by default; the code is this project's. Box2D 3 builds
 // its static ground as one body of many boxes, here each box is a static body of its own (the
 // same surfaces; Quadrant bodies carry one shape). Box2D 3 moves junkyard's pusher with
@@ -106,6 +106,34 @@ Scene MakeSmash(int count) {
     }
   }
   s.bounds = {{-25, Real(-0.5 * kSmashRows * d - 1)}, {Real(30 + columns * d + 1), Real(0.5 * kSmashRows * d + 1)}};
+  return s;
+}
+
+Scene MakeJointGrid(int count) {
+  if (count < 57 || count > 1000000) {
+    throw Error("joint_grid: count must be in [57, 1000000] dynamic bodies, got " + std::to_string(count));
+  }
+  // The smallest N x N grid with at least `count` dynamic bodies (seven are static): built again
+  // from its own dynamic count, the same grid.
+  int n = int(std::sqrt(double(count + 7)));
+  while (n * n - 7 < count) ++n;
+  Scene s = Box2d3BenchmarkBase("joint_grid");
+  // Columns k (x = k) of rows i (y = -i), column by column as Box2D 3 builds them; the top row's
+  // seven middle bodies are static. Circles of radius 0.4, 1 m apart, filtered never to collide
+  // (category 2, mask everything but 2), each joined to the one above and the one to its left.
+  for (int k = 0; k < n; ++k) {
+    for (int i = 0; i < n; ++i) {
+      const bool fixed = i == 0 && k >= n / 2 - 3 && k <= n / 2 + 3;
+      BodyDesc b = MakeCircleBody({Real(k), Real(-i)}, Real(0.4), !fixed);
+      b.categoryBits = 2;
+      b.maskBits = ~2u;
+      const int index = int(s.bodies.size());
+      s.bodies.push_back(b);
+      if (i > 0) s.joints.push_back(JointDesc{index - 1, index, {Real(k), Real(-i) + Real(0.5)}});
+      if (k > 0) s.joints.push_back(JointDesc{index - n, index, {Real(k) - Real(0.5), Real(-i)}});
+    }
+  }
+  s.bounds = AABB{{-Real(n), -Real(2 * n)}, {Real(2 * n), Real(n)}};
   return s;
 }
 

@@ -9,7 +9,7 @@ namespace quadrant::scene {
 
 std::vector<std::string> SceneNames() {
   return {"circle_stress", "polygon_stress", "circle_stress_clumped", "polygon_stress_clumped",
-          "many_pyramids", "tumbler", "junkyard", "smash",
+          "many_pyramids", "tumbler", "joint_grid", "junkyard", "smash",
           // The hard cases (hard_cases.cpp): fixed size except pyramid, where `count` is the
           // number of boxes and the base the largest b with b (b + 1) / 2 <= count (210 -> base
           // 20, 5050 -> base 100).
@@ -38,6 +38,7 @@ Scene MakeScene(std::string_view name, int count, uint64_t seed) {
   }
   if (name == "many_pyramids") return MakeManyPyramids(count);
   if (name == "tumbler") return MakeTumbler(count);
+  if (name == "joint_grid") return MakeJointGrid(count);
   if (name == "junkyard") return MakeJunkyard(count);
   if (name == "smash") return MakeSmash(count);
   if (name == "vertical_stack") return MakeVerticalStack();
@@ -62,7 +63,8 @@ Scene MakeScene(std::string_view name, int count, uint64_t seed) {
 }
 
 bool IsDenseScene(std::string_view name) {
-  return name == "pyramid" || name == "many_pyramids" || name == "tumbler" || name == "junkyard" || name == "smash";
+  return name == "pyramid" || name == "many_pyramids" || name == "tumbler" || name == "joint_grid" || name == "junkyard" ||
+         name == "smash";
 }
 
 std::vector<std::string> DefaultBenchScenes() {
@@ -81,6 +83,7 @@ std::vector<int> DefaultBenchCounts(std::string_view name) {
   if (name == "many_pyramids") return {1375, 2750};
   if (name == "tumbler") return {1024, 2025};
   // Box2D 3's sizes and a quarter of them (not in the default run).
+  if (name == "joint_grid") return {2493, 9993};  // N = 50 and Box2D 3's N = 100
   if (name == "junkyard") return {2000, 8000};
   if (name == "smash") return {2400, 9600};
   throw Error("no default bench counts for scene '" + std::string(name) + "'");

@@ -51,6 +51,11 @@ Scene MakeTumbler(int count);
 
 // ---- Box2D 3's benchmark scenes beyond the dense ones (box2d3.cpp) ---------------------------
 
+/// Box2D 3's "joint_grid" (500 steps there): an N x N grid of circles of radius 0.4 1 m apart, N the
+/// smallest with N x N - 7 >= count (57 <= count <= 1000000; the dynamic bodies), each joined by a revolute joint to the one above and to its left (2 N (N - 1)
+/// joints), the top row's middle seven static, filtered never to collide; gravity, no sleep.
+/// Box2D 3 runs N = 100 (count 9993, 19800 joints). Engines whose adapter loads no joints report it unsupported.
+Scene MakeJointGrid(int count);
 /// Box2D 3's "junkyard" (800 steps there): a 4 x 8 m kinematic pusher (body 0) driven to x = 60
 /// sin(0.2 t) by velocity, 261 static 1 m ground and wall boxes, and `count` pentagons of
 /// circumradius 0.25 in 200 columns (count / 200 rows, 200 <= count <= 200000) dropped from 15 m;

@@ -115,7 +115,8 @@ TEST_P(DeterministicScheme, SameHashForOneToFourThreads) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Scenes, DeterministicScheme,
-                         ::testing::Values("circle_stress", "polygon_stress", "pyramid", "junkyard", "smash"));
+                         ::testing::Values("circle_stress", "polygon_stress", "pyramid", "joint_grid", "junkyard",
+                                           "smash"));
 
 TEST(DeterministicSchemeTest, GrainDoesNotChangeTheResult) {
   // Serial and parallel execution of a section must agree bit for bit.
