@@ -1,6 +1,7 @@
 // Tests for joints (quadrant/joints.h, dynamics/soft_step_joints.cpp, world/joint_set.cpp): a
 // pendulum keeps its length and period, a hanging chain does not stretch, limits, motor and spring
-// do what they say, a weld holds a beam, joined bodies do not collide unless asked, a joint grid has
+// do what they say, a weld holds a beam, a prismatic motor runs to its stop, a wheel's suspension
+// carries a car its motor drives, motor and mouse joints reach their targets, joined bodies do not collide unless asked, a joint grid has
 // the same state hash on 1, 2 and 4 threads, a body's removal removes its joints, sleeping joined
 // bodies sleep and wake together, and every bad input is refused with the world unchanged.
 #include <gtest/gtest.h>
@@ -224,6 +225,123 @@ TEST(JointTest, WeldHoldsABeam) {
   EXPECT_LT(std::abs(w.GetLinearVelocity(last).y), Real(0.01));
 }
 
+// A slider on a horizontal axis: a motor drives it to its upper stop, where it stays, level
+// and on the line, without turning.
+TEST(JointTest, PrismaticMotorRunsToItsStop) {
+  World w;
+  const BodyId base = Anchor(w, {0, 5});
+  BodyDef box;
+  box.type = BodyType::kDynamic;
+  box.position = {0, 5};
+  box.shape = ShapeDef::Box(Real(0.5), Real(0.25));
+  const BodyId slider = w.CreateBody(box);
+  PrismaticJointDef p;
+  p.bodyA = base;
+  p.bodyB = slider;
+  p.localAxisA = {2, 0};  // normalised by the world
+  p.enableLimit = true;
+  p.lowerTranslation = -1;
+  p.upperTranslation = 3;
+  p.enableMotor = true;
+  p.motorSpeed = 2;
+  p.maxMotorForce = 100;
+  const JointId id = w.CreatePrismaticJoint(p);
+  Real most = 0;
+  for (int s = 0; s < 180; ++s) {
+    w.Step(kDt);
+    most = std::max(most, w.GetJointLength(id));
+  }
+  EXPECT_LT(most, Real(3.02));
+  EXPECT_NEAR(w.GetJointLength(id), Real(3), Real(0.01));
+  EXPECT_NEAR(w.GetPosition(slider).y, Real(5), Real(0.005)) << "held on the axis against gravity";
+  EXPECT_NEAR(w.GetAngle(slider), Real(0), Real(0.002)) << "no turn relative to the base";
+  // The motor reverses it to the lower stop.
+  w.SetMotorSpeed(id, -3);
+  for (int s = 0; s < 180; ++s) w.Step(kDt);
+  EXPECT_NEAR(w.GetJointLength(id), Real(-1), Real(0.01));
+}
+
+// A car's wheel: the hub rides on a vertical spring (1 Hz) and the motor spins the wheel.
+TEST(JointTest, WheelSuspensionCarriesAndMotorSpins) {
+  World w;
+  AddGround(w, 50, Real(0.5));
+  BodyDef chassisDef;
+  chassisDef.type = BodyType::kDynamic;
+  chassisDef.position = {0, 2};
+  chassisDef.shape = ShapeDef::Box(1, Real(0.25));
+  const BodyId chassis = w.CreateBody(chassisDef);
+  JointId motor{};
+  for (Real x : {Real(-0.8), Real(0.8)}) {
+    const BodyId wheel = Ball(w, {x, 1}, Real(0.4));
+    WheelJointDef j;
+    j.bodyA = chassis;
+    j.bodyB = wheel;
+    j.localAnchorA = w.GetLocalPoint(chassis, {x, 1});
+    j.localAxisA = {0, 1};
+    j.hertz = 4;
+    j.dampingRatio = Real(0.7);
+    j.enableMotor = true;
+    j.motorSpeed = -4;  // clockwise: rolls to +x
+    j.maxMotorTorque = 20;
+    motor = w.CreateWheelJoint(j);
+  }
+  for (int s = 0; s < 240; ++s) w.Step(kDt);
+  EXPECT_GT(w.GetPosition(chassis).x, Real(3)) << "the car drove off to +x";
+  EXPECT_GT(w.GetPosition(chassis).y, Real(1.2)) << "carried by the springs";
+  EXPECT_LT(std::abs(w.GetAngle(chassis)), Real(0.2));
+  EXPECT_LT(std::abs(w.GetJointLength(motor)), Real(0.5)) << "the suspension's travel stays small";
+}
+
+// A motor joint carries a body to its target offset with a bounded force; a mouse joint pulls a
+// body to a point.
+TEST(JointTest, MotorAndMouseJointsReachTheirTargets) {
+  WorldDef def;
+  def.gravity = {0, 0};
+  World w(def);
+  const BodyId ground = Anchor(w, {0, 0});
+  BodyDef box;
+  box.type = BodyType::kDynamic;
+  box.position = {0, 0};
+  box.shape = ShapeDef::Box(Real(0.5), Real(0.5));
+  const BodyId mover = w.CreateBody(box);
+  MotorJointDef m;
+  m.bodyA = ground;
+  m.bodyB = mover;
+  m.localAnchorA = {3, 1};  // the target: bodyB's origin at (3, 1), turned by 0.5 rad
+  m.referenceAngle = Real(0.5);
+  m.maxForce = 50;
+  m.maxTorque = 20;
+  const JointId mj = w.CreateMotorJoint(m);
+  for (int s = 0; s < 240; ++s) w.Step(kDt);
+  EXPECT_NEAR(w.GetPosition(mover).x, Real(3), Real(0.01));
+  EXPECT_NEAR(w.GetPosition(mover).y, Real(1), Real(0.01));
+  EXPECT_NEAR(w.GetJointAngle(mj), Real(0), Real(0.01));
+  // A force limit: with maxForce 1 N a 1 kg box is still on its way after 0.5 s (it accelerates
+  // at most 1 m/s^2: at most 0.125 m from rest).
+  const BodyId slow = w.CreateBody(box);
+  m.bodyB = slow;
+  m.maxForce = 1;
+  w.CreateMotorJoint(m);
+  for (int s = 0; s < 30; ++s) w.Step(kDt);
+  EXPECT_LT(Length(w.GetPosition(slow)), Real(0.13));
+  EXPECT_GT(Length(w.GetPosition(slow)), Real(0.05));
+
+  const BodyId ball = Ball(w, {-5, 0}, Real(0.5));
+  MouseJointDef mouse;
+  mouse.bodyA = ground;
+  mouse.bodyB = ball;
+  mouse.target = {-5, 4};
+  mouse.maxForce = 500;
+  const JointId mo = w.CreateMouseJoint(mouse);
+  for (int s = 0; s < 120; ++s) w.Step(kDt);
+  EXPECT_NEAR(w.GetPosition(ball).y, Real(4), Real(0.02));
+  w.SetJointTarget(mo, {-8, 4});
+  for (int s = 0; s < 120; ++s) w.Step(kDt);
+  EXPECT_NEAR(w.GetPosition(ball).x, Real(-8), Real(0.02));
+  EXPECT_THROW(w.SetJointTarget(mo, {INFINITY, 0}), Error);
+  EXPECT_THROW(w.SetJointTarget(mj, {0, 0}), Error) << "not a mouse joint";
+}
+
 TEST(JointTest, JoinedBodiesCollideOnlyWhenAsked) {
   for (bool collide : {false, true}) {
     WorldDef def;
@@ -357,6 +475,28 @@ TEST(JointTest, BadJointsAreRefusedWithTheWorldUnchanged) {
   wd.bodyB = b;
   refused([&] { WeldJointDef x = wd; x.angularHertz = std::nanf(""); w.CreateWeldJoint(x); }, "angularhertz");
   refused([&] { WeldJointDef x = wd; x.referenceAngle = 7; w.CreateWeldJoint(x); }, "referenceAngle");
+  PrismaticJointDef pd;
+  pd.bodyA = a;
+  pd.bodyB = b;
+  refused([&] { PrismaticJointDef x = pd; x.localAxisA = {0, 0}; w.CreatePrismaticJoint(x); }, "localAxisA must not be zero");
+  refused([&] { PrismaticJointDef x = pd; x.localAxisA.y = std::nanf(""); w.CreatePrismaticJoint(x); }, "localAxisA must be finite");
+  refused([&] { PrismaticJointDef x = pd; x.lowerTranslation = 1; w.CreatePrismaticJoint(x); }, "lowerTranslation must be <=");
+  refused([&] { PrismaticJointDef x = pd; x.maxMotorForce = -1; w.CreatePrismaticJoint(x); }, "maxMotorForce");
+  WheelJointDef wh;
+  wh.bodyA = a;
+  wh.bodyB = b;
+  refused([&] { WheelJointDef x = wh; x.hertz = -2; w.CreateWheelJoint(x); }, "hertz");
+  refused([&] { WheelJointDef x = wh; x.upperTranslation = INFINITY; w.CreateWheelJoint(x); }, "upperTranslation");
+  MotorJointDef md;
+  md.bodyA = a;
+  md.bodyB = b;
+  refused([&] { MotorJointDef x = md; x.correctionFactor = 2; w.CreateMotorJoint(x); }, "correctionFactor");
+  refused([&] { MotorJointDef x = md; x.maxForce = -1; w.CreateMotorJoint(x); }, "maxForce");
+  MouseJointDef mo;
+  mo.bodyA = a;
+  mo.bodyB = b;
+  refused([&] { MouseJointDef x = mo; x.hertz = 0; w.CreateMouseJoint(x); }, "hertz must be finite and > 0");
+  refused([&] { MouseJointDef x = mo; x.target = {2e6f, 0}; w.CreateMouseJoint(x); }, "target");
   // Read-backs and writes on the wrong joint type, or on a stale joint.
   const JointId rod = w.CreateDistanceJoint(d);
   EXPECT_THROW(w.GetJointAngle(rod), Error);

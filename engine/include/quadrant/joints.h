@@ -25,9 +25,13 @@ struct JointId {
 };
 
 enum class JointType : uint8_t {
-  kRevolute,  ///< a shared point; free rotation with an optional limit, motor and spring
-  kDistance,  ///< a rod (or spring, or rope between limits) between two anchors
-  kWeld,      ///< a shared point and a fixed relative angle, rigid or soft
+  kRevolute,   ///< a shared point; free rotation with an optional limit, motor and spring
+  kDistance,   ///< a rod (or spring, or rope between limits) between two anchors
+  kWeld,       ///< a shared point and a fixed relative angle, rigid or soft
+  kPrismatic,  ///< sliding along an axis fixed in bodyA, no relative turn; limit, motor, spring
+  kWheel,      ///< sliding along an axis on a spring (suspension), free turn with a motor
+  kMotor,      ///< drives bodyB to an offset and angle relative to bodyA with bounded force and torque
+  kMouse,      ///< pulls bodyB's anchor to a world target by a bounded soft spring
 };
 
 /// Holds bodyA's and bodyB's anchors together; bodyB turns relative to bodyA by an angle measured
@@ -72,6 +76,66 @@ struct WeldJointDef {
   Real linearHertz = 0, linearDampingRatio = 0;
   Real angularHertz = 0, angularDampingRatio = 0;
   bool collideConnected = false;
+};
+
+/// bodyB slides relative to bodyA along localAxisA (in bodyA's frame, any non-zero length: it is
+/// normalised) through the anchors, without turning relative to it (referenceAngle). The
+/// translation is measured along the axis from where the anchors coincide. Refused besides the
+/// common rules: a zero or non-finite axis, lowerTranslation > upperTranslation, a negative
+/// maxMotorForce, hertz or dampingRatio.
+struct PrismaticJointDef {
+  BodyId bodyA, bodyB;
+  Vec2 localAnchorA, localAnchorB;
+  Vec2 localAxisA{1, 0};
+  Real referenceAngle = 0;
+  bool enableLimit = false;
+  Real lowerTranslation = 0, upperTranslation = 0;  ///< m
+  bool enableMotor = false;
+  Real motorSpeed = 0, maxMotorForce = 0;  ///< m/s, N
+  bool enableSpring = false;
+  Real hertz = 0, dampingRatio = 0;  ///< a spring towards translation 0
+  bool collideConnected = false;
+};
+
+/// A wheel on bodyB (its anchor the hub) riding on bodyA along localAxisA (the suspension): held
+/// on the axis's line, a spring of hertz and dampingRatio along it (enableSpring; the default, as
+/// Box2D's), optional limits on the travel, and a motor on bodyB's turn relative to bodyA.
+struct WheelJointDef {
+  BodyId bodyA, bodyB;
+  Vec2 localAnchorA, localAnchorB;
+  Vec2 localAxisA{0, 1};
+  bool enableSpring = true;
+  Real hertz = 1, dampingRatio = Real(0.7);
+  bool enableLimit = false;
+  Real lowerTranslation = 0, upperTranslation = 0;
+  bool enableMotor = false;
+  Real motorSpeed = 0, maxMotorTorque = 0;  ///< rad/s, N m
+  bool collideConnected = false;
+};
+
+/// Drives bodyB's anchor towards bodyA's anchor and bodyB's angle towards bodyA's plus
+/// referenceAngle with at most maxForce and maxTorque, aiming to close correctionFactor (in [0, 1])
+/// of the remaining offset per sub-step (Box2D's motor joint: a character's or a platform's
+/// controller). Refused: negative or non-finite maxForce, maxTorque; correctionFactor outside [0, 1].
+struct MotorJointDef {
+  BodyId bodyA, bodyB;
+  Vec2 localAnchorA, localAnchorB;  ///< the offset to reach: bodyB's anchor onto bodyA's
+  Real referenceAngle = 0;
+  Real maxForce = 1, maxTorque = 1;  ///< N, N m, >= 0
+  Real correctionFactor = Real(0.3);
+  bool collideConnected = false;
+};
+
+/// Pulls bodyB's anchor (localAnchorB) towards `target` (a world point; World::SetJointTarget moves
+/// it) by a spring of hertz and dampingRatio, with at most maxForce. bodyA is only a reference
+/// (a static ground body, as in Box2D); localAnchorA is unused.
+struct MouseJointDef {
+  BodyId bodyA, bodyB;
+  Vec2 localAnchorB;
+  Vec2 target;
+  Real hertz = 5, dampingRatio = Real(0.7);
+  Real maxForce = 1000;  ///< N, >= 0
+  bool collideConnected = true;
 };
 
 }  // namespace quadrant

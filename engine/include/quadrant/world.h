@@ -75,6 +75,10 @@ class World {
   JointId CreateRevoluteJoint(const RevoluteJointDef& def);
   JointId CreateDistanceJoint(const DistanceJointDef& def);
   JointId CreateWeldJoint(const WeldJointDef& def);
+  JointId CreatePrismaticJoint(const PrismaticJointDef& def);
+  JointId CreateWheelJoint(const WheelJointDef& def);
+  JointId CreateMotorJoint(const MotorJointDef& def);
+  JointId CreateMouseJoint(const MouseJointDef& def);
   /// Throws quadrant::Error for a stale or null id.
   void DestroyJoint(JointId id);
   bool IsValid(JointId id) const;
@@ -82,14 +86,19 @@ class World {
   JointType GetJointType(JointId id) const;
   BodyId GetJointBodyA(JointId id) const;
   BodyId GetJointBodyB(JointId id) const;
-  /// A revolute or weld joint's angle: bodyB's angle minus bodyA's minus referenceAngle, in
-  /// [-pi, pi]. A distance joint's current length between its anchors (m).
+  /// A joint's angle: bodyB's angle minus bodyA's minus referenceAngle, in [-pi, pi] (not for
+  /// distance and mouse joints). GetJointLength: a distance joint's current length between its
+  /// anchors, a prismatic or wheel joint's translation along its axis (m).
   Real GetJointAngle(JointId id) const;
   Real GetJointLength(JointId id) const;
-  /// A revolute joint's motor speed (rad/s; throws for other joint types or a non-finite speed).
+  /// The motor speed of a revolute, wheel (rad/s) or prismatic (m/s) joint; throws for other joint
+  /// types or a non-finite speed.
   void SetMotorSpeed(JointId id, Real speed);
-  /// The impulses the joint applied to bodyB over the last step (N s; the point's linear impulse,
-  /// and the angular or axial impulse): divide by the step's dt for the force.
+  /// A mouse joint's target (a finite world point within 1e6 m); wakes bodyB.
+  void SetJointTarget(JointId id, Vec2 target);
+  /// The impulses the joint applied to bodyB over the last step (N s and N m s; a distance joint's
+  /// along its axis; no angular impulse for distance and mouse joints): divided by the step's dt,
+  /// the joint's force and torque.
   Vec2 GetJointLinearImpulse(JointId id) const;
   Real GetJointAngularImpulse(JointId id) const;
 

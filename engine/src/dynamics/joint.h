@@ -19,6 +19,8 @@ struct Joint {
   Vec2 localAnchorA, localAnchorB;  // relative to each body's origin
   Real referenceAngle = 0;
   // Revolute: limit, motor, spring. Distance: length, spring, limit. Weld: two springs.
+  // Prismatic and wheel: lower and upper are translations. Motor joint: maxMotorTorque is its
+  // maxTorque. Mouse: hertz and dampingRatio its spring.
   bool enableLimit = false, enableMotor = false, enableSpring = false;
   bool collideConnected = false;
   Real lower = 0, upper = 0;          // revolute angles; distance lengths
@@ -26,10 +28,14 @@ struct Joint {
   Real hertz = 0, dampingRatio = 0;   // revolute and distance spring; weld linear spring
   Real angularHertz = 0, angularDampingRatio = 0;  // weld
   Real length = 0;                    // distance
+  Vec2 localAxisA;                    // prismatic, wheel: unit, in bodyA's frame
+  Real maxForce = 0, correctionFactor = 0;  // prismatic motor (N), motor and mouse force; motor joint
+  Vec2 target;                        // mouse: the world point bodyB's anchor is pulled to
   // Accumulated impulses, kept from step to step (warm start).
   Vec2 linearImpulse;                 // revolute and weld point
   Real angularImpulse = 0;            // weld angle; distance rod or spring
   Real springImpulse = 0, motorImpulse = 0, lowerImpulse = 0, upperImpulse = 0;
+  Real perpImpulse = 0;               // prismatic and wheel: across the axis
 };
 
 }  // namespace quadrant

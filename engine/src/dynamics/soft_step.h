@@ -69,10 +69,11 @@ struct SoftJointRow {
   Real deltaAngle;      // the joint angle at the step's start (relative angle minus reference)
   Real mA, mB, iA, iB;
   Real axialMass;       // 1 / (iA + iB), the angular rows' mass (0 if neither turns)
+  Vec2 axisA;           // prismatic, wheel: the axis in world axes at the step's start
   Softness spring, angularSpring;
   // Accumulated impulses (per sub-step), loaded from the joint and stored back after the step.
   Vec2 linearImpulse;
-  Real angularImpulse, springImpulse, motorImpulse, lowerImpulse, upperImpulse;
+  Real angularImpulse, springImpulse, motorImpulse, lowerImpulse, upperImpulse, perpImpulse;
 };
 
 class SoftStepSolver final : public Solver {

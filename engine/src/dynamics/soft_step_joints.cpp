@@ -7,6 +7,12 @@
 // the step began (dq), and a separation is the start offset plus the bodies' motion since then
 // (dp), so no transform is rebuilt inside the sub-steps (Box2D 3's formulation; Catto, "Solver2D").
 //
+// Joint types: revolute (point; limit, motor, spring on the angle), distance (axis; rod, or spring
+// between limits), weld (point and angle), prismatic (axial spring, motor, limits; across the axis
+// and the angle as one 2x2 block), wheel (angular motor; axial spring and limits; across the axis),
+// motor (point and angle driven towards their targets with bounded impulses) and mouse (bodyB's
+// anchor pulled to a world target by a bounded spring; bodyA is not read).
+//
 // Rigid rows are soft springs of WorldDef::jointHertz and jointDampingRatio while the bias acts
 // (the solve) and plain velocity rows in the relax pass; a limit that is still open is
 // speculative (it lets the gap close within the sub-step, no further). Accumulated impulses are
@@ -58,7 +64,8 @@ void SoftStepSolver::PrepareJoints(const StepContext& ctx, Real h) {
   colorOf.assign(size_t(n), ConstraintGraph::kColors);
   for (int k = 0; k < n; ++k) {
     const Joint& j = joints_[size_t(k)];
-    const bool dynA = bodies.inv[j.a].invMass > 0, dynB = bodies.inv[j.b].invMass > 0;
+    // A mouse joint pulls bodyB only: bodyA is a reference it never reads.
+    const bool dynA = j.type != JointType::kMouse && bodies.inv[j.a].invMass > 0, dynB = bodies.inv[j.b].invMass > 0;
     if (!dynA && !dynB) {
       colorOf[size_t(k)] = -1;  // nothing to move: no row
       continue;
@@ -92,20 +99,23 @@ void SoftStepSolver::PrepareJoints(const StepContext& ctx, Real h) {
     r.b = j.b;
     r.type = j.type;
     const BodyInverseMass ia = bodies.inv[j.a], ib = bodies.inv[j.b];
-    r.dynA = ia.invMass > 0;
+    r.dynA = j.type != JointType::kMouse && ia.invMass > 0;
     r.dynB = ib.invMass > 0;
-    r.mA = ia.invMass;
+    r.mA = r.dynA ? ia.invMass : 0;
     r.mB = ib.invMass;
-    r.iA = rotation ? ia.invInertia : 0;
+    r.iA = rotation && r.dynA ? ia.invInertia : 0;
     r.iB = rotation ? ib.invInertia : 0;
     const Rot qA = bodies.xf[j.a].q, qB = bodies.xf[j.b].q;
     r.frameA = Rotate(qA, j.localAnchorA - bodies.localCenter[j.a]);
     r.frameB = Rotate(qB, j.localAnchorB - bodies.localCenter[j.b]);
-    r.deltaCenter = bodies.center[j.b] - bodies.center[j.a];
+    r.deltaCenter = bodies.center[j.b] - (j.type == JointType::kMouse ? j.target : bodies.center[j.a]);
+    r.axisA = Rotate(qA, j.localAxisA);
     r.deltaAngle = Wrap(RelativeAngle(qA, qB) - j.referenceAngle);
     const Real turning = r.iA + r.iB;
     r.axialMass = turning > 0 ? Real(1) / turning : Real(0);
-    r.spring = j.enableSpring || j.type == JointType::kWeld ? MakeSoftness(j.hertz, j.dampingRatio, h) : Softness{};
+    r.spring = j.enableSpring || j.type == JointType::kWeld || j.type == JointType::kMouse
+                   ? MakeSoftness(j.hertz, j.dampingRatio, h)
+                   : Softness{};
     r.angularSpring = j.type == JointType::kWeld ? MakeSoftness(j.angularHertz, j.angularDampingRatio, h) : Softness{};
     const bool warm = def.effects.warmStarting;
     r.linearImpulse = warm ? j.linearImpulse : Vec2{};
@@ -114,6 +124,7 @@ void SoftStepSolver::PrepareJoints(const StepContext& ctx, Real h) {
     r.motorImpulse = warm ? j.motorImpulse : 0;
     r.lowerImpulse = warm ? j.lowerImpulse : 0;
     r.upperImpulse = warm ? j.upperImpulse : 0;
+    r.perpImpulse = warm ? j.perpImpulse : 0;
   }
 }
 
@@ -127,6 +138,7 @@ void SoftStepSolver::StoreJoints() {
     j.motorImpulse = r.motorImpulse;
     j.lowerImpulse = r.lowerImpulse;
     j.upperImpulse = r.upperImpulse;
+    j.perpImpulse = r.perpImpulse;
   }
 }
 
@@ -173,24 +185,49 @@ void SoftStepSolver::WarmStartJoints(int begin, int end) {
     SolverBody& A = s[r.a];
     SolverBody& B = s[r.b];
     const Vec2 rA = Rotate(A.dq, r.frameA), rB = Rotate(B.dq, r.frameB);
+    // The impulse P at the anchors and the angular impulses LA, LB about the centres.
     Vec2 P = r.linearImpulse;
-    Real axial = 0;
+    Real LA = Cross(rA, P), LB = Cross(rB, P);
     switch (r.type) {
-      case JointType::kRevolute: axial = r.springImpulse + r.motorImpulse + r.lowerImpulse - r.upperImpulse; break;
-      case JointType::kWeld: axial = r.angularImpulse; break;
+      case JointType::kRevolute: {
+        const Real axial = r.springImpulse + r.motorImpulse + r.lowerImpulse - r.upperImpulse;
+        LA += axial;
+        LB += axial;
+        break;
+      }
+      case JointType::kWeld:
+      case JointType::kMotor:
+        LA += r.angularImpulse;
+        LB += r.angularImpulse;
+        break;
+      case JointType::kMouse: break;
       case JointType::kDistance: {
         const Vec2 d = (B.dp - A.dp) + r.deltaCenter + (rB - rA);
         P = (r.angularImpulse + r.springImpulse + r.lowerImpulse - r.upperImpulse) * Normalize(d);
+        LA = Cross(rA, P);
+        LB = Cross(rB, P);
+        break;
+      }
+      case JointType::kPrismatic:
+      case JointType::kWheel: {
+        const Vec2 axis = Rotate(A.dq, r.axisA), perp{-axis.y, axis.x};
+        const Vec2 d = (B.dp - A.dp) + r.deltaCenter + (rB - rA);
+        const bool prismatic = r.type == JointType::kPrismatic;
+        const Real axial = r.springImpulse + r.lowerImpulse - r.upperImpulse + (prismatic ? r.motorImpulse : 0);
+        const Real turn = prismatic ? r.angularImpulse : r.motorImpulse;
+        P = axial * axis + r.perpImpulse * perp;
+        LA = axial * Cross(d + rA, axis) + r.perpImpulse * Cross(d + rA, perp) + turn;
+        LB = axial * Cross(rB, axis) + r.perpImpulse * Cross(rB, perp) + turn;
         break;
       }
     }
     if (r.dynA) {
       A.v = A.v - r.mA * P;
-      A.w -= r.iA * (Cross(rA, P) + axial);
+      A.w -= r.iA * LA;
     }
     if (r.dynB) {
       B.v = B.v + r.mB * P;
-      B.w += r.iB * (Cross(rB, P) + axial);
+      B.w += r.iB * LB;
     }
   }
 }
@@ -278,6 +315,115 @@ void SoftStepSolver::SolveJoints(int begin, int end, bool useBias) {
         }
         const bool spring = j.hertz > 0;
         point(spring ? r.spring : rigid, spring || useBias);
+        break;
+      }
+      case JointType::kPrismatic:
+      case JointType::kWheel: {
+        const bool prismatic = r.type == JointType::kPrismatic;
+        const Vec2 axis = Rotate(A.dq, r.axisA), perp{-axis.y, axis.x};
+        const Vec2 d = (dcB - dcA) + r.deltaCenter + (rB - rA);
+        const Real translation = Dot(axis, d);
+        const Real a1 = Cross(d + rA, axis), a2 = Cross(rB, axis);
+        const Real kAxial = mA + mB + iA * a1 * a1 + iB * a2 * a2;
+        const Real mass = kAxial > 0 ? Real(1) / kAxial : Real(0);
+        auto cdot = [&] { return Dot(axis, e.vB - e.vA) + a2 * e.wB - a1 * e.wA; };
+        auto push = [&](Real impulse) {
+          const Vec2 P = impulse * axis;
+          e.vA = e.vA - mA * P;
+          e.wA -= iA * impulse * a1;
+          e.vB = e.vB + mB * P;
+          e.wB += iB * impulse * a2;
+        };
+        if (!prismatic && j.enableMotor && r.axialMass > 0) {
+          const Real most = j.maxMotorTorque / invH;
+          const Real old = r.motorImpulse;
+          r.motorImpulse = std::clamp(old - r.axialMass * (e.wB - e.wA - j.motorSpeed), -most, most);
+          turn(r.motorImpulse - old);
+        }
+        if (j.enableSpring && j.hertz > 0) {
+          const Real impulse = -r.spring.massScale * mass * (cdot() + r.spring.biasRate * translation) -
+                               r.spring.impulseScale * r.springImpulse;
+          r.springImpulse += impulse;
+          push(impulse);
+        }
+        if (prismatic && j.enableMotor) {
+          const Real most = j.maxForce / invH;
+          const Real old = r.motorImpulse;
+          r.motorImpulse = std::clamp(old + mass * (j.motorSpeed - cdot()), -most, most);
+          push(r.motorImpulse - old);
+        }
+        if (j.enableLimit) {
+          push(LimitImpulse(translation - j.lower, cdot(), mass, r.lowerImpulse, useBias, rigid, invH));
+          push(-LimitImpulse(j.upper - translation, -cdot(), mass, r.upperImpulse, useBias, rigid, invH));
+        }
+        const Real s1 = Cross(d + rA, perp), s2 = Cross(rB, perp);
+        Real massScale = 1, impulseScale = 0;
+        if (useBias) {
+          massScale = rigid.massScale;
+          impulseScale = rigid.impulseScale;
+        }
+        if (prismatic) {
+          // Across the axis and the relative turn, solved together (they share the lever s1, s2).
+          const Vec2 cd{Dot(perp, e.vB - e.vA) + s2 * e.wB - s1 * e.wA, e.wB - e.wA};
+          const Vec2 bias = useBias ? rigid.biasRate * Vec2{Dot(perp, d), angle()} : Vec2{};
+          const Real k11 = mA + mB + iA * s1 * s1 + iB * s2 * s2, k12 = iA * s1 + iB * s2;
+          const Real k22 = iA + iB > 0 ? iA + iB : Real(1);
+          const Vec2 x = Solve22(k11, k12, k22, cd + bias);
+          const Vec2 impulse = -massScale * x - impulseScale * Vec2{r.perpImpulse, r.angularImpulse};
+          r.perpImpulse += impulse.x;
+          r.angularImpulse += impulse.y;
+          const Vec2 P = impulse.x * perp;
+          e.vA = e.vA - mA * P;
+          e.wA -= iA * (impulse.x * s1 + impulse.y);
+          e.vB = e.vB + mB * P;
+          e.wB += iB * (impulse.x * s2 + impulse.y);
+        } else {
+          const Real cd = Dot(perp, e.vB - e.vA) + s2 * e.wB - s1 * e.wA;
+          const Real bias = useBias ? rigid.biasRate * Dot(perp, d) : Real(0);
+          const Real k = mA + mB + iA * s1 * s1 + iB * s2 * s2;
+          const Real impulse = -massScale * (k > 0 ? Real(1) / k : Real(0)) * (cd + bias) - impulseScale * r.perpImpulse;
+          r.perpImpulse += impulse;
+          const Vec2 P = impulse * perp;
+          e.vA = e.vA - mA * P;
+          e.wA -= iA * impulse * s1;
+          e.vB = e.vB + mB * P;
+          e.wB += iB * impulse * s2;
+        }
+        break;
+      }
+      case JointType::kMotor: {
+        // Always correcting (no relax): a controller, not a constraint.
+        const Real c = j.correctionFactor * invH;
+        if (r.axialMass > 0) {
+          const Real most = j.maxMotorTorque / invH;
+          const Real old = r.angularImpulse;
+          r.angularImpulse = std::clamp(old - r.axialMass * (e.wB - e.wA + c * angle()), -most, most);
+          turn(r.angularImpulse - old);
+        }
+        const Vec2 sep = (dcB - dcA) + (rB - rA) + r.deltaCenter;
+        const Vec2 cd = (e.vB + Cross(e.wB, rB)) - (e.vA + Cross(e.wA, rA)) + c * sep;
+        const Real k11 = mA + mB + rA.y * rA.y * iA + rB.y * rB.y * iB;
+        const Real k12 = -rA.y * rA.x * iA - rB.y * rB.x * iB;
+        const Real k22 = mA + mB + rA.x * rA.x * iA + rB.x * rB.x * iB;
+        const Vec2 old = r.linearImpulse;
+        r.linearImpulse = r.linearImpulse - Solve22(k11, k12, k22, cd);
+        const Real most = j.maxForce / invH, size = Length(r.linearImpulse);
+        if (size > most) r.linearImpulse = (most / size) * r.linearImpulse;
+        ApplyLinear(e, rA, rB, r.linearImpulse - old, mA, mB, iA, iB);
+        break;
+      }
+      case JointType::kMouse: {
+        const Vec2 C = dcB + rB + r.deltaCenter;  // the anchor's offset from the target
+        const Vec2 cd = e.vB + Cross(e.wB, rB);
+        const Real k11 = mB + rB.y * rB.y * iB, k12 = -rB.y * rB.x * iB, k22 = mB + rB.x * rB.x * iB;
+        const Vec2 x = Solve22(k11, k12, k22, cd + r.spring.biasRate * C);
+        const Vec2 old = r.linearImpulse;
+        r.linearImpulse = r.linearImpulse - r.spring.massScale * x - r.spring.impulseScale * r.linearImpulse;
+        const Real most = j.maxForce / invH, size = Length(r.linearImpulse);
+        if (size > most) r.linearImpulse = (most / size) * r.linearImpulse;
+        const Vec2 P = r.linearImpulse - old;
+        e.vB = e.vB + mB * P;
+        e.wB += iB * Cross(rB, P);
         break;
       }
       case JointType::kDistance: {

@@ -18,13 +18,15 @@ template <class Def>
 Joint Common(const Def& def, JointType type, const std::string& call) {
   Require(!def.bodyA.IsNull() && !def.bodyB.IsNull(), call + ": bodyA and bodyB must be set");
   Require(!(def.bodyA == def.bodyB), call + ": bodyA and bodyB are the same body");
-  Require(FiniteAnchor(def.localAnchorA), call + ": localAnchorA must be finite and within 1e6 m");
+  Vec2 anchorA{};
+  if constexpr (requires { def.localAnchorA; }) anchorA = def.localAnchorA;  // a mouse joint has none
+  Require(FiniteAnchor(anchorA), call + ": localAnchorA must be finite and within 1e6 m");
   Require(FiniteAnchor(def.localAnchorB), call + ": localAnchorB must be finite and within 1e6 m");
   Joint j;
   j.type = type;
   j.idA = def.bodyA;
   j.idB = def.bodyB;
-  j.localAnchorA = def.localAnchorA;
+  j.localAnchorA = anchorA;
   j.localAnchorB = def.localAnchorB;
   j.collideConnected = def.collideConnected;
   return j;
@@ -92,6 +94,97 @@ Joint MakeJoint(const WeldJointDef& def) {
   j.dampingRatio = def.linearDampingRatio;
   j.angularHertz = def.angularHertz;
   j.angularDampingRatio = def.angularDampingRatio;
+  return j;
+}
+
+namespace {
+
+Vec2 UnitAxis(Vec2 axis, const std::string& call) {
+  Require(IsFinite(axis) && std::abs(axis.x) <= kMaxCoordinate && std::abs(axis.y) <= kMaxCoordinate,
+          call + ": localAxisA must be finite");
+  const Real length = Length(axis);
+  Require(length > Real(1e-6), call + ": localAxisA must not be zero");
+  return (Real(1) / length) * axis;
+}
+
+void RequireTranslations(Real lower, Real upper, const std::string& call) {
+  Require(IsFinite(lower) && IsFinite(upper) && std::abs(lower) <= kMaxCoordinate && std::abs(upper) <= kMaxCoordinate,
+          call + ": lowerTranslation and upperTranslation must be finite and within 1e6 m");
+  Require(lower <= upper, call + ": lowerTranslation must be <= upperTranslation");
+}
+
+}  // namespace
+
+Joint MakeJoint(const PrismaticJointDef& def) {
+  const std::string call = "CreatePrismaticJoint";
+  Joint j = Common(def, JointType::kPrismatic, call);
+  j.localAxisA = UnitAxis(def.localAxisA, call);
+  Require(IsFinite(def.referenceAngle) && std::abs(def.referenceAngle) <= kPi,
+          call + ": referenceAngle must be finite and within [-pi, pi]");
+  RequireTranslations(def.lowerTranslation, def.upperTranslation, call);
+  Require(IsFinite(def.motorSpeed), call + ": motorSpeed must be finite");
+  Require(IsFinite(def.maxMotorForce) && def.maxMotorForce >= 0, call + ": maxMotorForce must be finite and >= 0");
+  RequireSpring(def.hertz, def.dampingRatio, call + ": ");
+  j.referenceAngle = def.referenceAngle;
+  j.enableLimit = def.enableLimit;
+  j.lower = def.lowerTranslation;
+  j.upper = def.upperTranslation;
+  j.enableMotor = def.enableMotor;
+  j.motorSpeed = def.motorSpeed;
+  j.maxForce = def.maxMotorForce;
+  j.enableSpring = def.enableSpring;
+  j.hertz = def.hertz;
+  j.dampingRatio = def.dampingRatio;
+  return j;
+}
+
+Joint MakeJoint(const WheelJointDef& def) {
+  const std::string call = "CreateWheelJoint";
+  Joint j = Common(def, JointType::kWheel, call);
+  j.localAxisA = UnitAxis(def.localAxisA, call);
+  RequireTranslations(def.lowerTranslation, def.upperTranslation, call);
+  Require(IsFinite(def.motorSpeed), call + ": motorSpeed must be finite");
+  Require(IsFinite(def.maxMotorTorque) && def.maxMotorTorque >= 0, call + ": maxMotorTorque must be finite and >= 0");
+  RequireSpring(def.hertz, def.dampingRatio, call + ": ");
+  j.enableSpring = def.enableSpring;
+  j.hertz = def.hertz;
+  j.dampingRatio = def.dampingRatio;
+  j.enableLimit = def.enableLimit;
+  j.lower = def.lowerTranslation;
+  j.upper = def.upperTranslation;
+  j.enableMotor = def.enableMotor;
+  j.motorSpeed = def.motorSpeed;
+  j.maxMotorTorque = def.maxMotorTorque;
+  return j;
+}
+
+Joint MakeJoint(const MotorJointDef& def) {
+  const std::string call = "CreateMotorJoint";
+  Joint j = Common(def, JointType::kMotor, call);
+  Require(IsFinite(def.referenceAngle) && std::abs(def.referenceAngle) <= kPi,
+          call + ": referenceAngle must be finite and within [-pi, pi]");
+  Require(IsFinite(def.maxForce) && def.maxForce >= 0, call + ": maxForce must be finite and >= 0");
+  Require(IsFinite(def.maxTorque) && def.maxTorque >= 0, call + ": maxTorque must be finite and >= 0");
+  Require(IsFinite(def.correctionFactor) && def.correctionFactor >= 0 && def.correctionFactor <= 1,
+          call + ": correctionFactor must be within [0, 1]");
+  j.referenceAngle = def.referenceAngle;
+  j.maxForce = def.maxForce;
+  j.maxMotorTorque = def.maxTorque;
+  j.correctionFactor = def.correctionFactor;
+  return j;
+}
+
+Joint MakeJoint(const MouseJointDef& def) {
+  const std::string call = "CreateMouseJoint";
+  Joint j = Common(def, JointType::kMouse, call);
+  Require(FiniteAnchor(def.target), call + ": target must be finite and within 1e6 m");
+  Require(IsFinite(def.hertz) && def.hertz > 0, call + ": hertz must be finite and > 0");
+  Require(IsFinite(def.dampingRatio) && def.dampingRatio >= 0, call + ": dampingRatio must be finite and >= 0");
+  Require(IsFinite(def.maxForce) && def.maxForce >= 0, call + ": maxForce must be finite and >= 0");
+  j.target = def.target;
+  j.hertz = def.hertz;
+  j.dampingRatio = def.dampingRatio;
+  j.maxForce = def.maxForce;
   return j;
 }
 

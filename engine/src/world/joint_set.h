@@ -22,6 +22,10 @@ namespace quadrant {
 Joint MakeJoint(const RevoluteJointDef& def);
 Joint MakeJoint(const DistanceJointDef& def);
 Joint MakeJoint(const WeldJointDef& def);
+Joint MakeJoint(const PrismaticJointDef& def);
+Joint MakeJoint(const WheelJointDef& def);
+Joint MakeJoint(const MotorJointDef& def);
+Joint MakeJoint(const MouseJointDef& def);
 
 class JointSet {
  public:

@@ -1319,6 +1319,12 @@ JointId World::CreateDistanceJoint(const DistanceJointDef& def) {
   return impl_->AddJoint(MakeJoint(def), "CreateDistanceJoint");
 }
 JointId World::CreateWeldJoint(const WeldJointDef& def) { return impl_->AddJoint(MakeJoint(def), "CreateWeldJoint"); }
+JointId World::CreatePrismaticJoint(const PrismaticJointDef& def) {
+  return impl_->AddJoint(MakeJoint(def), "CreatePrismaticJoint");
+}
+JointId World::CreateWheelJoint(const WheelJointDef& def) { return impl_->AddJoint(MakeJoint(def), "CreateWheelJoint"); }
+JointId World::CreateMotorJoint(const MotorJointDef& def) { return impl_->AddJoint(MakeJoint(def), "CreateMotorJoint"); }
+JointId World::CreateMouseJoint(const MouseJointDef& def) { return impl_->AddJoint(MakeJoint(def), "CreateMouseJoint"); }
 
 void World::DestroyJoint(JointId id) {
   Impl& w = *impl_;
@@ -1340,7 +1346,8 @@ BodyId World::GetJointBodyB(JointId id) const { return impl_->joints.All()[size_
 Real World::GetJointAngle(JointId id) const {
   const Impl& w = *impl_;
   const Joint& j = w.joints.All()[size_t(w.joints.Dense(id))];
-  Require(j.type != JointType::kDistance, "GetJointAngle: a distance joint has no angle (GetJointLength)");
+  Require(j.type != JointType::kDistance && j.type != JointType::kMouse,
+          "GetJointAngle: distance and mouse joints have no angle");
   const auto [a, b] = w.JointBodies(j);
   const Rot qa = w.bodies.xf[a].q, qb = w.bodies.xf[b].q;
   Real angle = std::atan2(qa.c * qb.s - qa.s * qb.c, qa.c * qb.c + qa.s * qb.s) - j.referenceAngle;
@@ -1353,16 +1360,20 @@ Real World::GetJointAngle(JointId id) const {
 Real World::GetJointLength(JointId id) const {
   const Impl& w = *impl_;
   const Joint& j = w.joints.All()[size_t(w.joints.Dense(id))];
-  Require(j.type == JointType::kDistance, "GetJointLength: only a distance joint has a length");
+  Require(j.type == JointType::kDistance || j.type == JointType::kPrismatic || j.type == JointType::kWheel,
+          "GetJointLength: only distance, prismatic and wheel joints have a length");
   const auto [a, b] = w.JointBodies(j);
-  return Length(TransformPoint(w.bodies.xf[b], j.localAnchorB) - TransformPoint(w.bodies.xf[a], j.localAnchorA));
+  const Vec2 d = TransformPoint(w.bodies.xf[b], j.localAnchorB) - TransformPoint(w.bodies.xf[a], j.localAnchorA);
+  if (j.type == JointType::kDistance) return Length(d);
+  return Dot(Rotate(w.bodies.xf[a].q, j.localAxisA), d);
 }
 
 void World::SetMotorSpeed(JointId id, Real speed) {
   Impl& w = *impl_;
   const int d = w.joints.Dense(id);
   Joint& j = w.joints.All()[size_t(d)];
-  Require(j.type == JointType::kRevolute, "SetMotorSpeed: only a revolute joint has a motor");
+  Require(j.type == JointType::kRevolute || j.type == JointType::kPrismatic || j.type == JointType::kWheel,
+          "SetMotorSpeed: only revolute, prismatic and wheel joints have a motor");
   Require(IsFinite(speed), "SetMotorSpeed: speed must be finite");
   j.motorSpeed = speed;
   if (w.def.effects.sleep) {
@@ -1372,19 +1383,52 @@ void World::SetMotorSpeed(JointId id, Real speed) {
   }
 }
 
+void World::SetJointTarget(JointId id, Vec2 target) {
+  Impl& w = *impl_;
+  Joint& j = w.joints.All()[size_t(w.joints.Dense(id))];
+  Require(j.type == JointType::kMouse, "SetJointTarget: only a mouse joint has a target");
+  Require(IsFinite(target) && std::abs(target.x) <= kMaxCoordinate && std::abs(target.y) <= kMaxCoordinate,
+          "SetJointTarget: target must be finite and within 1e6 m");
+  j.target = target;
+  if (w.def.effects.sleep) w.islands.WakeIslandOf(w.bodies, w.JointBodies(j).second);
+}
+
+// The solver keeps a joint's impulses per sub-step (each sub-step re-applies them): the step's
+// impulse is softSubSteps times that.
 Vec2 World::GetJointLinearImpulse(JointId id) const {
-  const Joint& j = impl_->joints.All()[size_t(impl_->joints.Dense(id))];
-  return j.linearImpulse;
+  const Impl& w = *impl_;
+  const Joint& j = w.joints.All()[size_t(w.joints.Dense(id))];
+  const Real n = Real(w.def.softSubSteps);
+  const auto [a, b] = w.JointBodies(j);
+  switch (j.type) {
+    case JointType::kDistance: {
+      const Vec2 d = TransformPoint(w.bodies.xf[b], j.localAnchorB) - TransformPoint(w.bodies.xf[a], j.localAnchorA);
+      return (n * (j.angularImpulse + j.springImpulse + j.lowerImpulse - j.upperImpulse)) * Normalize(d);
+    }
+    case JointType::kPrismatic:
+    case JointType::kWheel: {
+      const Vec2 axis = Rotate(w.bodies.xf[a].q, j.localAxisA);
+      const Real along = j.springImpulse + j.lowerImpulse - j.upperImpulse + (j.type == JointType::kPrismatic ? j.motorImpulse : 0);
+      return n * (along * axis + j.perpImpulse * Vec2{-axis.y, axis.x});
+    }
+    default: return n * j.linearImpulse;
+  }
 }
 
 Real World::GetJointAngularImpulse(JointId id) const {
-  const Joint& j = impl_->joints.All()[size_t(impl_->joints.Dense(id))];
+  const Impl& w = *impl_;
+  const Joint& j = w.joints.All()[size_t(w.joints.Dense(id))];
+  const Real n = Real(w.def.softSubSteps);
   switch (j.type) {
-    case JointType::kRevolute: return j.springImpulse + j.motorImpulse + j.lowerImpulse - j.upperImpulse;
-    case JointType::kDistance: return j.angularImpulse + j.springImpulse + j.lowerImpulse - j.upperImpulse;
-    case JointType::kWeld: break;
+    case JointType::kRevolute: return n * (j.springImpulse + j.motorImpulse + j.lowerImpulse - j.upperImpulse);
+    case JointType::kWheel: return n * j.motorImpulse;
+    case JointType::kDistance:
+    case JointType::kMouse: return 0;
+    case JointType::kWeld:
+    case JointType::kPrismatic:
+    case JointType::kMotor: break;
   }
-  return j.angularImpulse;
+  return n * j.angularImpulse;
 }
 
 Vec2 World::GetLocalPoint(BodyId id, Vec2 worldPoint) const {
