@@ -40,7 +40,8 @@ class DebugDraw {
   /// A circle of `radius` at `center`; `angle` is its body's angle, for a line from the centre
   /// that shows the body turning.
   virtual void DrawCircle(Vec2 center, Real radius, Real angle, Color color) = 0;
-  /// A convex polygon, its 3 to 8 vertices counter-clockwise (the span lives for the call only).
+  /// A convex polygon, its 3 to 8 vertices counter-clockwise (the span lives for the call only);
+  /// 2 vertices only from DrawSegment's default, a line.
   virtual void DrawPolygon(std::span<const Vec2> vertices, Color color) = 0;
   /// A capsule: the points within `radius` of the segment p1-p2. By default its rectangle as a
   /// polygon and its two end discs as circles.
@@ -52,6 +53,13 @@ class DebugDraw {
     DrawPolygon(std::span<const Vec2>(rect, 4), color);
     DrawCircle(p1, radius, 0, color);
     DrawCircle(p2, radius, 0, color);
+  }
+  /// A segment or chain segment, a line from p1 to p2 (a chain segment's solid side is on the
+  /// left of p1 -> p2). By default a polygon of the two vertices p1, p2: the one DrawPolygon call
+  /// with fewer than 3 vertices, which a renderer that draws outlines draws as the line.
+  virtual void DrawSegment(Vec2 p1, Vec2 p2, Color color) {
+    const Vec2 line[2] = {p1, p2};
+    DrawPolygon(std::span<const Vec2>(line, 2), color);
   }
   /// A contact point and its unit normal (from the contact's first body to its second).
   virtual void DrawContact(Vec2 point, Vec2 normal) { (void)point, (void)normal; }

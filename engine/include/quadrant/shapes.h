@@ -46,6 +46,26 @@ struct Capsule {
   Real radius = Real(0.25);
 };
 
+/// A two-sided line segment from point1 to point2 (body coordinates): no area, so no mass. Only
+/// static and kinematic bodies may carry one; it collides with circles, polygons and capsules
+/// (exactly as a capsule of radius 0), never with another segment.
+struct Segment {
+  Vec2 point1{Real(-0.5), 0};
+  Vec2 point2{Real(0.5), 0};
+};
+
+/// One segment of a chain (Box2D 3's b2ChainSegment): one-sided, it collides only on its right
+/// side, the side of its normal (point2 - point1) turned clockwise, so a counter-clockwise loop
+/// faces outwards and a ground to stand on runs right to left (x decreasing). The ghost vertices
+/// are the neighbours' far ends, ghost1 -> point1 -> point2 -> ghost2: a contact whose normal
+/// points into a neighbour's side (the "ghost collision" of a box catching on a join) is
+/// skipped or turned to the segment's normal, so bodies slide across the joins smoothly.
+struct ChainSegment {
+  Vec2 ghost1{Real(-1.5), 0};
+  Segment segment;
+  Vec2 ghost2{Real(1.5), 0};
+};
+
 /// A convex polygon, counter-clockwise, with precomputed outward unit normals.
 /// Build it with MakePolygon or MakeBox: they validate the input.
 struct Polygon {
@@ -78,9 +98,17 @@ void ValidateCircle(const Circle& circle);
 /// Validates a capsule (finite centres, radius and length >= kMinFeatureSize, within the
 /// coordinate limit); throws quadrant::Error.
 void ValidateCapsule(const Capsule& capsule);
+/// Validates a segment (finite points within the coordinate limit, at least kMinFeatureSize
+/// apart); throws quadrant::Error.
+void ValidateSegment(const Segment& segment);
+/// Validates a chain segment: its segment as ValidateSegment, and its ghost vertices finite,
+/// within the coordinate limit and at least kMinFeatureSize from their ends; throws quadrant::Error.
+void ValidateChainSegment(const ChainSegment& chainSegment);
 MassData ComputeMass(const Circle& circle, Real density);
 MassData ComputeMass(const Capsule& capsule, Real density);
 MassData ComputeMass(const Polygon& polygon, Real density);
+/// A segment has no area: mass and inertia 0, its centre the segment's middle.
+MassData ComputeMass(const Segment& segment);
 
 /// Signed area of a polygon (positive for counter-clockwise).
 Real ComputeArea(const Polygon& polygon);
@@ -88,5 +116,6 @@ Real ComputeArea(const Polygon& polygon);
 AABB ComputeAABB(const Circle& circle, Transform xf);
 AABB ComputeAABB(const Capsule& capsule, Transform xf);
 AABB ComputeAABB(const Polygon& polygon, Transform xf);
+AABB ComputeAABB(const Segment& segment, Transform xf);
 
 }  // namespace quadrant

@@ -6,6 +6,7 @@
 
 #include <array>
 #include <cstdint>
+#include <vector>
 
 #include "quadrant/error.h"
 #include "quadrant/math.h"
@@ -30,7 +31,11 @@ enum class BodyType : uint8_t {
   kDynamic,    ///< moved by gravity and contacts
 };
 
-enum class ShapeType : uint8_t { kCircle, kPolygon, kCapsule };
+/// The hot loops test circles and polygons first; every later type is rarer and goes out of line.
+enum class ShapeType : uint8_t { kCircle, kPolygon, kCapsule, kSegment, kChainSegment };
+
+/// A segment or a chain segment: no area, static and kinematic bodies only.
+constexpr bool IsSegmentType(ShapeType t) { return t == ShapeType::kSegment || t == ShapeType::kChainSegment; }
 
 /// The single shape of a body. Quadrant bodies carry exactly one shape: every scene of the
 /// suite needs no more, and it keeps the hot loops free of a shape list per body.
@@ -51,6 +56,10 @@ struct ShapeDef {
   Real density = 1;       ///< kg/m^2, > 0 for dynamic bodies
   Real friction = Real(0.6);   ///< Coulomb coefficient, >= 0; mixed as sqrt(fa*fb) like Box2D
   Real restitution = 0;   ///< 0..1 (values above 1 are refused); mixed as max(ea, eb) like Box2D
+  // The zero-area shapes, after the materials so that the fields the hot loops read keep their
+  // offsets (the narrow phase reads shapes in whole cache lines).
+  Segment segment;            ///< ShapeType::kSegment
+  ChainSegment chainSegment;  ///< ShapeType::kChainSegment
 
   static ShapeDef MakeCircle(Real radius, Vec2 center = {});
   static ShapeDef Box(Real hx, Real hy, Vec2 center = {}, Real angle = 0);
@@ -58,6 +67,15 @@ struct ShapeDef {
   /// A capsule from center1 to center2 (body coordinates) of the given radius; validated
   /// (ValidateCapsule). Not under ParallelScheme::kQuadrants or in a DistributedWorld.
   static ShapeDef MakeCapsule(Vec2 center1, Vec2 center2, Real radius);
+  /// A two-sided segment from p1 to p2 (body coordinates); validated (ValidateSegment). Static
+  /// and kinematic bodies only (CreateBody refuses a dynamic one: no area, no mass). Not under
+  /// ParallelScheme::kQuadrants or in a DistributedWorld.
+  static ShapeDef MakeSegment(Vec2 p1, Vec2 p2);
+  /// One segment p1 -> p2 of a chain whose neighbouring vertices are ghost1 (before p1) and
+  /// ghost2 (after p2): one-sided, solid on the left, colliding on the right (ChainSegment has the
+  /// convention); validated (ValidateChainSegment). Static and kinematic bodies only.
+  /// MakeChainBodies builds a whole chain.
+  static ShapeDef MakeChainSegment(Vec2 ghost1, Vec2 p1, Vec2 p2, Vec2 ghost2);
 };
 
 /// Every category bit: the default mask of bodies and queries.
@@ -118,6 +136,27 @@ struct BodyDef {
   /// and the flag changes nothing. Default false.
   bool isBullet = false;
 };
+
+/// A chain of segments without ghost collisions (Box2D 3's b2ChainDef): terrain a box slides over
+/// without catching at the joins. Each segment is one-sided (ChainSegment: it collides on its
+/// right, so a counter-clockwise loop faces outwards and a ground runs right to left) and knows its
+/// neighbours' far ends as ghost vertices. Quadrant bodies carry one shape, so a chain is one
+/// static body per segment (MakeChainBodies, World::CreateChain).
+struct ChainDef {
+  /// World coordinates, in order; consecutive points at least 0.005 m apart. An open chain needs
+  /// 4 or more and, as in Box2D 3, its first and last segments are only ghosts (no collision):
+  /// points 1 to count - 2 are the ground. A loop needs 3 or more and closes back to the first.
+  std::vector<Vec2> points;
+  bool isLoop = false;
+  Real friction = Real(0.6);  ///< every segment's, as ShapeDef::friction
+  Real restitution = 0;       ///< every segment's, as ShapeDef::restitution
+  Filter filter;              ///< every segment body's
+};
+
+/// The static bodies of a chain, one ShapeDef::MakeChainSegment each, at the origin with the
+/// points as their shapes' coordinates (so neighbours share their vertices bit for bit).
+/// Validated; throws quadrant::Error naming the bad segment.
+std::vector<BodyDef> MakeChainBodies(const ChainDef& def);
 
 /// Throws quadrant::Error, with the message CreateBody would give, for a definition that
 /// World::CreateBody refuses whatever the world (bad numbers, shapes, densities, a mass that

@@ -64,6 +64,9 @@ class World {
 
   /// Validates `def` fully before adding anything; throws quadrant::Error on bad input.
   BodyId CreateBody(const BodyDef& def);
+  /// A chain as static bodies, one chain segment each (MakeChainBodies), in the chain's order;
+  /// validates the whole chain before adding any body. Throws quadrant::Error on bad input.
+  std::vector<BodyId> CreateChain(const ChainDef& def);
   /// Throws quadrant::Error for a stale or null id.
   void DestroyBody(BodyId id);
   bool IsValid(BodyId id) const;

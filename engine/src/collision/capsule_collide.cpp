@@ -253,6 +253,8 @@ Manifold CollideWithCapsule(const ShapeDef& a, Transform xfA, const ShapeDef& b,
       case ShapeType::kCircle: return CollideCapsuleAndCircle(a.capsule, xfA, b.circle, xfB, speculative);
       case ShapeType::kCapsule: return CollideCapsules(a.capsule, xfA, b.capsule, xfB, speculative);
       case ShapeType::kPolygon: return flipped(CollidePolygonAndCapsule(b.polygon, xfB, a.capsule, xfA, speculative));
+      case ShapeType::kSegment:
+      case ShapeType::kChainSegment: return {};  // CollideRareShapes takes segment pairs
     }
   }
   if (a.type == ShapeType::kCircle) return flipped(CollideCapsuleAndCircle(b.capsule, xfB, a.circle, xfA, speculative));

@@ -160,4 +160,39 @@ void ValidateCapsule(const Capsule& capsule) {
   }
 }
 
+namespace {
+
+bool WithinLimit(Vec2 p) { return std::abs(p.x) <= kMaxCoordinate && std::abs(p.y) <= kMaxCoordinate; }
+
+}  // namespace
+
+void ValidateSegment(const Segment& segment) {
+  if (!IsFinite(segment.point1) || !IsFinite(segment.point2)) throw Error("segment point is not finite");
+  if (!WithinLimit(segment.point1) || !WithinLimit(segment.point2)) {
+    throw Error("segment is beyond the coordinate limit of 1e6 m");
+  }
+  // Closer than the linear slop, the segment's direction (and so its normal) is noise.
+  const Real length = Length(segment.point2 - segment.point1);
+  if (!(length >= kMinFeatureSize)) {
+    throw Error("segment length must be at least 0.005 m, got " + std::to_string(length));
+  }
+}
+
+void ValidateChainSegment(const ChainSegment& chainSegment) {
+  ValidateSegment(chainSegment.segment);
+  if (!IsFinite(chainSegment.ghost1) || !IsFinite(chainSegment.ghost2)) {
+    throw Error("chain segment ghost vertex is not finite");
+  }
+  if (!WithinLimit(chainSegment.ghost1) || !WithinLimit(chainSegment.ghost2)) {
+    throw Error("chain segment ghost vertex is beyond the coordinate limit of 1e6 m");
+  }
+  // The neighbours' directions give the ghost normals: each needs a length too.
+  const Real before = Length(chainSegment.segment.point1 - chainSegment.ghost1);
+  const Real after = Length(chainSegment.ghost2 - chainSegment.segment.point2);
+  if (!(before >= kMinFeatureSize) || !(after >= kMinFeatureSize)) {
+    throw Error("chain segment ghost vertex must be at least 0.005 m from its end, got " +
+                std::to_string(std::min(before, after)));
+  }
+}
+
 }  // namespace quadrant

@@ -39,6 +39,17 @@ AABB ComputeAABB(const Capsule& capsule, Transform xf) {
   return {Min(p1, p2) - r, Max(p1, p2) + r};
 }
 
+MassData ComputeMass(const Segment& segment) {
+  MassData md;
+  md.center = Real(0.5) * (segment.point1 + segment.point2);
+  return md;
+}
+
+AABB ComputeAABB(const Segment& segment, Transform xf) {
+  const Vec2 p1 = TransformPoint(xf, segment.point1), p2 = TransformPoint(xf, segment.point2);
+  return {Min(p1, p2), Max(p1, p2)};
+}
+
 Real ComputeArea(const Polygon& polygon) {
   Real area = 0;
   const Vec2 o = polygon.vertices[0];

@@ -1,5 +1,5 @@
 // Narrow phase: circle-circle, polygon-circle and polygon-polygon manifolds (capsules:
-// capsule_collide.cpp).
+// capsule_collide.cpp; segments and chain segments: segment_collide.cpp).
 //
 // Polygon pairs use the separating axis test over both polygons' face normals, then clip the
 // incident edge against the side planes of the reference edge (Sutherland-Hodgman on one
@@ -479,9 +479,10 @@ bool BoxesVex() {
 
 [[gnu::always_inline]] inline Manifold CollideInline(const ShapeDef& a, const Transform& xfA, const ShapeDef& b,
                                                      const Transform& xfB, Real speculative) {
-  // One test for a capsule on either side (kCapsule is the only type with bit 1 set).
-  static_assert(uint8_t(ShapeType::kCapsule) == 2 && uint8_t(ShapeType::kPolygon) == 1 && uint8_t(ShapeType::kCircle) == 0);
-  if ((uint8_t(a.type) | uint8_t(b.type)) & 2) [[unlikely]] return CollideWithCapsule(a, xfA, b, xfB, speculative);
+  // One test for a capsule or a segment on either side (every type after kPolygon has a bit
+  // above bit 0 set; circles and polygons none).
+  static_assert(uint8_t(ShapeType::kPolygon) == 1 && uint8_t(ShapeType::kCircle) == 0);
+  if ((uint8_t(a.type) | uint8_t(b.type)) > 1) [[unlikely]] return CollideRareShapes(a, xfA, b, xfB, speculative);
   if (a.type == ShapeType::kCircle) {
     if (b.type == ShapeType::kCircle) return CollideCircles(a.circle, xfA, b.circle, xfB, speculative);
     Manifold m = CollidePolygonAndCircle(b.polygon, xfB, a.circle, xfA, speculative);

@@ -47,6 +47,10 @@ Manifold CollideCapsuleAndCircle(const Capsule& a, Transform xfA, const Circle& 
 Manifold CollidePolygonAndCapsule(const Polygon& a, Transform xfA, const Capsule& b, Transform xfB, Real speculative);
 Manifold CollideCapsules(const Capsule& a, Transform xfA, const Capsule& b, Transform xfB, Real speculative);
 Manifold CollideWithCapsule(const ShapeDef& a, Transform xfA, const ShapeDef& b, Transform xfB, Real speculative);
+/// Any pair with a shape other than a circle or a polygon in it (segment_collide.cpp): capsule
+/// pairs as CollideWithCapsule, segments as capsules of radius 0, chain segments one-sided with
+/// their ghost vertices; two segments of either kind never collide.
+Manifold CollideRareShapes(const ShapeDef& a, Transform xfA, const ShapeDef& b, Transform xfB, Real speculative);
 
 /// Dispatches on the shape types. For a circle A and polygon B it collides (B, A) and flips
 /// the normal so the result still points from A to B.

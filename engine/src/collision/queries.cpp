@@ -56,14 +56,48 @@ CapsuleD CapsuleWorld(const Capsule& c, const Transform& xf) {
   return w;
 }
 
+// A segment of either kind is a capsule of radius 0 for every test but the ray cast (and
+// contains no point: it has no area). A chain segment's overlaps are two-sided, as Box2D 3's.
+const Segment& SegmentOf(const ShapeDef& shape) {
+  return shape.type == ShapeType::kSegment ? shape.segment : shape.chainSegment.segment;
+}
+bool IsRoundCore(ShapeType t) { return t == ShapeType::kCapsule || IsSegmentType(t); }
+CapsuleD RoundCoreWorld(const ShapeDef& shape, const Transform& xf) {
+  if (shape.type == ShapeType::kCapsule) return CapsuleWorld(shape.capsule, xf);
+  const Segment& seg = SegmentOf(shape);
+  return CapsuleWorld(Capsule{seg.point1, seg.point2, 0}, xf);
+}
+
+// Where the ray p + t d, t in [0, 1], crosses the segment a-b: true, the fraction and the
+// segment's normal facing the ray's start. A ray along the segment's line, or one starting on
+// it, does not cross it. `oneSided`: only from the right of a -> b (a chain segment's face).
+bool RaySegment(D2 a, D2 b, D2 p, D2 d, bool oneSided, double& tOut, D2& normal) {
+  const D2 e{b.x - a.x, b.y - a.y};
+  const double len = std::sqrt(DotD(e, e));
+  D2 n{e.y / len, -e.x / len};  // right of a -> b
+  const D2 ap{p.x - a.x, p.y - a.y};
+  const double side = DotD(n, ap);  // > 0: the start is on the right
+  const double den = DotD(n, d);
+  if (side == 0 || den == 0 || (side > 0) == (den > 0)) return false;  // on the line, parallel, or away
+  if (oneSided && side < 0) return false;
+  const double t = -side / den;
+  if (t > 1) return false;
+  const double u = DotD(D2{ap.x + t * d.x, ap.y + t * d.y}, e);
+  if (u < 0 || u > DotD(e, e)) return false;
+  if (side < 0) n = {-n.x, -n.y};
+  tOut = t;
+  normal = n;
+  return true;
+}
+
 bool RayRoundedPolygon(const D2* v, const D2* n, int count, double radius, D2 p, D2 d, double& tOut, D2& normal);
 
 }  // namespace
 
 bool ShapeOverlapsBox(const ShapeDef& shape, const Transform& xf, const AABB& box) {
-  if (shape.type == ShapeType::kCapsule) {
+  if (IsRoundCore(shape.type)) {
     // The segment within the radius of the box: an end inside, or the nearest of the box's edges.
-    const CapsuleD c = CapsuleWorld(shape.capsule, xf);
+    const CapsuleD c = RoundCoreWorld(shape, xf);
     const D2 lo{box.lower.x, box.lower.y}, hi{box.upper.x, box.upper.y};
     for (const D2& v : c.v) {
       if (v.x >= lo.x && v.x <= hi.x && v.y >= lo.y && v.y <= hi.y) return true;
@@ -102,6 +136,16 @@ bool ShapeOverlapsBox(const ShapeDef& shape, const Transform& xf, const AABB& bo
 
 bool RayCastShape(const ShapeDef& shape, const Transform& xf, Vec2 p1, Vec2 p2, RayHit& hit) {
   const D2 d{double(p2.x) - p1.x, double(p2.y) - p1.y};
+  if (IsSegmentType(shape.type)) {
+    const CapsuleD c = RoundCoreWorld(shape, xf);
+    double t = 0;
+    D2 normal{0, 0};
+    if (!RaySegment(c.v[0], c.v[1], ToD(p1), d, shape.type == ShapeType::kChainSegment, t, normal)) return false;
+    hit.fraction = Real(t);
+    hit.point = {Real(p1.x + t * d.x), Real(p1.y + t * d.y)};
+    hit.normal = {Real(normal.x), Real(normal.y)};
+    return true;
+  }
   if (shape.type == ShapeType::kCapsule) {
     const CapsuleD c = CapsuleWorld(shape.capsule, xf);
     double t = 0;
@@ -171,7 +215,8 @@ double CrossD(D2 a, D2 b) { return a.x * b.y - a.y * b.x; }
 // radius.
 struct WorldShape {
   bool circle = false;
-  bool capsule = false;
+  bool capsule = false;  // a capsule, or a segment of either kind (radius 0)
+  bool segment = false;
   D2 centre{0, 0};
   double radius = 0;
   D2 v[kMaxPolygonVertices];
@@ -187,9 +232,10 @@ WorldShape ToWorld(const ShapeDef& shape, const Transform& xf) {
     w.radius = shape.circle.radius;
     return w;
   }
-  if (shape.type == ShapeType::kCapsule) {
-    const CapsuleD c = CapsuleWorld(shape.capsule, xf);
+  if (IsRoundCore(shape.type)) {
+    const CapsuleD c = RoundCoreWorld(shape, xf);
     w.capsule = true;
+    w.segment = shape.type != ShapeType::kCapsule;
     w.count = 2;
     w.v[0] = c.v[0], w.v[1] = c.v[1], w.n[0] = c.n[0], w.n[1] = c.n[1];
     w.radius = c.radius;
@@ -343,6 +389,7 @@ void SetHit(RayHit& hit, double t, D2 point, D2 normal) {
 
 bool ShapesOverlap(const ShapeDef& a, const Transform& xfA, const ShapeDef& b, const Transform& xfB) {
   const WorldShape sa = ToWorld(a, xfA), sb = ToWorld(b, xfB);
+  if (sa.segment && sb.segment) return false;  // as in the narrow phase: segments never meet
   if (sa.capsule || sb.capsule) {
     // The cores' distance against the radii: a circle's core is its centre, a capsule's its
     // segment, a polygon's itself (a core inside it is at distance 0).
@@ -390,6 +437,7 @@ bool ShapesOverlap(const ShapeDef& a, const Transform& xfA, const ShapeDef& b, c
 bool ShapeContainsPoint(const ShapeDef& shape, const Transform& xf, Vec2 point) {
   const WorldShape s = ToWorld(shape, xf);
   const D2 p = ToD(point);
+  if (s.segment) return false;  // no area (Box2D's rule)
   if (s.capsule) return PointSegmentSquared(s.v[0], s.v[1], p) <= s.radius * s.radius;
   if (s.circle) {
     const D2 d = Sub(p, s.centre);

@@ -476,6 +476,8 @@ void DistributedWorld::Load(std::span<const BodyDef> bodies) {
     // A rank's record carries a circle or a polygon (ToRecord).
     Require(bodies[i].shape.type != ShapeType::kCapsule, "DistributedWorld::Load: capsule shapes are not supported (body " +
                                                             std::to_string(i) + ")");
+    Require(!IsSegmentType(bodies[i].shape.type), "DistributedWorld::Load: segment shapes are not supported (body " +
+                                                      std::to_string(i) + ")");
     AppendBody(row, bodies[i], w.def, static_cast<uint32_t>(i));
     const Record r = Impl::ToRecord(row, 0, static_cast<uint32_t>(i));
     if (r.type == BodyType::kStatic) {

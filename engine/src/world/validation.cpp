@@ -115,6 +115,10 @@ ShapeDef ValidateBodyDef(const BodyDef& def) {
     shape.polygon = MakePolygon(std::span<const Vec2>(shape.polygon.vertices.data(), size_t(count)));
   } else if (shape.type == ShapeType::kCapsule) {
     ValidateCapsule(shape.capsule);
+  } else if (shape.type == ShapeType::kSegment) {
+    ValidateSegment(shape.segment);
+  } else if (shape.type == ShapeType::kChainSegment) {
+    ValidateChainSegment(shape.chainSegment);
   } else {
     throw Error("ShapeDef.type is unknown");
   }
@@ -126,6 +130,8 @@ MassData ShapeMass(const ShapeDef& shape) {
   switch (shape.type) {
     case ShapeType::kCircle: return ComputeMass(shape.circle, shape.density);
     case ShapeType::kCapsule: return ComputeMass(shape.capsule, shape.density);
+    case ShapeType::kSegment: return ComputeMass(shape.segment);
+    case ShapeType::kChainSegment: return ComputeMass(shape.chainSegment.segment);
     case ShapeType::kPolygon: break;
   }
   return ComputeMass(shape.polygon, shape.density);
@@ -135,6 +141,8 @@ void RequireDynamicMass(const ShapeDef& shape, const std::string& prefix) {
   // Density times area can overflow (or underflow) float: a mass or inertia that is not a
   // positive finite number would poison the solver, so the body is refused.
   // Subnormal values count as underflow: they lose precision and make 1/m overflow.
+  // Box2D's rule: a shape of no area gives no mass, so a segment rides static and kinematic bodies.
+  Require(!IsSegmentType(shape.type), prefix + "a segment has no area (mass 0): only a static or kinematic body may carry it");
   const MassData md = ShapeMass(shape);
   constexpr Real kSmallest = std::numeric_limits<Real>::min();
   Require(IsFinite(md.mass) && md.mass >= kSmallest && IsFinite(md.rotationalInertia) &&

@@ -57,6 +57,60 @@ ShapeDef ShapeDef::MakeCapsule(Vec2 center1, Vec2 center2, Real radius) {
   return s;
 }
 
+ShapeDef ShapeDef::MakeSegment(Vec2 p1, Vec2 p2) {
+  ShapeDef s;
+  s.type = ShapeType::kSegment;
+  s.segment = Segment{p1, p2};
+  ValidateSegment(s.segment);
+  return s;
+}
+
+ShapeDef ShapeDef::MakeChainSegment(Vec2 ghost1, Vec2 p1, Vec2 p2, Vec2 ghost2) {
+  ShapeDef s;
+  s.type = ShapeType::kChainSegment;
+  s.chainSegment = ChainSegment{ghost1, Segment{p1, p2}, ghost2};
+  ValidateChainSegment(s.chainSegment);
+  return s;
+}
+
+std::vector<BodyDef> MakeChainBodies(const ChainDef& def) {
+  const std::vector<Vec2>& p = def.points;
+  const int n = static_cast<int>(p.size());
+  Require(def.isLoop ? n >= 3 : n >= 4, std::string("ChainDef: ") + (def.isLoop ? "a loop needs at least 3 points" :
+                                                                                   "an open chain needs at least 4 points") +
+                                            ", got " + std::to_string(n));
+  // A repeated point is the likely mistake: named as such (the segments' checks cover the rest).
+  for (int k = 0; k + (def.isLoop ? 0 : 1) < n; ++k) {
+    const Vec2 a = p[size_t(k)], b = p[size_t((k + 1) % n)];
+    const Real gap = Length(b - a);
+    Require(!IsFinite(a) || !IsFinite(b) || gap >= kMinFeatureSize || !IsFinite(gap),
+            "ChainDef: points " + std::to_string(k) + " and " + std::to_string((k + 1) % n) + " are " +
+                std::to_string(gap) + " m apart (at least 0.005 m)");
+  }
+  // A loop: a segment from every point to the next, wrapping. An open chain: its first and last
+  // segments are only the ghosts of their neighbours (Box2D 3's rule), n - 3 segments.
+  const int first = def.isLoop ? 0 : 1, count = def.isLoop ? n : n - 3;
+  const auto at = [&](int k) { return p[size_t((k % n + n) % n)]; };
+  std::vector<BodyDef> bodies;
+  bodies.reserve(size_t(count));
+  for (int k = first; k < first + count; ++k) {
+    BodyDef body;
+    body.type = BodyType::kStatic;
+    body.filter = def.filter;
+    try {
+      body.shape = ShapeDef::MakeChainSegment(at(k - 1), at(k), at(k + 1), at(k + 2));
+    } catch (const Error& e) {
+      throw Error("ChainDef: segment " + std::to_string(k - first) + " (points " + std::to_string(k) + " to " +
+                  std::to_string((k + 1) % n) + "): " + e.what());
+    }
+    body.shape.friction = def.friction;
+    body.shape.restitution = def.restitution;
+    CheckBodyDef(body);
+    bodies.push_back(body);
+  }
+  return bodies;
+}
+
 ShapeDef ShapeDef::FromPolygon(const Polygon& polygon) {
   ShapeDef s;
   s.type = ShapeType::kPolygon;
@@ -253,6 +307,8 @@ int AppendBody(Bodies& b, const BodyDef& def, const WorldDef& worldDef, uint32_t
   Real boundRadius = 0;
   Require(worldDef.scheme != ParallelScheme::kQuadrants || shape.type != ShapeType::kCapsule,
           "CreateBody: a capsule needs ParallelScheme::kDeterministic");
+  Require(worldDef.scheme != ParallelScheme::kQuadrants || !IsSegmentType(shape.type),
+          "CreateBody: a segment needs ParallelScheme::kDeterministic");
   Require(def.isAwake || (def.type == BodyType::kDynamic && worldDef.effects.sleep),
           "CreateBody: BodyDef.isAwake = false needs a dynamic body and WorldDef.effects.sleep");
   if (shape.type == ShapeType::kCircle) {
@@ -261,6 +317,10 @@ int AppendBody(Bodies& b, const BodyDef& def, const WorldDef& worldDef, uint32_t
   } else if (shape.type == ShapeType::kCapsule) {
     md = ComputeMass(shape.capsule, shape.density);
     boundRadius = Real(0.5) * Length(shape.capsule.center2 - shape.capsule.center1) + shape.capsule.radius;
+  } else if (IsSegmentType(shape.type)) {
+    const Segment& seg = shape.type == ShapeType::kSegment ? shape.segment : shape.chainSegment.segment;
+    md = ComputeMass(seg);
+    boundRadius = Real(0.5) * Length(seg.point2 - seg.point1);
   } else {
     md = ComputeMass(shape.polygon, shape.density);
     for (int k = 0; k < shape.polygon.count; ++k) {
@@ -330,6 +390,16 @@ BodyId World::CreateBody(const BodyDef& def) {
     w.UpdateAABB(i, 0);
   }
   return BodyId{slot, w.generation[slot]};
+}
+
+std::vector<BodyId> World::CreateChain(const ChainDef& def) {
+  const std::vector<BodyDef> bodies = MakeChainBodies(def);  // throws before anything changes
+  // What CreateBody checks beyond CheckBodyDef depends on the world alone, the same for every
+  // segment: the first body is refused or none is.
+  std::vector<BodyId> ids;
+  ids.reserve(bodies.size());
+  for (const BodyDef& body : bodies) ids.push_back(CreateBody(body));
+  return ids;
 }
 
 void World::DestroyBody(BodyId id) {
@@ -1248,6 +1318,9 @@ void World::Draw(DebugDraw& draw, uint32_t flags) const {
         draw.DrawCircle(TransformPoint(xf, s.circle.center), s.circle.radius, quadrant::GetAngle(xf.q), color);
       } else if (s.type == ShapeType::kCapsule) {
         draw.DrawCapsule(TransformPoint(xf, s.capsule.center1), TransformPoint(xf, s.capsule.center2), s.capsule.radius, color);
+      } else if (IsSegmentType(s.type)) {
+        const Segment& seg = s.type == ShapeType::kSegment ? s.segment : s.chainSegment.segment;
+        draw.DrawSegment(TransformPoint(xf, seg.point1), TransformPoint(xf, seg.point2), color);
       } else {
         Vec2 v[kMaxPolygonVertices];
         for (int k = 0; k < s.polygon.count; ++k) v[k] = TransformPoint(xf, s.polygon.vertices[k]);

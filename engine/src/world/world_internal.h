@@ -93,6 +93,18 @@ struct CandidatePair;
 /// place a body row is made: World::CreateBody and the distributed world both use it.
 int AppendBody(Bodies& bodies, const BodyDef& def, const WorldDef& worldDef, uint32_t slot);
 
+// The shape's box, out of the hot loops (queries, drawing, GetAABB).
+inline AABB ComputeShapeAABB(const ShapeDef& s, const Transform& xf) {
+  switch (s.type) {
+    case ShapeType::kCircle: return ComputeAABB(s.circle, xf);
+    case ShapeType::kCapsule: return ComputeAABB(s.capsule, xf);
+    case ShapeType::kSegment: return ComputeAABB(s.segment, xf);
+    case ShapeType::kChainSegment: return ComputeAABB(s.chainSegment.segment, xf);
+    case ShapeType::kPolygon: break;
+  }
+  return ComputeAABB(s.polygon, xf);
+}
+
 // The broad-phase box of a body: its shape's AABB grown by half the speculative distance on
 // every side (so two shapes closer than that distance pair up), and for moving bodies swept
 // by this step's displacement, so a pair that can meet within the step is found before it
@@ -110,7 +122,8 @@ int AppendBody(Bodies& bodies, const BodyDef& def, const WorldDef& worldDef, uin
     const Vec2 r{s.circle.radius, s.circle.radius};
     return {p - r, p + r};
   }
-  if (s.type == ShapeType::kCapsule) [[unlikely]] return ComputeAABB(s.capsule, xf);
+  // Capsules and segments after the polygons: one compare for all of them.
+  if (uint8_t(s.type) > uint8_t(ShapeType::kPolygon)) [[unlikely]] return ComputeShapeAABB(s, xf);
   const Polygon& poly = s.polygon;
   Vec2 lower = TransformPoint(xf, poly.vertices[0]);
   Vec2 upper = lower;
@@ -122,15 +135,6 @@ int AppendBody(Bodies& bodies, const BodyDef& def, const WorldDef& worldDef, uin
   return {lower, upper};
 }
 
-// The shape's box, out of the hot loops (queries, drawing, GetAABB).
-inline AABB ComputeShapeAABB(const ShapeDef& s, const Transform& xf) {
-  switch (s.type) {
-    case ShapeType::kCircle: return ComputeAABB(s.circle, xf);
-    case ShapeType::kCapsule: return ComputeAABB(s.capsule, xf);
-    case ShapeType::kPolygon: break;
-  }
-  return ComputeAABB(s.polygon, xf);
-}
 
 // `sweep` is the time the box is swept over: the step's dt, or 0 for only the base margin.
 [[gnu::always_inline]] inline AABB SweptBoxOver(const ShapeDef& s, const Transform& xf, const BodyVelocity& bv, Real boundRadius,
