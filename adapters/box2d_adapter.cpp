@@ -116,9 +116,19 @@ class Box2dAdapter final : public Adapter {
       // body, with the capsule's exact mass set after (the three fixtures' own overlap).
       b2PolygonShape capsuleBox;
       b2CircleShape capsuleEnds[2];
+      // Segments are b2EdgeShape: two-sided, or one-sided with its ghost vertices (v0, v3) for a
+      // chain segment. Box2D 2.4.1's one-sided edge collides on the right of v1 -> v2, the
+      // scene's convention, so the vertices pass in their order.
+      b2EdgeShape edge;
       if (desc.shape == ShapeKind::kCircle) {
         circle.m_radius = static_cast<float>(desc.radius);
         fixture.shape = &circle;
+      } else if (desc.shape == ShapeKind::kSegment) {
+        edge.SetTwoSided(ToB2(desc.vertices[0]), ToB2(desc.vertices[1]));
+        fixture.shape = &edge;
+      } else if (desc.shape == ShapeKind::kChainSegment) {
+        edge.SetOneSided(ToB2(desc.vertices[0]), ToB2(desc.vertices[1]), ToB2(desc.vertices[2]), ToB2(desc.vertices[3]));
+        fixture.shape = &edge;
       } else if (desc.shape == ShapeKind::kCapsule) {
         const Vec2 c1 = desc.vertices[0], c2 = desc.vertices[1];
         const Vec2 axis = c2 - c1;

@@ -162,6 +162,11 @@ class BulletAdapter final : public Adapter {
           (b.vertices.size() != 2 || b.vertices[0].y != 0 || b.vertices[1].y != 0 || b.vertices[0].x != -b.vertices[1].x)) {
         throw Unsupported("bullet: a capsule must lie along its body's x axis, centred on the origin (btCapsuleShapeX)");
       }
+      // Bullet's 2D mode wraps convex shapes of some thickness (btConvex2dShape); a line has none,
+      // and a thin box would be another shape, caught on its corners.
+      if (b.shape == ShapeKind::kSegment || b.shape == ShapeKind::kChainSegment) {
+        throw Unsupported("bullet: no segment or chain shape in Bullet's 2D mode (a thin box would be another shape)");
+      }
     }
     if (!scene.joints.empty()) {
       throw Unsupported("bullet: the adapter does not load joints (Bullet's constraints are not mapped to the plane yet)");

@@ -190,6 +190,13 @@ class ChipmunkAdapter final : public Adapter {
       } else if (desc.shape == ShapeKind::kCapsule) {
         // Chipmunk's segment with a radius is a capsule.
         shape = cpSegmentShapeNew(body, ToCp(desc.vertices[0]), ToCp(desc.vertices[1]), cpFloat(desc.radius));
+      } else if (desc.shape == ShapeKind::kSegment) {
+        shape = cpSegmentShapeNew(body, ToCp(desc.vertices[0]), ToCp(desc.vertices[1]), 0.0);
+      } else if (desc.shape == ShapeKind::kChainSegment) {
+        // Chipmunk's neighbours keep a body from catching on the joins, as the ghost vertices do,
+        // but its segment stays two-sided: a body behind the chain collides with it there.
+        shape = cpSegmentShapeNew(body, ToCp(desc.vertices[1]), ToCp(desc.vertices[2]), 0.0);
+        cpSegmentShapeSetNeighbors(shape, ToCp(desc.vertices[0]), ToCp(desc.vertices[3]));
       } else {
         std::vector<cpVect> verts;
         verts.reserve(desc.vertices.size());

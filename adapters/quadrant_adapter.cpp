@@ -46,6 +46,9 @@ class QuadrantAdapter final : public Adapter {
         if (b.categoryBits != 1 || b.maskBits != 0xFFFFFFFFu) {
           throw Unsupported("quadrant's quadrants scheme has no collision filters (the deterministic scheme has)");
         }
+        if (b.shape == ShapeKind::kSegment || b.shape == ShapeKind::kChainSegment) {
+          throw Unsupported("quadrant's quadrants scheme has no segments (the deterministic scheme has)");
+        }
       }
     }
     auto world = std::make_unique<World>(def);

@@ -73,6 +73,34 @@ BodyDesc MakeCapsuleBody(Vec2 position, Real halfLength, Real radius, bool dynam
   return b;
 }
 
+BodyDesc MakeSegmentBody(Vec2 position, Vec2 p1, Vec2 p2, bool kinematic) {
+  BodyDesc b;
+  b.dynamic = false;
+  b.kinematic = kinematic;
+  b.shape = ShapeKind::kSegment;
+  b.vertices = {p1, p2};
+  b.position = position;
+  return b;
+}
+
+std::vector<BodyDesc> MakeChainBodyDescs(const std::vector<Vec2>& points, bool isLoop, Real friction) {
+  ChainDef def;
+  def.points = points;
+  def.isLoop = isLoop;
+  def.friction = friction;
+  std::vector<BodyDesc> out;
+  for (const BodyDef& body : MakeChainBodies(def)) {  // the engine's rules, once
+    const ChainSegment& c = body.shape.chainSegment;
+    BodyDesc b;
+    b.dynamic = false;
+    b.shape = ShapeKind::kChainSegment;
+    b.vertices = {c.ghost1, c.segment.point1, c.segment.point2, c.ghost2};
+    b.friction = friction;
+    out.push_back(b);
+  }
+  return out;
+}
+
 BodyDef ToBodyDef(const BodyDesc& b) {
   BodyDef bd;
   bd.type = b.dynamic ? BodyType::kDynamic : b.kinematic ? BodyType::kKinematic : BodyType::kStatic;
@@ -90,6 +118,16 @@ BodyDef ToBodyDef(const BodyDesc& b) {
     if (b.vertices.size() != 2) throw Error("a capsule has 2 centres, got " + std::to_string(b.vertices.size()));
     bd.shape.type = ShapeType::kCapsule;
     bd.shape.capsule = Capsule{b.vertices[0], b.vertices[1], b.radius};
+  } else if (b.shape == ShapeKind::kSegment) {
+    if (b.vertices.size() != 2) throw Error("a segment has 2 points, got " + std::to_string(b.vertices.size()));
+    bd.shape.type = ShapeType::kSegment;
+    bd.shape.segment = Segment{b.vertices[0], b.vertices[1]};
+  } else if (b.shape == ShapeKind::kChainSegment) {
+    if (b.vertices.size() != 4) {
+      throw Error("a chain segment has 4 vertices (ghost1, point1, point2, ghost2), got " + std::to_string(b.vertices.size()));
+    }
+    bd.shape.type = ShapeType::kChainSegment;
+    bd.shape.chainSegment = ChainSegment{b.vertices[0], Segment{b.vertices[1], b.vertices[2]}, b.vertices[3]};
   } else {
     if (b.vertices.size() > size_t(kMaxPolygonVertices)) {
       throw Error("a polygon has at most 8 vertices, got " + std::to_string(b.vertices.size()));
@@ -107,6 +145,7 @@ BodyDef ToBodyDef(const BodyDesc& b) {
 }
 
 MassProperties ComputeMassProperties(const BodyDesc& body) {
+  if (body.shape == ShapeKind::kSegment || body.shape == ShapeKind::kChainSegment) return {};  // no area: no mass
   MassData md = body.shape == ShapeKind::kCircle    ? ComputeMass(Circle{{0, 0}, body.radius}, body.density)
                 : body.shape == ShapeKind::kCapsule ? ComputeMass(ToBodyDef(body).shape.capsule, body.density)
                                                     : ComputeMass(MakePolygon(body.vertices), body.density);

@@ -15,7 +15,11 @@
 
 namespace quadrant::scene {
 
-enum class ShapeKind : uint8_t { kCircle, kPolygon, kCapsule };
+/// kSegment: a two-sided line segment (vertices: its 2 points); kChainSegment: one segment of a
+/// chain (vertices: ghost1, point1, point2, ghost2; one-sided, colliding on the right of point1 ->
+/// point2, quadrant::ChainSegment's convention, which Box2D 2.4.1's one-sided b2EdgeShape shares).
+/// Both have no area: static and kinematic bodies only (MakeChainBodyDescs builds a chain).
+enum class ShapeKind : uint8_t { kCircle, kPolygon, kCapsule, kSegment, kChainSegment };
 
 /// Effects a scene calls for: the engine's own type (quadrant/world.h), so the scene API and the
 /// engine cannot drift (scene.h had a copy). An adapter whose engine cannot honour one that is on
@@ -41,6 +45,7 @@ struct BodyDesc {
   ShapeKind shape = ShapeKind::kCircle;
   Real radius = Real(0.5);          ///< circles (m), centred on the body origin; capsules' radius
   /// Polygons: convex, counter-clockwise, body coordinates. Capsules: the two centres.
+  /// Segments: the two points. Chain segments: ghost1, point1, point2, ghost2.
   std::vector<Vec2> vertices;
   Vec2 position;                    ///< body origin (m)
   Real angle = 0;                   ///< rad
@@ -111,6 +116,16 @@ BodyDesc MakeBoxBody(Vec2 position, Real hx, Real hy, bool dynamic = true);
 /// A capsule body: centres (-halfLength, 0) and (halfLength, 0), `radius`, at `position`.
 BodyDesc MakeCapsuleBody(Vec2 position, Real halfLength, Real radius, bool dynamic = true);
 
+/// A segment body (static, or kinematic with `kinematic`) from p1 to p2, body coordinates, at
+/// `position`.
+BodyDesc MakeSegmentBody(Vec2 position, Vec2 p1, Vec2 p2, bool kinematic = false);
+
+/// A chain (quadrant::ChainDef's rules: an open chain of 4 or more points collides on points 1 to
+/// count - 2, a loop of 3 or more all round) as static chain-segment bodies at the origin, world
+/// points as their vertices. Throws quadrant::Error for a chain MakeChainBodies refuses.
+std::vector<BodyDesc> MakeChainBodyDescs(const std::vector<Vec2>& points, bool isLoop = false,
+                                         Real friction = Real(0.6));
+
 /// Exact mass (kg) and rotational inertia about the centre of mass (kg m^2) of a body as the
 /// scene defines it; every adapter gives its engine these values where the engine lets it.
 struct MassProperties {
@@ -129,7 +144,8 @@ BodyDef ToBodyDef(const BodyDesc& body);
 /// Validates a whole scene; throws quadrant::Error naming the first bad body or field. The
 /// world settings are checked here (time step > 0, iterations >= 1, ...); each body is checked
 /// by the engine's own rules (quadrant::CheckBodyDef on ToBodyDef, so the scene API and the
-/// engine refuse the same bodies, message prefixed with "scene body <i>: "), plus what only a
+/// engine refuse the same bodies, message prefixed with "scene body <i>: "; a segment or chain
+/// segment on a dynamic body among them), plus what only a
 /// scene can get wrong: dynamic and kinematic both set, polygon vertices not in
 /// counter-clockwise convex order (the engine re-orders them; other engines need the order).
 /// Joints: body indices in range and distinct, finite values, lowerAngle <= upperAngle within

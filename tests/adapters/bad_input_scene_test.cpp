@@ -92,6 +92,46 @@ std::vector<Row> Rows() {
          b.radius = Real(0.2);
        }),
        "scene body 2: capsule length (centre to centre) must be at least 0.005 m"},
+      {"segment on a dynamic body", body(kBall, [](BodyDesc& b) {
+         b.shape = ShapeKind::kSegment;
+         b.vertices = {{0, 0}, {1, 0}};
+       }),
+       "scene body 2: a segment has no area (mass 0): only a static or kinematic body may carry it"},
+      {"chain segment on a dynamic body", body(kBall, [](BodyDesc& b) {
+         b.shape = ShapeKind::kChainSegment;
+         b.vertices = {{2, 0}, {1, 0}, {0, 0}, {-1, 0}};
+       }),
+       "scene body 2: a segment has no area"},
+      {"segment with 3 points", body(0, [](BodyDesc& b) {
+         b.shape = ShapeKind::kSegment;
+         b.vertices = {{0, 0}, {1, 0}, {2, 0}};
+       }),
+       "scene body 0: a segment has 2 points, got 3"},
+      {"segment points 1 mm apart", body(0, [](BodyDesc& b) {
+         b.shape = ShapeKind::kSegment;
+         b.vertices = {{0, 0}, {Real(0.001), 0}};
+       }),
+       "scene body 0: segment length must be at least 0.005 m, got 0.001000"},
+      {"segment point NaN", body(0, [](BodyDesc& b) {
+         b.shape = ShapeKind::kSegment;
+         b.vertices = {{kNaN, 0}, {1, 0}};
+       }),
+       "scene body 0: segment point is not finite"},
+      {"segment beyond 1e6 m", body(0, [](BodyDesc& b) {
+         b.shape = ShapeKind::kSegment;
+         b.vertices = {{0, 0}, {Real(2e6), 0}};
+       }),
+       "scene body 0: segment is beyond the coordinate limit of 1e6 m"},
+      {"chain segment with 2 vertices", body(0, [](BodyDesc& b) {
+         b.shape = ShapeKind::kChainSegment;
+         b.vertices = {{0, 0}, {1, 0}};
+       }),
+       "scene body 0: a chain segment has 4 vertices (ghost1, point1, point2, ghost2), got 2"},
+      {"chain segment ghost on its end", body(0, [](BodyDesc& b) {
+         b.shape = ShapeKind::kChainSegment;
+         b.vertices = {{1, 0}, {1, 0}, {0, 0}, {-1, 0}};
+       }),
+       "scene body 0: chain segment ghost vertex must be at least 0.005 m from its end"},
       {"density 0 (dynamic)", body(kBox, [](BodyDesc& b) { b.density = 0; }), "scene body 1: a dynamic body needs ShapeDef.density > 0"},
       {"density -1", body(kBall, [](BodyDesc& b) { b.density = -1; }), "ShapeDef.density must be finite and >= 0"},
       {"density NaN", body(kBox, [](BodyDesc& b) { b.density = kNaN; }), "ShapeDef.density must be finite and >= 0"},

@@ -422,6 +422,20 @@ TEST(DistributedBadInput, GravityScaleAndBulletRefused) {
   ExpectErrorOnEveryRank([&] { dw.Step(Real(1.0 / 60.0)); }, "Load a scene first");
 }
 
+TEST(DistributedBadInput, CapsuleAndSegmentShapesRefused) {
+  // A rank's record carries a circle or a polygon.
+  WorldDef def;
+  def.solver = SolverType::kJacobi;
+  DistributedWorld dw(def, DistributedDef{}, MPI_COMM_WORLD);
+  std::vector<BodyDef> bodies = SmallScene(0);
+  bodies[3].shape = ShapeDef::MakeCapsule({Real(-0.2), 0}, {Real(0.2), 0}, Real(0.1));
+  ExpectErrorOnEveryRank([&] { dw.Load(bodies); }, "DistributedWorld::Load: capsule shapes are not supported (body 3)");
+  bodies[3].type = BodyType::kStatic;
+  bodies[3].shape = ShapeDef::MakeSegment({Real(-0.2), 0}, {Real(0.2), 0});
+  ExpectErrorOnEveryRank([&] { dw.Load(bodies); }, "DistributedWorld::Load: segment shapes are not supported (body 3)");
+  ExpectErrorOnEveryRank([&] { dw.Step(Real(1.0 / 60.0)); }, "Load a scene first");
+}
+
 TEST(DistributedBadInput, MoreRanksThanTiles) {
   if (Size() < 2) GTEST_SKIP() << "needs two ranks";
   WorldDef def;
