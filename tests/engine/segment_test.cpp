@@ -420,5 +420,40 @@ TEST(SegmentTest, BadSegmentsAndChainsAreRefusedAndTheWorldIsUnchanged) {
   EXPECT_EQ(q.GetBodyCount(), 0);
 }
 
+TEST(ChainTest, APileOnAChainAndSegmentsHasTheSameHashOnOneAndTwoThreads) {
+  uint64_t hashes[2] = {};
+  for (int t = 1; t <= 2; ++t) {
+    WorldDef def;
+    def.threadCount = t;
+    def.minParallelItems = 8;
+    World world(def);
+    // A bowl: a chain loop would face outwards, so an open chain, right to left, its face up.
+    ChainDef bowl;
+    for (int k = 0; k <= 24; ++k) {
+      const double a = 3.14159265358979 * (1 - k / 24.0);  // pi .. 0: x from -6 to 6
+      bowl.points.push_back({Real(-6 * std::cos(a)), Real(6 - 6 * std::sin(a))});
+    }
+    world.CreateChain(bowl);
+    AddSegment(world, {-2, 3}, {2, Real(3.5)});  // a two-sided shelf in the middle
+    for (int k = 0; k < 40; ++k) {
+      const Vec2 p{Real(-3 + (k % 8) * 0.8), Real(5 + (k / 8) * 0.8)};
+      if (k % 2) {
+        AddBox(world, p, Real(0.25), Real(0.25), 1, Real(0.3 * k));
+      } else {
+        AddCircle(world, p, Real(0.25));
+      }
+    }
+    StepN(world, 300);
+    for (BodyId id : world.GetBodyIds()) {
+      if (world.GetType(id) != BodyType::kDynamic) continue;
+      const Vec2 p = world.GetPosition(id);
+      ASSERT_TRUE(IsFinite(p));
+      EXPECT_LT(Length(p - Vec2{0, 6}), 6.0);  // inside the bowl
+    }
+    hashes[t - 1] = world.StateHash();
+  }
+  EXPECT_EQ(hashes[0], hashes[1]);
+}
+
 }  // namespace
 }  // namespace quadrant
