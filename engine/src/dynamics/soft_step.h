@@ -71,6 +71,10 @@ struct SoftJointRow {
   Real axialMass;       // 1 / (iA + iB), the angular rows' mass (0 if neither turns)
   Vec2 axisA;           // prismatic, wheel: the axis in world axes at the step's start
   bool inChain;         // revolute: its point rows are solved with its chain's (SolveChain)
+  // The joint's settings the sub-steps read, copied here so a pass reads its rows alone (the
+  // Joint records are larger and in another order): see Joint.
+  bool enableLimit, enableMotor, enableSpring;
+  Real lower, upper, motorSpeed, maxMotorTorque, maxForce, correctionFactor, hertz, angularHertz, length;
   Softness spring, angularSpring;
   // Accumulated impulses (per sub-step), loaded from the joint and stored back after the step.
   Vec2 linearImpulse;
@@ -137,7 +141,7 @@ class SoftStepSolver final : public Solver {
   void PrepareJoints(const StepContext& ctx, Real h);
   void WarmStartJoints(int begin, int end);
   void SolveJoints(int begin, int end, bool useBias);
-  void StoreJoints();
+  void StoreJoints(StageRunner& run);
   void FindChains(int bodyCount);
   void SolveChain(int chain, bool useBias);
   // fn(begin, end) over the joint rows, a stage per joint colour, queued in the sub-step's region.
@@ -300,7 +304,7 @@ class SoftStepSolver final : public Solver {
   std::vector<SoftJointRow> jointRows_;         // in colour order
   std::vector<int> jointColorStart_;        // per colour: its first row (and one past the last)
   std::vector<uint64_t> jointBodyColors_;   // per body: the joint colours it holds (zero between steps)
-  std::vector<int> jointColorOf_;
+  std::vector<int> jointColorOf_, jointSlotOf_;
   Softness jointSoft_;                      // the rigid rows' softness this step
   // Chains (WorldDef::jointChainSolve): chain c's rows, in order, are chainRows_[chainStart_[c]
   // .. chainStart_[c + 1]); chainShared_[k] is the body the k-th row shares with the next.

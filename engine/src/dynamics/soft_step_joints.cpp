@@ -87,46 +87,71 @@ void SoftStepSolver::PrepareJoints(const StepContext& ctx, Real h) {
   const Real hertz = std::min(def.jointHertz, Real(0.25) / h);
   const Softness rigid = MakeSoftness(hertz, def.jointDampingRatio, h);
   jointSoft_ = rigid;
+  // Each joint's row position (serial: the colours' fill order), the masks back to zero for the
+  // next step; then the rows, in parallel (each reads its joint and bodies, writes its own row).
+  std::vector<int>& slotOf = jointSlotOf_;
+  slotOf.assign(joints_.size(), -1);
   for (int k = 0; k < n; ++k) {
     const Joint& j = joints_[size_t(k)];
     if (colorOf[size_t(k)] < 0) continue;
-    // The masks back to zero for the next step, as the rows are made.
     jointBodyColors_[j.a] = 0;
     jointBodyColors_[j.b] = 0;
-    SoftJointRow& r = jointRows_[size_t(fill[size_t(colorOf[size_t(k)])]++)];
-    r.joint = k;
-    r.a = j.a;
-    r.b = j.b;
-    r.type = j.type;
-    const BodyInverseMass ia = bodies.inv[j.a], ib = bodies.inv[j.b];
-    r.dynA = j.type != JointType::kMouse && ia.invMass > 0;
-    r.dynB = ib.invMass > 0;
-    r.mA = r.dynA ? ia.invMass : 0;
-    r.mB = ib.invMass;
-    r.iA = rotation && r.dynA ? ia.invInertia : 0;
-    r.iB = rotation ? ib.invInertia : 0;
-    const Rot qA = bodies.xf[j.a].q, qB = bodies.xf[j.b].q;
-    r.frameA = Rotate(qA, j.localAnchorA - bodies.localCenter[j.a]);
-    r.frameB = Rotate(qB, j.localAnchorB - bodies.localCenter[j.b]);
-    r.deltaCenter = bodies.center[j.b] - (j.type == JointType::kMouse ? j.target : bodies.center[j.a]);
-    r.axisA = Rotate(qA, j.localAxisA);
-    r.deltaAngle = Wrap(RelativeAngle(qA, qB) - j.referenceAngle);
-    const Real turning = r.iA + r.iB;
-    r.axialMass = turning > 0 ? Real(1) / turning : Real(0);
-    r.spring = j.enableSpring || j.type == JointType::kWeld || j.type == JointType::kMouse
-                   ? MakeSoftness(j.hertz, j.dampingRatio, h)
-                   : Softness{};
-    r.angularSpring = j.type == JointType::kWeld ? MakeSoftness(j.angularHertz, j.angularDampingRatio, h) : Softness{};
-    const bool warm = def.effects.warmStarting;
-    r.linearImpulse = warm ? j.linearImpulse : Vec2{};
-    r.angularImpulse = warm ? j.angularImpulse : 0;
-    r.springImpulse = warm ? j.springImpulse : 0;
-    r.motorImpulse = warm ? j.motorImpulse : 0;
-    r.lowerImpulse = warm ? j.lowerImpulse : 0;
-    r.upperImpulse = warm ? j.upperImpulse : 0;
-    r.perpImpulse = warm ? j.perpImpulse : 0;
-    r.inChain = false;
+    slotOf[size_t(k)] = fill[size_t(colorOf[size_t(k)])]++;
   }
+  const bool warm = def.effects.warmStarting;
+  ctx.run->For(Stage::kSolve, n, ctx.run->MinHeavyItems(), [&](int begin, int end, int) {
+    for (int k = begin; k < end; ++k) {
+      if (slotOf[size_t(k)] < 0) continue;
+      const Joint& j = joints_[size_t(k)];
+      SoftJointRow& r = jointRows_[size_t(slotOf[size_t(k)])];
+      r.joint = k;
+      r.a = j.a;
+      r.b = j.b;
+      r.type = j.type;
+      const BodyInverseMass ia = bodies.inv[j.a], ib = bodies.inv[j.b];
+      r.dynA = j.type != JointType::kMouse && ia.invMass > 0;
+      r.dynB = ib.invMass > 0;
+      r.mA = r.dynA ? ia.invMass : 0;
+      r.mB = ib.invMass;
+      r.iA = rotation && r.dynA ? ia.invInertia : 0;
+      r.iB = rotation ? ib.invInertia : 0;
+      const Rot qA = bodies.xf[j.a].q, qB = bodies.xf[j.b].q;
+      r.frameA = Rotate(qA, j.localAnchorA - bodies.localCenter[j.a]);
+      r.frameB = Rotate(qB, j.localAnchorB - bodies.localCenter[j.b]);
+      r.deltaCenter = bodies.center[j.b] - (j.type == JointType::kMouse ? j.target : bodies.center[j.a]);
+      r.axisA = Rotate(qA, j.localAxisA);
+      // The angle only where a row reads it (an atan2: joint_grid's plain revolute joints need none).
+      const bool angled = j.type == JointType::kWeld || j.type == JointType::kPrismatic || j.type == JointType::kMotor ||
+                          (j.type == JointType::kRevolute && (j.enableLimit || j.enableSpring));
+      r.deltaAngle = angled ? Wrap(RelativeAngle(qA, qB) - j.referenceAngle) : Real(0);
+      const Real turning = r.iA + r.iB;
+      r.axialMass = turning > 0 ? Real(1) / turning : Real(0);
+      r.spring = j.enableSpring || j.type == JointType::kWeld || j.type == JointType::kMouse
+                     ? MakeSoftness(j.hertz, j.dampingRatio, h)
+                     : Softness{};
+      r.angularSpring = j.type == JointType::kWeld ? MakeSoftness(j.angularHertz, j.angularDampingRatio, h) : Softness{};
+      r.linearImpulse = warm ? j.linearImpulse : Vec2{};
+      r.angularImpulse = warm ? j.angularImpulse : 0;
+      r.springImpulse = warm ? j.springImpulse : 0;
+      r.motorImpulse = warm ? j.motorImpulse : 0;
+      r.lowerImpulse = warm ? j.lowerImpulse : 0;
+      r.upperImpulse = warm ? j.upperImpulse : 0;
+      r.perpImpulse = warm ? j.perpImpulse : 0;
+      r.inChain = false;
+      r.enableLimit = j.enableLimit;
+      r.enableMotor = j.enableMotor;
+      r.enableSpring = j.enableSpring;
+      r.lower = j.lower;
+      r.upper = j.upper;
+      r.motorSpeed = j.motorSpeed;
+      r.maxMotorTorque = j.maxMotorTorque;
+      r.maxForce = j.maxForce;
+      r.correctionFactor = j.correctionFactor;
+      r.hertz = j.hertz;
+      r.angularHertz = j.angularHertz;
+      r.length = j.length;
+    }
+  });
   chainStart_.assign(1, 0);
   chainRows_.clear();
   chainShared_.clear();
@@ -344,17 +369,20 @@ void SoftStepSolver::SolveChain(int chain, bool useBias) {
 }
 
 // The joints' impulses back into them, for the next step's warm start and the read-back.
-void SoftStepSolver::StoreJoints() {
-  for (const SoftJointRow& r : jointRows_) {
-    Joint& j = joints_[size_t(r.joint)];
-    j.linearImpulse = r.linearImpulse;
-    j.angularImpulse = r.angularImpulse;
-    j.springImpulse = r.springImpulse;
-    j.motorImpulse = r.motorImpulse;
-    j.lowerImpulse = r.lowerImpulse;
-    j.upperImpulse = r.upperImpulse;
-    j.perpImpulse = r.perpImpulse;
-  }
+void SoftStepSolver::StoreJoints(StageRunner& run) {
+  run.For(Stage::kSolve, static_cast<int>(jointRows_.size()), run.MinHeavyItems(), [&](int begin, int end, int) {
+    for (int k = begin; k < end; ++k) {
+      const SoftJointRow& r = jointRows_[size_t(k)];
+      Joint& j = joints_[size_t(r.joint)];
+      j.linearImpulse = r.linearImpulse;
+      j.angularImpulse = r.angularImpulse;
+      j.springImpulse = r.springImpulse;
+      j.motorImpulse = r.motorImpulse;
+      j.lowerImpulse = r.lowerImpulse;
+      j.upperImpulse = r.upperImpulse;
+      j.perpImpulse = r.perpImpulse;
+    }
+  });
 }
 
 namespace {
@@ -453,7 +481,7 @@ void SoftStepSolver::SolveJoints(int begin, int end, bool useBias) {
   const Softness rigid = jointSoft_;
   for (int k = begin; k < end; ++k) {
     SoftJointRow& r = jointRows_[size_t(k)];
-    const Joint& j = joints_[size_t(r.joint)];
+    const SoftJointRow& j = r;  // the joint's settings, as copied into its row
     SolverBody& A = s[r.a];
     SolverBody& B = s[r.b];
     Ends e{A.v, B.v, A.w, B.w};

@@ -164,7 +164,7 @@ void SoftStepSolver::SolveContacts(StepContext& ctx, const StepPlan& step, doubl
   }
   // Lean, the last relax pass stored the impulses (RelaxPasses; WorldDef validation keeps
   // softSubSteps and softRelaxIterations >= 1, so that pass always runs).
-  if (!jointRows_.empty()) StoreJoints();
+  if (!jointRows_.empty()) StoreJoints(run);
   if (!step.lean) {
     StoreRowImpulses(run);
     run.For(Stage::kSolve, m, run.MinHeavyItems(), [&](int b, int e, int) { constraints_.StoreImpulses(ctx.contacts, b, e); });
