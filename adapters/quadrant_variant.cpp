@@ -10,7 +10,8 @@
 // for its impulses accumulated and clamped over the passes (WorldDef::thesisAccumulatedImpulse),
 // "b2pos" for Box2D 2.4.1's position pass instead of its push (WorldDef::thesisPositionPass),
 // "relaxfriction" for soft_step's friction in every relax pass, "b3soft"
-// for soft_step with Box2D 3's settings (one relax pass, no mass-ratio limit, damping ratio 10).
+// for soft_step with Box2D 3's settings (one relax pass, no mass-ratio limit, damping ratio 10),
+// "nochain" for revolute chains solved joint by joint (WorldDef::jointChainSolve off).
 // The default is the engine's own (WorldDef: soft_step with two relax passes and a mass-ratio
 // limit of 10) with the uniform grid and the deterministic scheme.
 // relax<N> and ratio<N> override the engine's defaults; "pgs" alone is Box2D 2.4's solver.
@@ -80,6 +81,8 @@ QuadrantVariant QuadrantVariant::Parse(std::string_view variant) {
       v.thesisAccumulated = true;
     } else if (token == "b2pos") {
       v.thesisPositionPass = true;
+    } else if (token == "nochain") {
+      v.jointChainSolve = false;  // WorldDef::jointChainSolve: revolute chains joint by joint
     } else if (token == "b2skin") {
       v.polygonSkin = Real(0.01);  // Box2D 2.4.1's b2_polygonRadius
     } else if (token == "quadtree") {
@@ -93,7 +96,8 @@ QuadrantVariant QuadrantVariant::Parse(std::string_view variant) {
     } else {
       throw Error("unknown quadrant variant '" + std::string(token) +
                   "' (known: thesis, pgs, soft_step, jacobi, quadtree, grid, deterministic, quadrants, sub<N>, it<N>, "
-                  "pos<N>, relax<N>, ratio<N>, passes<N>, b3soft, relaxfriction, b2rest, b2skin, coupled, points, accum, b2pos)");
+                  "pos<N>, relax<N>, ratio<N>, passes<N>, b3soft, relaxfriction, b2rest, b2skin, coupled, points, accum, b2pos, "
+                  "nochain)");
     }
     if (end == std::string_view::npos) break;
     start = end + 1;
@@ -133,6 +137,7 @@ WorldDef QuadrantVariant::MakeWorldDef(const Scene& scene, int threads) const {
   if (thesisPasses > 0) def.thesisPasses = thesisPasses;
   def.thesisAccumulatedImpulse = thesisAccumulated;
   def.thesisPositionPass = thesisPositionPass;
+  def.jointChainSolve = jointChainSolve;
   if (box2d3Soft) {
     def.softRelaxIterations = 1;
     def.softMassRatioLimit = 0;

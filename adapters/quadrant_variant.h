@@ -25,6 +25,7 @@ struct QuadrantVariant {
   int thesisPasses = 0;        ///< passes<N>: the thesis solver's WorldDef::thesisPasses; 0: the engine's
   bool thesisAccumulated = false;  ///< accum: the thesis solver's WorldDef::thesisAccumulatedImpulse
   bool thesisPositionPass = false;  ///< b2pos: the thesis solver's WorldDef::thesisPositionPass
+  bool jointChainSolve = true;   // nochain: WorldDef::jointChainSolve off
   int massRatioLimit = 0;      ///< ratio<N>: soft_step's WorldDef::softMassRatioLimit; 0: the engine's
   int relaxIterations = 0;     ///< relax<N>: soft_step's WorldDef::softRelaxIterations; 0: the engine's
   bool box2d3Soft = false;     ///< b3soft: soft_step with Box2D 3's settings (relax 1, no ratio limit, damping 10)

@@ -445,4 +445,85 @@ Scene MakeNewtonsCradle(Mixing mixing) {
   return s;
 }
 
+// ---- Joint hard cases (issue #27 item 5) -----------------------------------------------------
+
+Scene MakeHeavyChain(Mixing mixing) {
+  Scene s = BaseScene("heavy_chain");
+  (void)mixing;  // nothing touches: no material is mixed
+  // A static pin at (0, 40); 30 links of 0.5 m x 0.2 m (density 1: 0.1 kg), each pinned to the one
+  // above at their shared end; a ball of 1000 links' mass (100 kg, r = 5.64 m) pinned below.
+  const Real top = 40, length = Real(0.5);
+  const int links = 30;
+  BodyDesc pin = MakeCircleBody({0, top}, Real(0.05), /*dynamic=*/false);
+  s.bodies.push_back(pin);
+  for (int k = 0; k < links; ++k) {
+    s.bodies.push_back(Box({0, top - length * (Real(k) + Real(0.5))}, Real(0.1), length / 2, true, Real(0.6)));
+    s.joints.push_back(JointDesc{int(s.bodies.size()) - 2, int(s.bodies.size()) - 1, {0, top - length * Real(k)}});
+  }
+  const Real linkMass = Real(0.2) * length;
+  const Real radius = Real(std::sqrt(1000.0 * double(linkMass) / 3.14159265358979323846));
+  BodyDesc heavy = Ball({0, top - length * Real(links) - radius}, radius, Real(0.6), 0);
+  s.bodies.push_back(heavy);
+  s.joints.push_back(JointDesc{int(s.bodies.size()) - 2, int(s.bodies.size()) - 1, {0, top - length * Real(links)}});
+  s.bounds = Bounds({-20, top - 40}, {20, top + 1});
+  return s;
+}
+
+namespace {
+
+// A capsule body along its x axis (centres +-halfLength), turned by `angle`.
+BodyDesc Limb(Vec2 centre, Real halfLength, Real radius, Real angle, Real friction) {
+  BodyDesc b = MakeCapsuleBody(centre, halfLength, radius);
+  b.angle = angle;
+  b.friction = friction;
+  return b;
+}
+
+}  // namespace
+
+Scene MakeRagdollPile(int count, Mixing mixing) {
+  RequireRange(count, 1, 200, "ragdoll count");
+  Scene s = BaseScene("ragdoll_pile");
+  const Real f = Coef(mixing, Real(0.6));
+  // A box 8 m wide and 20 m high: the ground and two walls.
+  s.bodies.push_back(Ground({0, 0}, 5, f));
+  s.bodies.push_back(Box({-4.5f, 10}, Real(0.5), 10, false, f, 0));
+  s.bodies.push_back(Box({4.5f, 10}, Real(0.5), 10, false, f, 0));
+  const Real up = Real(3.14159265358979323846 / 2);
+  // Each ragdoll: torso, head, two arms, two upper and two lower legs (capsules, the head a
+  // circle), 9 bodies and 8 revolute joints with limits and a little joint friction (a motor of
+  // speed 0 and 0.2 N m), standing, feet 0.1 m up. Columns of four, rows 2 m apart.
+  for (int n = 0; n < count; ++n) {
+    const Vec2 o{Real(-2.4) + Real(1.6) * Real(n % 4), Real(1) + Real(2.2) * Real(n / 4)};
+    const int torso = int(s.bodies.size());
+    s.bodies.push_back(Limb(o + Vec2{0, Real(1.2)}, Real(0.2), Real(0.13), up, f));
+    auto limb = [&](Vec2 centre, Real half, Real radius) {
+      s.bodies.push_back(Limb(o + centre, half, radius, up, f));
+      return int(s.bodies.size()) - 1;
+    };
+    auto join = [&](int a, int b, Vec2 anchor, Real lower, Real upper) {
+      JointDesc j{a, b, o + anchor};
+      j.enableLimit = true;
+      j.lowerAngle = lower;
+      j.upperAngle = upper;
+      j.enableMotor = true;
+      j.maxMotorTorque = Real(0.2);
+      s.joints.push_back(j);
+    };
+    BodyDesc head = Ball(o + Vec2{0, Real(1.65)}, Real(0.12), f, 0);
+    s.bodies.push_back(head);
+    join(torso, int(s.bodies.size()) - 1, {0, Real(1.53)}, Real(-0.5), Real(0.5));
+    for (Real side : {Real(-1), Real(1)}) {
+      const int arm = limb({side * Real(0.27), Real(1.15)}, Real(0.22), Real(0.06));
+      join(torso, arm, {side * Real(0.27), Real(1.43)}, Real(-2.5), Real(2.5));
+      const int thigh = limb({side * Real(0.09), Real(0.75)}, Real(0.18), Real(0.08));
+      join(torso, thigh, {side * Real(0.09), Real(1.0)}, Real(-1.5), Real(1.5));
+      const int shin = limb({side * Real(0.09), Real(0.3)}, Real(0.16), Real(0.07));
+      join(thigh, shin, {side * Real(0.09), Real(0.52)}, Real(-2.0), Real(0.05));
+    }
+  }
+  s.bounds = Bounds({-5, -1}, {5, 20});
+  return s;
+}
+
 }  // namespace quadrant::scene

@@ -153,6 +153,14 @@ Scene MakeConfined(int side = 25, uint64_t seed = 42, Mixing mixing = Mixing::kB
 /// a hexagonal lattice from the floor up with random velocities up to 2 m/s (seeded). Walls first
 /// (4 bodies), then the circles.
 Scene MakeClosedBox(int count = 2000, uint64_t seed = 42, Mixing mixing = Mixing::kBox2d);
+/// Issue #27's heavy chain: 30 links of 0.5 m x 0.2 m (0.1 kg) hanging from a static pin by
+/// revolute joints, a ball of 1000 links' mass (100 kg) pinned at the bottom. Bodies: the pin, the
+/// links top down, the ball.
+Scene MakeHeavyChain(Mixing mixing = Mixing::kBox2d);
+/// Issue #27's ragdoll pile: `count` ragdolls (9 bodies: capsule limbs and torso, a circle head; 8
+/// revolute joints with limits and 0.2 N m of joint friction) dropped in columns of four into a box
+/// 8 m wide. Bodies: ground, two walls, then each ragdoll's torso, head, and per side arm, thigh, shin.
+Scene MakeRagdollPile(int count = 12, Mixing mixing = Mixing::kBox2d);
 /// MakePyramid(20) at (1e5, -8e4).
 Scene MakeFarFromOrigin(Mixing mixing = Mixing::kBox2d);
 /// Five touching balls (r = 0.5 m) in a row at x = 0, 1, 2, 3, 4, zero gravity, friction 0,

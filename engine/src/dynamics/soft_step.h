@@ -70,6 +70,11 @@ struct SoftJointRow {
   Real mA, mB, iA, iB;
   Real axialMass;       // 1 / (iA + iB), the angular rows' mass (0 if neither turns)
   Vec2 axisA;           // prismatic, wheel: the axis in world axes at the step's start
+  bool inChain;         // revolute: its point rows are solved with its chain's (SolveChain)
+  // The joint's settings the sub-steps read, copied here so a pass reads its rows alone (the
+  // Joint records are larger and in another order): see Joint.
+  bool enableLimit, enableMotor, enableSpring;
+  Real lower, upper, motorSpeed, maxMotorTorque, maxForce, correctionFactor, hertz, angularHertz, length;
   Softness spring, angularSpring;
   // Accumulated impulses (per sub-step), loaded from the joint and stored back after the step.
   Vec2 linearImpulse;
@@ -136,7 +141,9 @@ class SoftStepSolver final : public Solver {
   void PrepareJoints(const StepContext& ctx, Real h);
   void WarmStartJoints(int begin, int end);
   void SolveJoints(int begin, int end, bool useBias);
-  void StoreJoints();
+  void StoreJoints(StageRunner& run);
+  void FindChains(int bodyCount);
+  void SolveChain(int chain, bool useBias);
   // fn(begin, end) over the joint rows, a stage per joint colour, queued in the sub-step's region.
   static constexpr int kJointGrain = 32;
   template <class Fn>
@@ -297,8 +304,31 @@ class SoftStepSolver final : public Solver {
   std::vector<SoftJointRow> jointRows_;         // in colour order
   std::vector<int> jointColorStart_;        // per colour: its first row (and one past the last)
   std::vector<uint64_t> jointBodyColors_;   // per body: the joint colours it holds (zero between steps)
-  std::vector<int> jointColorOf_;
+  std::vector<int> jointColorOf_, jointSlotOf_;
   Softness jointSoft_;                      // the rigid rows' softness this step
+  // Chains (WorldDef::jointChainSolve): chain c's rows, in order, are chainRows_[chainStart_[c]
+  // .. chainStart_[c + 1]); chainShared_[k] is the body the k-th row shares with the next.
+  struct ChainSlot {
+    Vec2 rA, rB, rhs, x;
+    Real inv[4];  // the eliminated diagonal block's inverse
+    Real c[4];    // the coupling block with the next row
+  };
+  std::vector<int> chainRows_, chainStart_, chainShared_;
+  std::vector<ChainSlot> chainSlots_;
+  std::vector<int> chainDegree_;             // per body: revolute rows on it (FindChains)
+  std::vector<std::pair<int, int>> chainEnds_;  // per body: up to two of those rows
+  std::vector<uint8_t> chainEligible_, chainSeen_;
+  int ChainCount() const { return static_cast<int>(chainStart_.size()) - 1; }
+  // SolveChain over every chain, one stage (chains share no dynamic body), queued in the region.
+  void ChainPass(bool useBias) {
+    if (ChainCount() <= 0) return;
+    regionPass_.push_back(static_cast<int>(regionFns_.size()));
+    regionFns_.emplace_back([this, useBias](int b, int e) {
+      for (int c = b; c < e; ++c) SolveChain(c, useBias);
+    });
+    regionPlan_.push_back({ChainCount(), 1});
+    regionFirst_.push_back(0);
+  }
   Real jointInvH_ = 0;  // kept only with restitution (Run: lean)
 };
 

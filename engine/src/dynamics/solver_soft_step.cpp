@@ -164,7 +164,7 @@ void SoftStepSolver::SolveContacts(StepContext& ctx, const StepPlan& step, doubl
   }
   // Lean, the last relax pass stored the impulses (RelaxPasses; WorldDef validation keeps
   // softSubSteps and softRelaxIterations >= 1, so that pass always runs).
-  if (!jointRows_.empty()) StoreJoints();
+  if (!jointRows_.empty()) StoreJoints(run);
   if (!step.lean) {
     StoreRowImpulses(run);
     run.For(Stage::kSolve, m, run.MinHeavyItems(), [&](int b, int e, int) { constraints_.StoreImpulses(ctx.contacts, b, e); });
@@ -191,12 +191,14 @@ void SoftStepSolver::SubStep(StepContext& ctx, const StepPlan& step, int sub, co
     });
   }
   JointPass([this](int b, int e) { SolveJoints(b, e, true); });
+  ChainPass(true);
   ForEachGroup(run, simd, [&](auto lanes, SoftRowGroup& g, int lane) {
     SolveRows<decltype(lanes), kRotation, kFriction, true>(states_.data(), g, lane, prm);
   });
   // The rotation guard is per world step (ctx.dt): per sub-step it allowed n times the turn.
   IntegrateStatePositions(run, *ctx.bodies, def, step.h, ctx.dt);
   JointPass([this](int b, int e) { SolveJoints(b, e, false); });
+  ChainPass(false);
   const bool last = sub == step.n - 1;
   RelaxPasses<kRotation, kFriction>(run, def, simd, last ? lastPrm : prm, prm, step.lean && last);
   EndRegion(run);
