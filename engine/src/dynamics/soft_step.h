@@ -318,10 +318,13 @@ class SoftStepSolver final : public Solver {
   // Chains (WorldDef::jointChainSolve): chain c's rows, in order, are chainRows_[chainStart_[c]
   // .. chainStart_[c + 1]); chainShared_[k] is the body the k-th row shares with the next.
   struct ChainSlot {
-    Vec2 rA, rB, rhs, x;
-    Real inv[4];  // the eliminated diagonal block's inverse
-    Real c[4];    // the coupling block with the next row
+    Vec2 rA, rB;
+    Real rhs[3], x[3];  // two entries for a revolute chain, three for a weld chain
+    Real inv[9];        // the eliminated diagonal block's inverse
+    Real c[9];          // the coupling block with the next row
   };
+  template <int N>
+  void SolveChainOf(int chain, bool useBias);
   std::vector<int> chainRows_, chainStart_, chainShared_;
   std::vector<ChainSlot> chainSlots_;
   std::vector<int> chainDegree_;             // per body: revolute rows on it (FindChains)
