@@ -4,6 +4,7 @@
 // loop measures Box2D and nothing of ours.
 #include <box2d/box2d.h>
 
+#include <cfloat>
 #include <cmath>
 #include <memory>
 #include <string>
@@ -78,7 +79,11 @@ class Box2dAdapter final : public Adapter {
       }
     }
     for (const JointDesc& d : scene.joints) {
-      if (d.enableSpring) throw Unsupported("Box2D 2.4.1's revolute joint has no spring");
+      if (d.kind == JointKind::kRevolute && d.enableSpring) throw Unsupported("Box2D 2.4.1's revolute joint has no spring");
+      if (d.kind == JointKind::kPrismatic && d.enableSpring) throw Unsupported("Box2D 2.4.1's prismatic joint has no spring");
+      if (d.kind == JointKind::kWeld && d.hertz > 0) {
+        throw Unsupported("Box2D 2.4.1's weld joint is soft only in its angle (linear hertz must be 0)");
+      }
     }
 
     bodies_.clear();
@@ -177,19 +182,89 @@ class Box2dAdapter final : public Adapter {
       }
       bodies_.push_back(body);
     }
-    // Revolute joints: b2RevoluteJointDef::Initialize takes the world anchor and the bodies'
-    // angles at load as the reference, as the scene does.
+    // Joints: each b2*JointDef::Initialize takes the world anchor (and axis) and the bodies'
+    // angles at load as the reference, as the scene does. Springs in Box2D 2.4.1 are a stiffness
+    // and a damping, from hertz and damping ratio on the pair's masses (b2LinearStiffness,
+    // b2AngularStiffness).
     for (const JointDesc& d : scene.joints) {
-      b2RevoluteJointDef jd;
-      jd.Initialize(bodies_[size_t(d.bodyA)], bodies_[size_t(d.bodyB)], ToB2(d.anchor));
-      jd.collideConnected = d.collideConnected;
-      jd.enableLimit = d.enableLimit;
-      jd.lowerAngle = static_cast<float>(d.lowerAngle);
-      jd.upperAngle = static_cast<float>(d.upperAngle);
-      jd.enableMotor = d.enableMotor;
-      jd.motorSpeed = static_cast<float>(d.motorSpeed);
-      jd.maxMotorTorque = static_cast<float>(d.maxMotorTorque);
-      world_->CreateJoint(&jd);
+      b2Body* a = bodies_[size_t(d.bodyA)];
+      b2Body* b = bodies_[size_t(d.bodyB)];
+      switch (d.kind) {
+        case JointKind::kRevolute: {
+          b2RevoluteJointDef jd;
+          jd.Initialize(a, b, ToB2(d.anchor));
+          jd.collideConnected = d.collideConnected;
+          jd.enableLimit = d.enableLimit;
+          jd.lowerAngle = static_cast<float>(d.lowerAngle);
+          jd.upperAngle = static_cast<float>(d.upperAngle);
+          jd.enableMotor = d.enableMotor;
+          jd.motorSpeed = static_cast<float>(d.motorSpeed);
+          jd.maxMotorTorque = static_cast<float>(d.maxMotorTorque);
+          world_->CreateJoint(&jd);
+          break;
+        }
+        case JointKind::kPrismatic: {
+          b2PrismaticJointDef jd;
+          jd.Initialize(a, b, ToB2(d.anchor), ToB2(Normalize(d.axis)));
+          jd.collideConnected = d.collideConnected;
+          jd.enableLimit = d.enableLimit;
+          jd.lowerTranslation = static_cast<float>(d.lowerTranslation);
+          jd.upperTranslation = static_cast<float>(d.upperTranslation);
+          jd.enableMotor = d.enableMotor;
+          jd.motorSpeed = static_cast<float>(d.motorSpeed);
+          jd.maxMotorForce = static_cast<float>(d.maxMotorForce);
+          world_->CreateJoint(&jd);
+          break;
+        }
+        case JointKind::kDistance: {
+          b2DistanceJointDef jd;
+          jd.Initialize(a, b, ToB2(d.anchor), ToB2(d.anchorB));
+          if (d.length > 0) jd.length = static_cast<float>(d.length);
+          jd.collideConnected = d.collideConnected;
+          if (d.enableSpring) {
+            // Box2D 2.4.1 solves the spring (stiffness 0: none) between minLength and maxLength.
+            jd.minLength = d.enableLimit ? static_cast<float>(d.minLength) : 0.0f;
+            jd.maxLength = d.enableLimit ? static_cast<float>(d.maxLength) : FLT_MAX;
+            jd.stiffness = jd.damping = 0.0f;
+            if (d.hertz > 0) {
+              b2LinearStiffness(jd.stiffness, jd.damping, static_cast<float>(d.hertz), static_cast<float>(d.dampingRatio), a, b);
+            }
+          } else {
+            jd.minLength = jd.maxLength = jd.length;  // a rod: Box2D's rigid case
+          }
+          world_->CreateJoint(&jd);
+          break;
+        }
+        case JointKind::kWeld: {
+          b2WeldJointDef jd;
+          jd.Initialize(a, b, ToB2(d.anchor));
+          jd.collideConnected = d.collideConnected;
+          if (d.angularHertz > 0) {
+            b2AngularStiffness(jd.stiffness, jd.damping, static_cast<float>(d.angularHertz),
+                               static_cast<float>(d.angularDampingRatio), a, b);
+          }
+          world_->CreateJoint(&jd);
+          break;
+        }
+        case JointKind::kWheel: {
+          b2WheelJointDef jd;
+          jd.Initialize(a, b, ToB2(d.anchor), ToB2(Normalize(d.axis)));
+          jd.collideConnected = d.collideConnected;
+          if (d.enableSpring) {
+            b2LinearStiffness(jd.stiffness, jd.damping, static_cast<float>(d.hertz), static_cast<float>(d.dampingRatio), a, b);
+          } else {
+            jd.stiffness = jd.damping = 0.0f;
+          }
+          jd.enableLimit = d.enableLimit;
+          jd.lowerTranslation = static_cast<float>(d.lowerTranslation);
+          jd.upperTranslation = static_cast<float>(d.upperTranslation);
+          jd.enableMotor = d.enableMotor;
+          jd.motorSpeed = static_cast<float>(d.motorSpeed);
+          jd.maxMotorTorque = static_cast<float>(d.maxMotorTorque);
+          world_->CreateJoint(&jd);
+          break;
+        }
+      }
     }
   }
 

@@ -119,6 +119,13 @@ class ChipmunkAdapter final : public Adapter {
     const Effects& fx = scene.effects;
     if (fx.continuous) throw Unsupported("chipmunk: no continuous collision detection");
     if (!fx.warmStarting) throw Unsupported("chipmunk: warm starting cannot be switched off");
+    for (const JointDesc& d : scene.joints) {
+      if (d.kind == JointKind::kWheel) throw Unsupported("chipmunk: no wheel joint (a groove with a spring is not mapped)");
+      if (d.kind == JointKind::kPrismatic && (d.enableMotor || d.enableSpring)) {
+        throw Unsupported("chipmunk: a groove joint has no motor or spring along its axis");
+      }
+      if (d.kind == JointKind::kWeld && d.hertz > 0) throw Unsupported("chipmunk: a pivot cannot be soft (weld linear hertz)");
+    }
     // Chipmunk damps every body by one space-wide fraction per second, linear and angular
     // alike; a scene whose dynamic bodies differ cannot be given to it.
     double damping = 0;
@@ -212,10 +219,13 @@ class ChipmunkAdapter final : public Adapter {
       cpSpaceAddShape(space_, shape);
       if (!desc.awake) cpBodySleep(body);  // after its shape: a sleeping body keeps its shapes' bounds
     }
-    // Revolute joints: a pivot, and for the limit, motor and spring Chipmunk's rotary limit
-    // (on the absolute angle difference, so offset by the one at load), simple motor (its rate
-    // drives wA - wB: the scene's speed negated) and damped rotary spring (stiffness and damping
-    // from hertz and damping ratio on the pair's reduced inertia).
+    // Joints. Revolute: a pivot, and for the limit, motor and spring Chipmunk's rotary limit (on
+    // the absolute angle difference, so offset by the one at load), simple motor (its rate drives
+    // wA - wB: the scene's speed negated) and damped rotary spring (stiffness and damping from
+    // hertz and damping ratio on the pair's reduced inertia). Prismatic: a groove on bodyA
+    // between the limits (a long one without) and a rotary limit of zero width. Distance: a pin
+    // joint (rod), a slide joint (rope), a damped spring. Weld: a pivot and a zero-width rotary
+    // limit, or a damped rotary spring. No wheel joint (refused in the pass above).
     for (const JointDesc& d : scene.joints) {
       // A joint of two bodies that never move does nothing in any engine; Chipmunk aborts on its
       // infinite mass ("Unsolvable constraint"), so it is not made.
@@ -228,19 +238,61 @@ class ChipmunkAdapter final : public Adapter {
         cpSpaceAddConstraint(space_, c);
         return c;
       };
-      add(cpPivotJointNew(a, b, ToCp(d.anchor)));
+      auto inertia = [&](int i) {
+        const BodyDesc& bd = scene.bodies[size_t(i)];
+        return bd.dynamic ? cpFloat(ComputeMassProperties(bd).inertia) : INFINITY;
+      };
+      auto mass = [&](int i) {
+        const BodyDesc& bd = scene.bodies[size_t(i)];
+        return bd.dynamic ? cpFloat(ComputeMassProperties(bd).mass) : INFINITY;
+      };
+      auto reduced = [](cpFloat x, cpFloat y) { return std::isinf(x) ? y : std::isinf(y) ? x : x * y / (x + y); };
+      const cpFloat twoPi = 2 * 3.14159265358979323846;
       const cpFloat reference = cpFloat(scene.bodies[size_t(d.bodyB)].angle - scene.bodies[size_t(d.bodyA)].angle);
-      if (d.enableLimit) add(cpRotaryLimitJointNew(a, b, reference + d.lowerAngle, reference + d.upperAngle));
-      if (d.enableMotor) cpConstraintSetMaxForce(add(cpSimpleMotorNew(a, b, -cpFloat(d.motorSpeed))), cpFloat(d.maxMotorTorque));
-      if (d.enableSpring && d.hertz > 0) {
-        auto inertia = [&](int i) {
-          const BodyDesc& bd = scene.bodies[size_t(i)];
-          return bd.dynamic ? cpFloat(ComputeMassProperties(bd).inertia) : INFINITY;
-        };
-        const cpFloat ia = inertia(d.bodyA), ib = inertia(d.bodyB);
-        const cpFloat reduced = std::isinf(ia) ? ib : std::isinf(ib) ? ia : ia * ib / (ia + ib);
-        const cpFloat omega = 2 * 3.14159265358979323846 * cpFloat(d.hertz);
-        add(cpDampedRotarySpringNew(a, b, reference, reduced * omega * omega, 2 * cpFloat(d.dampingRatio) * reduced * omega));
+      auto rotarySpring = [&](Real hertz, Real ratio) {
+        const cpFloat i = reduced(inertia(d.bodyA), inertia(d.bodyB)), omega = twoPi * cpFloat(hertz);
+        add(cpDampedRotarySpringNew(a, b, reference, i * omega * omega, 2 * cpFloat(ratio) * i * omega));
+      };
+      switch (d.kind) {
+        case JointKind::kRevolute:
+          add(cpPivotJointNew(a, b, ToCp(d.anchor)));
+          if (d.enableLimit) add(cpRotaryLimitJointNew(a, b, reference + d.lowerAngle, reference + d.upperAngle));
+          if (d.enableMotor) cpConstraintSetMaxForce(add(cpSimpleMotorNew(a, b, -cpFloat(d.motorSpeed))), cpFloat(d.maxMotorTorque));
+          if (d.enableSpring && d.hertz > 0) rotarySpring(d.hertz, d.dampingRatio);
+          break;
+        case JointKind::kPrismatic: {
+          const Vec2 axis = Normalize(d.axis);
+          const Real lo = d.enableLimit ? d.lowerTranslation : Real(-1e4), hi = d.enableLimit ? d.upperTranslation : Real(1e4);
+          const cpVect g1 = cpBodyWorldToLocal(a, ToCp(d.anchor + lo * axis));
+          const cpVect g2 = cpBodyWorldToLocal(a, ToCp(d.anchor + hi * axis));
+          add(cpGrooveJointNew(a, b, g1, g2, cpBodyWorldToLocal(b, ToCp(d.anchor))));
+          add(cpRotaryLimitJointNew(a, b, reference, reference));
+          break;
+        }
+        case JointKind::kDistance: {
+          const cpVect pa = cpBodyWorldToLocal(a, ToCp(d.anchor)), pb = cpBodyWorldToLocal(b, ToCp(d.anchorB));
+          const cpFloat rest = d.length > 0 ? cpFloat(d.length) : cpFloat(Length(d.anchorB - d.anchor));
+          if (!d.enableSpring) {
+            cpConstraint* pin = add(cpPinJointNew(a, b, pa, pb));
+            cpPinJointSetDist(pin, rest);
+            break;
+          }
+          if (d.hertz > 0) {
+            const cpFloat m = reduced(mass(d.bodyA), mass(d.bodyB)), omega = twoPi * cpFloat(d.hertz);
+            add(cpDampedSpringNew(a, b, pa, pb, rest, m * omega * omega, 2 * cpFloat(d.dampingRatio) * m * omega));
+          }
+          if (d.enableLimit) add(cpSlideJointNew(a, b, pa, pb, cpFloat(d.minLength), cpFloat(d.maxLength)));
+          break;
+        }
+        case JointKind::kWeld:
+          add(cpPivotJointNew(a, b, ToCp(d.anchor)));
+          if (d.angularHertz > 0) {
+            rotarySpring(d.angularHertz, d.angularDampingRatio);
+          } else {
+            add(cpRotaryLimitJointNew(a, b, reference, reference));
+          }
+          break;
+        case JointKind::kWheel: break;  // refused before the world was touched
       }
     }
   }

@@ -60,23 +60,104 @@ class QuadrantAdapter final : public Adapter {
       ids.push_back(world->CreateBody(bd));
     }
     for (const JointDesc& d : scene.joints) {
-      RevoluteJointDef j;
-      j.bodyA = ids[size_t(d.bodyA)];
-      j.bodyB = ids[size_t(d.bodyB)];
-      j.localAnchorA = world->GetLocalPoint(j.bodyA, d.anchor);
-      j.localAnchorB = world->GetLocalPoint(j.bodyB, d.anchor);
-      j.referenceAngle = scene.bodies[size_t(d.bodyB)].angle - scene.bodies[size_t(d.bodyA)].angle;
-      j.collideConnected = d.collideConnected;
-      j.enableLimit = d.enableLimit;
-      j.lowerAngle = d.lowerAngle;
-      j.upperAngle = d.upperAngle;
-      j.enableMotor = d.enableMotor;
-      j.motorSpeed = d.motorSpeed;
-      j.maxMotorTorque = d.maxMotorTorque;
-      j.enableSpring = d.enableSpring;
-      j.hertz = d.hertz;
-      j.dampingRatio = d.dampingRatio;
-      world->CreateRevoluteJoint(j);
+      const BodyId a = ids[size_t(d.bodyA)], b = ids[size_t(d.bodyB)];
+      const Real reference = scene.bodies[size_t(d.bodyB)].angle - scene.bodies[size_t(d.bodyA)].angle;
+      const Vec2 axisA = InvRotate(world->GetRotation(a), d.axis);  // the axis in bodyA's frame
+      switch (d.kind) {
+        case JointKind::kRevolute: {
+          RevoluteJointDef j;
+          j.bodyA = a;
+          j.bodyB = b;
+          j.localAnchorA = world->GetLocalPoint(a, d.anchor);
+          j.localAnchorB = world->GetLocalPoint(b, d.anchor);
+          j.referenceAngle = reference;
+          j.collideConnected = d.collideConnected;
+          j.enableLimit = d.enableLimit;
+          j.lowerAngle = d.lowerAngle;
+          j.upperAngle = d.upperAngle;
+          j.enableMotor = d.enableMotor;
+          j.motorSpeed = d.motorSpeed;
+          j.maxMotorTorque = d.maxMotorTorque;
+          j.enableSpring = d.enableSpring;
+          j.hertz = d.hertz;
+          j.dampingRatio = d.dampingRatio;
+          world->CreateRevoluteJoint(j);
+          break;
+        }
+        case JointKind::kPrismatic: {
+          PrismaticJointDef j;
+          j.bodyA = a;
+          j.bodyB = b;
+          j.localAnchorA = world->GetLocalPoint(a, d.anchor);
+          j.localAnchorB = world->GetLocalPoint(b, d.anchor);
+          j.localAxisA = axisA;
+          j.referenceAngle = reference;
+          j.collideConnected = d.collideConnected;
+          j.enableLimit = d.enableLimit;
+          j.lowerTranslation = d.lowerTranslation;
+          j.upperTranslation = d.upperTranslation;
+          j.enableMotor = d.enableMotor;
+          j.motorSpeed = d.motorSpeed;
+          j.maxMotorForce = d.maxMotorForce;
+          j.enableSpring = d.enableSpring;
+          j.hertz = d.hertz;
+          j.dampingRatio = d.dampingRatio;
+          world->CreatePrismaticJoint(j);
+          break;
+        }
+        case JointKind::kDistance: {
+          DistanceJointDef j;
+          j.bodyA = a;
+          j.bodyB = b;
+          j.localAnchorA = world->GetLocalPoint(a, d.anchor);
+          j.localAnchorB = world->GetLocalPoint(b, d.anchorB);
+          j.length = d.length > 0 ? d.length : Length(d.anchorB - d.anchor);
+          j.collideConnected = d.collideConnected;
+          j.enableSpring = d.enableSpring;
+          j.hertz = d.hertz;
+          j.dampingRatio = d.dampingRatio;
+          j.enableLimit = d.enableLimit;
+          j.minLength = d.minLength;
+          j.maxLength = d.maxLength;
+          world->CreateDistanceJoint(j);
+          break;
+        }
+        case JointKind::kWeld: {
+          WeldJointDef j;
+          j.bodyA = a;
+          j.bodyB = b;
+          j.localAnchorA = world->GetLocalPoint(a, d.anchor);
+          j.localAnchorB = world->GetLocalPoint(b, d.anchor);
+          j.referenceAngle = reference;
+          j.collideConnected = d.collideConnected;
+          j.linearHertz = d.hertz;
+          j.linearDampingRatio = d.dampingRatio;
+          j.angularHertz = d.angularHertz;
+          j.angularDampingRatio = d.angularDampingRatio;
+          world->CreateWeldJoint(j);
+          break;
+        }
+        case JointKind::kWheel: {
+          WheelJointDef j;
+          j.bodyA = a;
+          j.bodyB = b;
+          j.localAnchorA = world->GetLocalPoint(a, d.anchor);
+          j.localAnchorB = world->GetLocalPoint(b, d.anchor);
+          j.localAxisA = axisA;
+          j.collideConnected = d.collideConnected;
+          j.enableSpring = d.enableSpring;
+          j.hertz = d.hertz;
+          j.dampingRatio = d.dampingRatio;
+          j.enableLimit = d.enableLimit;
+          j.lowerTranslation = d.lowerTranslation;
+          j.upperTranslation = d.upperTranslation;
+          j.enableMotor = d.enableMotor;
+          j.motorSpeed = d.motorSpeed;
+          j.maxMotorTorque = d.maxMotorTorque;
+          world->CreateWheelJoint(j);
+          break;
+        }
+      }
     }
     world_ = std::move(world);
     ids_ = std::move(ids);

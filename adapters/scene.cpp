@@ -193,8 +193,24 @@ void ValidateScene(const Scene& scene) {
     if (d.bodyA < 0 || d.bodyA >= n || d.bodyB < 0 || d.bodyB >= n) fail("body index out of range");
     if (d.bodyA == d.bodyB) fail("bodyA and bodyB are the same body");
     if (!IsFinite(d.anchor) || !IsFinite(d.lowerAngle) || !IsFinite(d.upperAngle) || !IsFinite(d.motorSpeed) ||
-        !IsFinite(d.maxMotorTorque) || !IsFinite(d.hertz) || !IsFinite(d.dampingRatio)) {
+        !IsFinite(d.maxMotorTorque) || !IsFinite(d.hertz) || !IsFinite(d.dampingRatio) || !IsFinite(d.axis) ||
+        !IsFinite(d.lowerTranslation) || !IsFinite(d.upperTranslation) || !IsFinite(d.maxMotorForce) ||
+        !IsFinite(d.anchorB) || !IsFinite(d.length) || !IsFinite(d.minLength) || !IsFinite(d.maxLength) ||
+        !IsFinite(d.angularHertz) || !IsFinite(d.angularDampingRatio)) {
       fail("a value is not finite");
+    }
+    if (d.kind != JointKind::kRevolute && d.kind != JointKind::kPrismatic && d.kind != JointKind::kDistance &&
+        d.kind != JointKind::kWeld && d.kind != JointKind::kWheel) {
+      fail("the joint kind is unknown");
+    }
+    if ((d.kind == JointKind::kPrismatic || d.kind == JointKind::kWheel) && Length(d.axis) < Real(1e-6)) {
+      fail("the axis must not be zero");
+    }
+    if (d.lowerTranslation > d.upperTranslation) fail("lowerTranslation must be <= upperTranslation");
+    if (d.kind == JointKind::kDistance && d.length != 0 && d.length < Real(0.005)) fail("length must be 0 (at load) or >= 0.005 m");
+    if (d.minLength > d.maxLength) fail("minLength must be <= maxLength");
+    if (d.maxMotorForce < 0 || d.angularHertz < 0 || d.angularDampingRatio < 0) {
+      fail("maxMotorForce, angularHertz and angularDampingRatio must be >= 0");
     }
     const Real pi = Real(3.14159265358979323846);
     if (d.lowerAngle > d.upperAngle || d.lowerAngle < -pi || d.upperAngle > pi) {

@@ -68,21 +68,38 @@ struct BodyDesc {
   uint32_t maskBits = 0xFFFFFFFFu;
 };
 
-/// A revolute joint between scene bodies bodyA and bodyB (indices), pinned at `anchor` (a world
-/// point at load), with an optional limit on bodyB's angle relative to bodyA's (from their angles
-/// at load), a motor and an angular spring (towards the load-time angle). Engines load it as
-/// Box2D 2.4.1's b2RevoluteJoint, Chipmunk's pivot with a rotary limit, simple motor and damped
-/// rotary spring; an adapter that cannot honour a part reports the scene unsupported.
+enum class JointKind : uint8_t { kRevolute, kPrismatic, kDistance, kWeld, kWheel };
+
+/// A joint between scene bodies bodyA and bodyB (indices). `anchor` is a world point at load: the
+/// revolute pin, the weld point, the prismatic and wheel joints' point on bodyB (the hub) sliding
+/// along `axis` (a world direction at load, fixed in bodyA), and the distance joint's anchor on
+/// bodyA (anchorB on bodyB). Angles are bodyB's relative to bodyA's, from their angles at load.
+///   revolute: limit (lowerAngle, upperAngle), motor (motorSpeed rad/s, maxMotorTorque), angular spring;
+///   prismatic: limit (lowerTranslation, upperTranslation), motor (motorSpeed m/s, maxMotorForce);
+///   distance: a rod of `length` (0: the anchors' distance at load), or with enableSpring a spring
+///             (hertz 0: none) between minLength and maxLength when enableLimit (a rope);
+///   weld: rigid, or springs: linear of hertz, angular of angularHertz (0: rigid);
+///   wheel: a suspension spring along the axis (hertz, dampingRatio), limits, a motor on the turn.
+/// Engines load it as their nearest joint (Box2D 2.4.1's b2*Joint, Chipmunk's pivot, groove, pin,
+/// slide, rotary limit, simple motor and damped springs); an adapter that cannot honour a part
+/// reports the scene unsupported, with the reason.
 struct JointDesc {
   int bodyA = 0, bodyB = 1;
   Vec2 anchor;
   bool collideConnected = false;
   bool enableLimit = false;
-  Real lowerAngle = 0, upperAngle = 0;  ///< rad
+  Real lowerAngle = 0, upperAngle = 0;  ///< rad (revolute)
   bool enableMotor = false;
-  Real motorSpeed = 0, maxMotorTorque = 0;  ///< rad/s, N m
+  Real motorSpeed = 0, maxMotorTorque = 0;  ///< rad/s or m/s; N m (revolute, wheel)
   bool enableSpring = false;
   Real hertz = 0, dampingRatio = 0;
+  JointKind kind = JointKind::kRevolute;
+  Vec2 axis{1, 0};                                   ///< prismatic, wheel
+  Real lowerTranslation = 0, upperTranslation = 0;   ///< m (prismatic, wheel)
+  Real maxMotorForce = 0;                            ///< N (prismatic)
+  Vec2 anchorB{};                                    ///< distance: bodyB's world anchor
+  Real length = 0, minLength = Real(0.005), maxLength = Real(1e6);  ///< m (distance)
+  Real angularHertz = 0, angularDampingRatio = 0;    ///< weld
 };
 
 class Adapter;
@@ -102,7 +119,7 @@ struct Scene {
   Effects effects = SceneEffects();
   AABB bounds;                        ///< region that holds every body (the box of stress scenes)
   std::vector<BodyDesc> bodies;
-  std::vector<JointDesc> joints;      ///< revolute joints, loaded after the bodies
+  std::vector<JointDesc> joints;      ///< loaded after the bodies
   Driver driver;                      ///< optional
   uint64_t seed = 0;                  ///< the seed it was generated with (0 = hand-built)
 };

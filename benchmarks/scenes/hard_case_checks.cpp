@@ -808,6 +808,54 @@ void RagdollPile(std::string_view engine, const HardCaseOptions&, HardCaseResult
   r.pass = sim.finite() && outside <= 0 && gap < 0.05 && speedEnd < 0.5 && keEnd < 0.01 * peakKe;
 }
 
+void PrismaticStop(std::string_view engine, const HardCaseOptions&, HardCaseResult& r) {
+  r.criterion = "a 1 kg box on a horizontal prismatic joint (travel [-2, 2] m) launched at 10 m/s into its stop, "
+                "gravity across the axis: over 60 s (every step) it passes the stop by less than 0.02 m, leaves "
+                "the axis by less than 0.01 m and turns less than 0.01 rad, and it rebounds at under 1 m/s";
+  Sim sim(r, engine, MakePrismaticStop(MixingOf(engine)));
+  double beyond = 0, across = 0, turn = 0, rebound = 0;
+  while (sim.steps() < int(kWindowSeconds * kStepsPerSecond)) {
+    sim.StepOnce();
+    const BodyState& b = sim.states()[1];
+    beyond = std::max({beyond, double(b.position.x) - 2, -2 - double(b.position.x)});
+    across = std::max(across, std::abs(double(b.position.y) - 5));
+    turn = std::max(turn, std::abs(double(b.angle)));
+    if (b.position.x > Real(1.5)) rebound = std::max(rebound, -double(b.velocity.x));
+  }
+  Add(r, "max_past_stop_m", std::max(0.0, beyond));
+  Add(r, "max_off_axis_m", across);
+  Add(r, "max_turn_rad", turn);
+  Add(r, "max_rebound_mps", rebound);
+  r.pass = sim.finite() && beyond < 0.02 && across < 0.01 && turn < 0.01 && rebound < 1;
+}
+
+void WeldBeam(std::string_view engine, const HardCaseOptions&, HardCaseResult& r) {
+  r.criterion = "ten 1 m x 0.2 m segments (0.2 kg) welded end to end, cantilevered level from a static block "
+                "under gravity, default budget: over 60 s (every step) the tip sags less than 0.1 m (1 % of the "
+                "span) and no weld opens by more than 0.01 m; at 60 s the tip is slower than 0.01 m/s";
+  Sim sim(r, engine, MakeWeldBeam(MixingOf(engine)));
+  const Scene& scene = sim.scene();
+  const size_t tip = scene.bodies.size() - 1;
+  const double tipY = scene.bodies[tip].position.y;
+  double sag = 0, open = 0;
+  auto end = [&](size_t i, double side) {  // a segment's end on its axis, side -1 (root) or +1
+    const BodyState& b = sim.states()[i];
+    return Vec2{Real(b.position.x + side * 0.5 * std::cos(double(b.angle))), Real(b.position.y + side * 0.5 * std::sin(double(b.angle)))};
+  };
+  while (sim.steps() < int(kWindowSeconds * kStepsPerSecond)) {
+    sim.StepOnce();
+    sag = std::max(sag, tipY - sim.states()[tip].position.y);
+    for (size_t i = 2; i < scene.bodies.size(); ++i) open = std::max(open, double(Length(end(i, -1) - end(i - 1, 1))));
+  }
+  const double speed = Length(sim.states()[tip].velocity);
+  Add(r, "tip_max_sag_m", sag);
+  Add(r, "max_weld_gap_m", open);
+  Add(r, "tip_speed_at_60s_mps", speed);
+  r.note = "A weld is held by a stiff spring in Quadrant (WorldDef::jointHertz) and Box2D 3, by iterations in "
+           "Box2D 2.4.1 and Chipmunk: the beam sags by what the welds give.";
+  r.pass = sim.finite() && sag < 0.1 && open < 0.01 && speed < 0.01;
+}
+
 struct CaseEntry {
   const char* name;
   CaseFn fn;
@@ -825,6 +873,7 @@ constexpr CaseEntry kCases[] = {
     {"heavy_on_supports", HeavyOnSupports},
     {"heavy_on_slab", HeavyOnSlab},      {"closed_box", ClosedBox},
     {"heavy_chain", HeavyChain},         {"ragdoll_pile", RagdollPile},
+    {"prismatic_stop", PrismaticStop},   {"weld_beam", WeldBeam},
 };
 
 }  // namespace

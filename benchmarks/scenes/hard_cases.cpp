@@ -526,4 +526,41 @@ Scene MakeRagdollPile(int count, Mixing mixing) {
   return s;
 }
 
+Scene MakePrismaticStop(Mixing mixing) {
+  Scene s = BaseScene("prismatic_stop");
+  const Real f = Coef(mixing, Real(0.6));
+  // A static 0.2 m post at (0, 5) and a 1 m box of 1 kg on a horizontal prismatic joint through the
+  // post's centre (the box's centre), travel limited to [-2, 2] m, launched at 10 m/s along it:
+  // gravity pulls it across the axis, the stop is hit at full speed.
+  s.bodies.push_back(Box({0, 5}, Real(0.1), Real(0.1), false, f, 0));
+  BodyDesc slider = Box({0, 5}, Real(0.5), Real(0.5), true, f);
+  slider.velocity = {10, 0};
+  s.bodies.push_back(slider);
+  JointDesc j{0, 1, {0, 5}};
+  j.kind = JointKind::kPrismatic;
+  j.axis = {1, 0};
+  j.enableLimit = true;
+  j.lowerTranslation = -2;
+  j.upperTranslation = 2;
+  s.joints.push_back(j);
+  s.bounds = Bounds({-5, 0}, {5, 10});
+  return s;
+}
+
+Scene MakeWeldBeam(Mixing mixing) {
+  Scene s = BaseScene("weld_beam");
+  const Real f = Coef(mixing, Real(0.6));
+  // A cantilever: a static 1 m wall block at (-0.5, 10) and ten 1 m x 0.2 m segments (0.2 kg
+  // each) welded end to end from its face at x = 0, level, under gravity.
+  s.bodies.push_back(Box({Real(-0.5), 10}, Real(0.5), Real(0.5), false, f, 0));
+  for (int k = 0; k < 10; ++k) {
+    s.bodies.push_back(Box({Real(k) + Real(0.5), 10}, Real(0.5), Real(0.1), true, f));
+    JointDesc j{int(s.bodies.size()) - 2, int(s.bodies.size()) - 1, {Real(k), 10}};
+    j.kind = JointKind::kWeld;
+    s.joints.push_back(j);
+  }
+  s.bounds = Bounds({-2, 0}, {12, 12});
+  return s;
+}
+
 }  // namespace quadrant::scene

@@ -161,6 +161,12 @@ Scene MakeHeavyChain(Mixing mixing = Mixing::kBox2d);
 /// revolute joints with limits and 0.2 N m of joint friction) dropped in columns of four into a box
 /// 8 m wide. Bodies: ground, two walls, then each ragdoll's torso, head, and per side arm, thigh, shin.
 Scene MakeRagdollPile(int count = 12, Mixing mixing = Mixing::kBox2d);
+/// Issue #27's prismatic stop: a 1 kg box on a horizontal prismatic joint (travel [-2, 2] m) through
+/// a static post, launched at 10 m/s into its stop, under gravity. Bodies: the post, the box.
+Scene MakePrismaticStop(Mixing mixing = Mixing::kBox2d);
+/// Issue #27's weld beam: ten 1 m x 0.2 m segments welded end to end, cantilevered from a static
+/// block under gravity. Bodies: the block, the segments from the root out.
+Scene MakeWeldBeam(Mixing mixing = Mixing::kBox2d);
 /// MakePyramid(20) at (1e5, -8e4).
 Scene MakeFarFromOrigin(Mixing mixing = Mixing::kBox2d);
 /// Five touching balls (r = 0.5 m) in a row at x = 0, 1, 2, 3, 4, zero gravity, friction 0,

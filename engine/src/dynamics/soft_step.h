@@ -305,14 +305,26 @@ class SoftStepSolver final : public Solver {
   std::vector<int> jointColorStart_;        // per colour: its first row (and one past the last)
   std::vector<uint64_t> jointBodyColors_;   // per body: the joint colours it holds (zero between steps)
   std::vector<int> jointColorOf_, jointSlotOf_;
+  std::vector<uint8_t> jointEnds_;   // per joint: which ends move (PrepareJoints), last step's until refreshed
+  std::vector<int> jointEndsChanged_;  // per worker
+  uint64_t jointsVersion_ = ~uint64_t(0);  // StepContext::jointsVersion of the colouring kept
+
+ public:
+  // How many joint colourings were asked for and how many reused last step's (for the tests).
+  int64_t jointColorings_ = 0, jointColoringsReused_ = 0;
+
+ private:
   Softness jointSoft_;                      // the rigid rows' softness this step
   // Chains (WorldDef::jointChainSolve): chain c's rows, in order, are chainRows_[chainStart_[c]
   // .. chainStart_[c + 1]); chainShared_[k] is the body the k-th row shares with the next.
   struct ChainSlot {
-    Vec2 rA, rB, rhs, x;
-    Real inv[4];  // the eliminated diagonal block's inverse
-    Real c[4];    // the coupling block with the next row
+    Vec2 rA, rB;
+    Real rhs[3], x[3];  // two entries for a revolute chain, three for a weld chain
+    Real inv[9];        // the eliminated diagonal block's inverse
+    Real c[9];          // the coupling block with the next row
   };
+  template <int N>
+  void SolveChainOf(int chain, bool useBias);
   std::vector<int> chainRows_, chainStart_, chainShared_;
   std::vector<ChainSlot> chainSlots_;
   std::vector<int> chainDegree_;             // per body: revolute rows on it (FindChains)

@@ -204,6 +204,7 @@ JointId JointSet::Add(const Joint& joint) {
   joints_.push_back(j);
   noCollide_ += j.collideConnected ? 0 : 1;
   stale_ = true;
+  ++version_;
   return JointId{slot, generation_[slot]};
 }
 
@@ -230,6 +231,7 @@ void JointSet::RemoveAt(int j) {
   generation_[slot] = generation_[slot] + 1 == 0 ? 1 : generation_[slot] + 1;  // 0 is the null id
   freeSlots_.push_back(slot);
   stale_ = true;
+  ++version_;
 }
 
 std::vector<int> JointSet::OnBody(uint32_t slot) const {

@@ -46,7 +46,12 @@ class JointSet {
   /// joined pairs that must not collide, rebuilt if a joint or a body came or went since.
   void Prepare(const std::vector<int32_t>& denseOf, int bodyCount);
   /// Bodies or joints changed (dense indices moved): the pair set is rebuilt at the next Prepare.
-  void MarkStale() { stale_ = true; }
+  void MarkStale() {
+    stale_ = true;
+    ++version_;
+  }
+  /// Bumped by every change of the joints or of the bodies' dense indices (StepContext::jointsVersion).
+  uint64_t Version() const { return version_; }
   /// Drops from `pairs` (keeping their order) every pair of bodies joined by a joint with
   /// collideConnected false. Nothing to do while no such joint exists.
   bool Filters() const { return noCollide_ > 0; }
@@ -59,6 +64,7 @@ class JointSet {
   std::vector<uint32_t> freeSlots_;
   int noCollide_ = 0;                 // joints with collideConnected false
   bool stale_ = true;
+  uint64_t version_ = 0;
   std::unordered_set<uint64_t> pairs_;  // (min, max) dense body indices of non-colliding joints
   std::vector<uint8_t> joined_;         // per dense body: in some non-colliding joint
 };

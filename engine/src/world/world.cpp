@@ -757,6 +757,7 @@ void World::Impl::RunPipeline(Real dt) {
   ctx.bodies = &bodies;
   ctx.contacts = contacts;
   ctx.joints = joints.All();
+  ctx.jointsVersion = joints.Version();
   ctx.profile = &profile;
   ctx.run = run.get();
   ctx.gravityScaled = solverScalesGravity;

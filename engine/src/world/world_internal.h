@@ -179,6 +179,9 @@ struct StepContext {
   /// The world's joints (soft_step solves them; the world refuses joints with the other solvers),
   /// their dense body indices current.
   std::span<Joint> joints;
+  /// Changes whenever a joint is added or removed or the bodies' dense indices move (JointSet):
+  /// with the same version and the same moving ends, last step's joint colouring holds.
+  uint64_t jointsVersion = 0;
   Profile* profile = nullptr;
   StageRunner* run = nullptr;
   /// Some body's gravity scale is not 1 (Bodies::gravityScale) and the solver applies the scales
