@@ -81,7 +81,7 @@ struct World::Impl {
   WorkerLists<Contact> workerContacts;  // the narrow phase's output, per worker
   ContactCache cache;
   // Contact recycling (PrepareRecycling): valid for this step's narrow phases when `recycling`.
-  std::vector<int32_t> recycleFirst;
+  std::vector<int32_t> recycleFirst, recycleWritten;
   RecycleSource recycleSource;
   bool recycling = false;
   Islands islands;  // only used when def.effects.sleep is on
@@ -762,13 +762,20 @@ void World::Impl::PrepareRecycling(bool persist) {
   const std::vector<Contact>* kept = cache.Kept();
   if (kept == nullptr) return;
   const int n = bodies.Count(), count = static_cast<int>(kept->size());
-  recycleFirst.assign(size_t(n), -1);
+  // Only the entries written last step are reset (the contacts' first bodies), not all n: a
+  // fill of every body each step cost the 1000-circle stress scene 0.6 % of its instructions.
+  if (recycleFirst.size() < size_t(n)) recycleFirst.resize(size_t(n), -1);
+  for (int32_t a : recycleWritten) {
+    if (size_t(a) < recycleFirst.size()) recycleFirst[size_t(a)] = -1;
+  }
+  recycleWritten.clear();
   const Contact* old = kept->data();
-  run->For(Stage::kNarrowPhase, count, run->MinHeavyItems(), [&](int begin, int end, int) {
-    for (int i = begin; i < end; ++i) {
-      if (i == 0 || old[i - 1].a != old[i].a) recycleFirst[size_t(old[i].a)] = i;
+  for (int i = 0; i < count; ++i) {
+    if (i == 0 || old[i - 1].a != old[i].a) {
+      recycleFirst[size_t(old[i].a)] = i;
+      recycleWritten.push_back(old[i].a);
     }
-  });
+  }
   recycleSource = {old, count, recycleFirst.data(), def.contactRecycleDistance};
   recycling = true;
 }
