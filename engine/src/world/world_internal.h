@@ -82,8 +82,9 @@ struct Contact {
   Real restitution = 0;
   Manifold manifold;
   /// Where the manifold was computed (with WorldDef::contactRecycleDistance): both bodies'
-  /// rotations and B's centre in A's frame relative to A's centre.
-  Rot recycleQA, recycleQB;
+  /// rotations and B's centre in A's frame relative to A's centre. {0, 0} (no rotation) where it
+  /// was computed without recycling on: its turn test fails, so it is never recycled.
+  Rot recycleQA{0, 0}, recycleQB{0, 0};
   Vec2 recycleRel;
 
   uint64_t Key() const { return (uint64_t(uint32_t(a)) << 32) | uint32_t(b); }
