@@ -63,15 +63,19 @@ class QuadrantAdapter final : public Adapter {
       const BodyId a = ids[size_t(d.bodyA)], b = ids[size_t(d.bodyB)];
       const Real reference = scene.bodies[size_t(d.bodyB)].angle - scene.bodies[size_t(d.bodyA)].angle;
       const Vec2 axisA = InvRotate(world->GetRotation(a), d.axis);  // the axis in bodyA's frame
+      // The fields every definition has: the bodies, the anchor (one world point) and the filter.
+      auto common = [&](auto& j) {
+        j.bodyA = a;
+        j.bodyB = b;
+        j.localAnchorA = world->GetLocalPoint(a, d.anchor);
+        j.localAnchorB = world->GetLocalPoint(b, d.anchor);
+        j.collideConnected = d.collideConnected;
+      };
       switch (d.kind) {
         case JointKind::kRevolute: {
           RevoluteJointDef j;
-          j.bodyA = a;
-          j.bodyB = b;
-          j.localAnchorA = world->GetLocalPoint(a, d.anchor);
-          j.localAnchorB = world->GetLocalPoint(b, d.anchor);
+          common(j);
           j.referenceAngle = reference;
-          j.collideConnected = d.collideConnected;
           j.enableLimit = d.enableLimit;
           j.lowerAngle = d.lowerAngle;
           j.upperAngle = d.upperAngle;
@@ -86,13 +90,9 @@ class QuadrantAdapter final : public Adapter {
         }
         case JointKind::kPrismatic: {
           PrismaticJointDef j;
-          j.bodyA = a;
-          j.bodyB = b;
-          j.localAnchorA = world->GetLocalPoint(a, d.anchor);
-          j.localAnchorB = world->GetLocalPoint(b, d.anchor);
+          common(j);
           j.localAxisA = axisA;
           j.referenceAngle = reference;
-          j.collideConnected = d.collideConnected;
           j.enableLimit = d.enableLimit;
           j.lowerTranslation = d.lowerTranslation;
           j.upperTranslation = d.upperTranslation;
@@ -107,12 +107,9 @@ class QuadrantAdapter final : public Adapter {
         }
         case JointKind::kDistance: {
           DistanceJointDef j;
-          j.bodyA = a;
-          j.bodyB = b;
-          j.localAnchorA = world->GetLocalPoint(a, d.anchor);
+          common(j);
           j.localAnchorB = world->GetLocalPoint(b, d.anchorB);
           j.length = d.length > 0 ? d.length : Length(d.anchorB - d.anchor);
-          j.collideConnected = d.collideConnected;
           j.enableSpring = d.enableSpring;
           j.hertz = d.hertz;
           j.dampingRatio = d.dampingRatio;
@@ -124,12 +121,8 @@ class QuadrantAdapter final : public Adapter {
         }
         case JointKind::kWeld: {
           WeldJointDef j;
-          j.bodyA = a;
-          j.bodyB = b;
-          j.localAnchorA = world->GetLocalPoint(a, d.anchor);
-          j.localAnchorB = world->GetLocalPoint(b, d.anchor);
+          common(j);
           j.referenceAngle = reference;
-          j.collideConnected = d.collideConnected;
           j.linearHertz = d.hertz;
           j.linearDampingRatio = d.dampingRatio;
           j.angularHertz = d.angularHertz;
@@ -139,12 +132,8 @@ class QuadrantAdapter final : public Adapter {
         }
         case JointKind::kWheel: {
           WheelJointDef j;
-          j.bodyA = a;
-          j.bodyB = b;
-          j.localAnchorA = world->GetLocalPoint(a, d.anchor);
-          j.localAnchorB = world->GetLocalPoint(b, d.anchor);
+          common(j);
           j.localAxisA = axisA;
-          j.collideConnected = d.collideConnected;
           j.enableSpring = d.enableSpring;
           j.hertz = d.hertz;
           j.dampingRatio = d.dampingRatio;

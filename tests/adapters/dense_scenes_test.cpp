@@ -206,6 +206,13 @@ TEST(Box2d3Scenes, BadSceneJointsAreRefused) {
   expectRefused([](JointDesc& j) { j.anchor.x = std::nanf(""); }, "NaN anchor");
   expectRefused([](JointDesc& j) { j.lowerAngle = 1; j.upperAngle = 0; }, "inverted limit");
   expectRefused([](JointDesc& j) { j.maxMotorTorque = -1; }, "negative torque");
+  expectRefused([](JointDesc& j) { j.kind = JointKind::kPrismatic; j.axis = {0, 0}; }, "zero axis");
+  expectRefused([](JointDesc& j) { j.lowerTranslation = 1; j.upperTranslation = 0; }, "inverted translation limits");
+  expectRefused([](JointDesc& j) { j.kind = JointKind::kDistance; j.length = Real(0.001); }, "too short a rod");
+  expectRefused([](JointDesc& j) { j.minLength = 2; j.maxLength = 1; }, "minLength > maxLength");
+  expectRefused([](JointDesc& j) { j.maxMotorForce = -1; }, "negative force");
+  expectRefused([](JointDesc& j) { j.kind = static_cast<JointKind>(9); }, "unknown kind");
+  expectRefused([](JointDesc& j) { j.anchorB.y = INFINITY; }, "infinite anchorB");
 }
 
 // Box2D 3's smash: the wall of boxes is created asleep; the ram wakes and scatters the boxes it

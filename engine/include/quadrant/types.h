@@ -269,9 +269,11 @@ struct WorldDef {
   /// the other joints, and chains' limits, motors and springs, are solved one by one as before.
   bool jointChainSolve = true;
   Real contactPushMaxVelocity = 3;      ///< soft_step fastest push-out of penetration (m/s), > 0
-  /// soft_step: the deepest penetration at which its contacts are soft (m), > 0; deeper points are
-  /// rigid rows pushing out at the rate they have at this depth, and the rest of the overlap is
-  /// moved out by a position pass (positionIterations) that adds no velocity.
+  /// soft_step: the deepest penetration at which its contacts are soft (m), > 0, beyond twice the
+  /// compression a point's soft spring needs for the load it carries (its normal impulse), so a
+  /// stack's loaded contacts stay soft; deeper points are rigid rows pushing out at the rate they
+  /// have at this depth, and the rest of the overlap is moved out by a position pass
+  /// (positionIterations) that adds no velocity.
   Real contactPushMaxDepth = Real(0.01);
   /// soft_step: solve four contact rows at a time (SSE2, in float builds on x86-64) instead of one.
   /// The state is the same bit for bit either way (a test checks it); false exists for that test
@@ -282,10 +284,11 @@ struct WorldDef {
   /// for bit (a test checks it); false keeps the four-wide SSE2 kernels (for that test and to
   /// measure).
   bool softVex = true;
-  /// soft_step: relax passes per sub-step, >= 1 (Box2D 3: 1). The second one holds the 30-box tall
-  /// stack at 4 sub-steps (top 0.035 m; with one 0.083 m, 0.05 allowed; docs/soft_step.md), at the
-  /// cost of one pass over the rows per sub-step (friction is solved in the last one only; base-100
-  /// pyramid: +4.3M instructions a step).
+  /// soft_step: relax passes per sub-step, >= 1 (Box2D 3: 1). The second one held the 30-box tall
+  /// stack at 4 sub-steps before contact recycling (top 0.035 m; with one 0.083 m, 0.05 allowed);
+  /// since, one holds it too (50 boxes: 0.026 m, against 0.0004 m with two; docs/soft_step.md), at
+  /// the cost of one pass over the rows per sub-step (friction is solved in the last one only;
+  /// base-100 pyramid: +4.3M instructions a step).
   int softRelaxIterations = 2;
   /// soft_step: solve friction in every relax pass, not only the last. Where a lever arm couples
   /// friction and the normal row (an oblique corner hit), the passes then converge both as Box2D
@@ -299,6 +302,15 @@ struct WorldDef {
   /// should; bounces, solved apart, are not affected). 10 by default: it holds issue #13's heavy
   /// boxes on supports and on a slab at the default budget, which nothing else measured does.
   Real softMassRatioLimit = 10;
+  /// soft_step (deterministic scheme, warm starting on): 0 (off) or how far (m) two bodies may move
+  /// relative to each other since their two-point manifold was computed before it is computed
+  /// again (Box2D 3's contact recycling, its default 10 x its 0.005 m slop). Until then the
+  /// manifold is kept: its normal, its points' lever arms, and separations moved with the bodies
+  /// as rigid points (turning either body by more than about 11 degrees also recomputes it). A
+  /// stack's contacts then stay put while it sways, instead of following each sub-millimetre
+  /// offset: without it the 30-box stack topples after 13 s, and Box2D 3 without its recycling
+  /// topples it after 3 s (docs/soft_step.md).
+  Real contactRecycleDistance = Real(0.05);
   Real linearSlop = Real(0.005);        ///< allowed penetration (m), as Box2D
   Real baumgarte = Real(0.2);           ///< fraction of penetration removed per position iteration
   Real maxLinearCorrection = Real(0.2); ///< most a position iteration moves a contact (m)

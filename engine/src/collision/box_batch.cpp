@@ -300,7 +300,7 @@ static void CollideBoxBatchVex(const BoxPair* pairs, int count, Manifold* out) {
     int n = 0;
     for (int p = 0; p < 2; ++p) {
       if (!((keepBits[p] >> k) & 1)) continue;
-      m.points[n++] = {{pxOut[p][k], pyOut[p][k]}, sepOut[p][k], uint32_t(idOut[p][k]), 0, 0};
+      m.points[n++] = {{pxOut[p][k], pyOut[p][k]}, sepOut[p][k], uint32_t(idOut[p][k]), 0, 0, {}, {}, 0};
     }
     m.pointCount = n;
     for (int p = n; p < 2; ++p) m.points[p] = ManifoldPoint{};

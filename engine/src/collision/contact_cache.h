@@ -35,6 +35,9 @@ class ContactCache {
   /// StrictlyIncreasing); otherwise stores them (Store) and leaves `contacts` as it was.
   void Keep(std::vector<Contact>& contacts, bool strictlyIncreasing);
   void Clear();
+  /// Last step's contacts as Keep took them (strictly increasing keys), or null when they were
+  /// stored as entries instead (or cleared).
+  const std::vector<Contact>* Kept() const { return kept_ ? &last_ : nullptr; }
 
   struct Entry {
     uint64_t key;

@@ -545,26 +545,26 @@ namespace pairs_vex {
 
 [[gnu::target("avx"), gnu::noinline]] void CollidePairsVex(const Bodies& bodies, const WorldDef& def, Real dt,
                                                             std::span<const CandidatePair> pairs,
-                                                            std::vector<Contact>& out) {
-  pairs_vex::PairLoop(bodies, def, dt, pairs, out, VexBoxes{});
+                                                            std::vector<Contact>& out, const RecycleSource* recycle) {
+  pairs_vex::PairLoop(bodies, def, dt, pairs, out, VexBoxes{}, recycle);
 }
 #endif
 
 }  // namespace
 
 void CollidePairs(const Bodies& bodies, const WorldDef& def, Real dt, std::span<const CandidatePair> pairs,
-                  std::vector<Contact>& out) {
+                  std::vector<Contact>& out, const RecycleSource* recycle) {
   if (!def.effects.continuous && bodies.bulletCount > 0) {  // bullets without continuous collision
-    pairs_default::PairLoop<CallBoxes, true>(bodies, def, dt, pairs, out, CallBoxes{});
+    pairs_default::PairLoop<CallBoxes, true>(bodies, def, dt, pairs, out, CallBoxes{}, recycle);
     return;
   }
 #if QUADRANT_NARROW_SIMD && defined(__x86_64__) && defined(__GNUC__)
   if (BoxesVex()) {
-    CollidePairsVex(bodies, def, dt, pairs, out);
+    CollidePairsVex(bodies, def, dt, pairs, out, recycle);
     return;
   }
 #endif
-  pairs_default::PairLoop(bodies, def, dt, pairs, out, CallBoxes{});
+  pairs_default::PairLoop(bodies, def, dt, pairs, out, CallBoxes{}, recycle);
 }
 
 }  // namespace quadrant

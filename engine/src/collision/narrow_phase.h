@@ -27,6 +27,11 @@ struct ManifoldPoint {
   uint32_t id = 0;        ///< feature id
   Real normalImpulse = 0; ///< accumulated by the solver (N s)
   Real tangentImpulse = 0;
+  /// The point relative to each body's centre of mass (world axes), as the solvers' lever arms:
+  /// `point` minus the centre when the manifold was computed (the pair loop sets them; a recycled
+  /// manifold keeps them, world.h's WorldDef::contactRecycleDistance).
+  Vec2 anchorA, anchorB;
+  Real baseSeparation = 0;  ///< `separation` when the manifold was computed (for recycling)
 };
 
 struct Manifold {

@@ -161,8 +161,8 @@ class ContactConstraints {
       for (int k = 0; k < cc.pointCount; ++k) {
         const ManifoldPoint& mp = contact.manifold.points[k];
         PointConstraint& pc = cc.points[k];
-        pc.rA = mp.point - bodies.center[cc.a];
-        pc.rB = mp.point - bodies.center[cc.b];
+        pc.rA = mp.anchorA;
+        pc.rB = mp.anchorB;
         Real kn = cc.invMassA + cc.invMassB;
         Real kt = kn;
         if constexpr (kRotation) {

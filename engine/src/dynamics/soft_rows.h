@@ -235,6 +235,9 @@ struct SoftSolveParams {
   // deepBelow: solver_soft_step.cpp then knows whether its position pass can move anything.
   std::atomic<bool>* deep = nullptr;
   Real deepBelow = 0;
+  // The point of a row solved first (0 or 1; the other follows), in the normal and the friction
+  // rows alike. solver_soft_step.cpp alternates it (SubStep says why).
+  int firstPoint = 0;
 };
 
 // What a relax pass does with the speculative bias (sep > 0 ? sep / h : 0). The relax passes of
@@ -250,7 +253,7 @@ struct alignas(32) RelaxBiasRows {
 };
 
 struct SoftPositionParams {
-  Real allowed = 0;        // penetration left alone (WorldDef::contactPushMaxDepth)
+  Real allowed = 0;        // penetration left alone (WorldDef::contactPushMaxDepth), beyond LoadCompression
   Real baumgarte = 0;
   Real maxCorrection = 0;  // WorldDef::maxLinearCorrection
 };
@@ -419,7 +422,11 @@ template <bool kRotation>
 template <bool kRotation, bool kFriction, bool kBias, RelaxBias kRelax>
 [[gnu::noinline]] void SolveRows8(SolverBody* states, SoftRowGroup& g, const SoftSolveParams& prm,
                                   RelaxBiasRows* cache) {
-  SolveRowsImpl<F8, kRotation, kFriction, kBias, kRelax>(states, g, 0, prm, cache);
+  if (prm.firstPoint != 0) {
+    SolveRowsImpl<F8, kRotation, kFriction, kBias, kRelax, 1>(states, g, 0, prm, cache);
+  } else {
+    SolveRowsImpl<F8, kRotation, kFriction, kBias, kRelax, 0>(states, g, 0, prm, cache);
+  }
 }
 template <bool kRotation>
 [[gnu::noinline]] bool SolvePositionRows8(SolverBody* states, const SoftRowGroup& g, const SoftPositionParams& prm,
@@ -463,7 +470,13 @@ inline void SolveRows(SolverBody* states, SoftRowGroup& g, int lane, const SoftS
   } else
 #endif
   {
-    if constexpr (!std::is_same_v<V, F8Avx>) rows4::SolveRowsImpl<V, kRotation, kFriction, kBias, kRelax>(states, g, lane, prm, cache);
+    if constexpr (!std::is_same_v<V, F8Avx>) {
+      if (prm.firstPoint != 0) {
+        rows4::SolveRowsImpl<V, kRotation, kFriction, kBias, kRelax, 1>(states, g, lane, prm, cache);
+      } else {
+        rows4::SolveRowsImpl<V, kRotation, kFriction, kBias, kRelax, 0>(states, g, lane, prm, cache);
+      }
+    }
   }
 }
 

@@ -51,14 +51,12 @@ void PadLane(SoftRowGroup& g, int lane) {
 // the lane's one selected (an unlimited lane: (mA + mB) + (iA rnA rnA + iB rnB rnB), as
 // PrepareContact sums it; a limited one: ((mA + mB) + iA rnA rnA) + iB rnB rnB, as BuildRows does).
 template <class V>
-[[gnu::always_inline]] inline void LeanPointMath(SoftRowGroup& g, int pt, int lane, const Real* px, const Real* py,
-                                                 const Real* cax, const Real* cay, const Real* cbx, const Real* cby,
-                                                 const Real* limitedLane) {
+[[gnu::always_inline]] inline void LeanPointMath(SoftRowGroup& g, int pt, int lane, const Real* ax, const Real* ay,
+                                                 const Real* bx, const Real* by, const Real* limitedLane) {
   const V z = Splat(Real(0), V{});
   SoftPointRows& p = g.p[pt];
-  const V x = Load(px, lane, z), y = Load(py, lane, z);
-  const V rAx = x - Load(cax, lane, z), rAy = y - Load(cay, lane, z);
-  const V rBx = x - Load(cbx, lane, z), rBy = y - Load(cby, lane, z);
+  const V rAx = Load(ax, lane, z), rAy = Load(ay, lane, z);
+  const V rBx = Load(bx, lane, z), rBy = Load(by, lane, z);
   Store(p.rAx, lane, rAx);
   Store(p.rAy, lane, rAy);
   Store(p.rBx, lane, rBx);
@@ -158,8 +156,8 @@ void SoftStepSolver::FillLeanLane(const StepContext& ctx, SoftRowGroup& g, int l
       continue;
     }
     const ManifoldPoint& mp = contact.manifold.points[pt];
-    const Vec2 rA = mp.point - bodies.center[a];
-    const Vec2 rB = mp.point - bodies.center[b];
+    const Vec2 rA = mp.anchorA;
+    const Vec2 rB = mp.anchorB;
     p.rAx[lane] = rA.x;
     p.rAy[lane] = rA.y;
     p.rBx[lane] = rB.x;
@@ -200,8 +198,7 @@ void SoftStepSolver::FillLeanGroup(const StepContext& ctx, SoftRowGroup& g, int 
   // The points and the bodies' centres of each lane; 1 in `limited` for a lane whose masses
   // softMassRatioLimit scaled (its effective masses are computed from the scaled ones, as
   // BuildRows does), and the lanes and points to pad afterwards.
-  alignas(32) Real px[2][kGroupRows] = {}, py[2][kGroupRows] = {};
-  alignas(32) Real cax[kGroupRows] = {}, cay[kGroupRows] = {}, cbx[kGroupRows] = {}, cby[kGroupRows] = {};
+  alignas(32) Real rax[2][kGroupRows] = {}, ray[2][kGroupRows] = {}, rbx[2][kGroupRows] = {}, rby[2][kGroupRows] = {};
   alignas(32) Real limitedLane[kGroupRows] = {};
   unsigned padLane = 0, padPoint[2] = {0, 0};
   for (int lane = 0; lane < kGroupRows; ++lane) {
@@ -218,11 +215,6 @@ void SoftStepSolver::FillLeanGroup(const StepContext& ctx, SoftRowGroup& g, int 
     const Real skin = skinOn ? PolygonSkin(*ctx.def, bodies.shape[a].type == ShapeType::kPolygon,
                                            bodies.shape[b].type == ShapeType::kPolygon)
                              : Real(0);
-    const Vec2 ca = bodies.center[a], cb = bodies.center[b];
-    cax[lane] = ca.x;
-    cay[lane] = ca.y;
-    cbx[lane] = cb.x;
-    cby[lane] = cb.y;
     const int count = contact.manifold.pointCount;
     for (int pt = 0; pt < 2; ++pt) {
       SoftPointRows& p = g.p[pt];
@@ -231,8 +223,10 @@ void SoftStepSolver::FillLeanGroup(const StepContext& ctx, SoftRowGroup& g, int 
         continue;
       }
       const ManifoldPoint& mp = contact.manifold.points[pt];
-      px[pt][lane] = mp.point.x;
-      py[pt][lane] = mp.point.y;
+      rax[pt][lane] = mp.anchorA.x;
+      ray[pt][lane] = mp.anchorA.y;
+      rbx[pt][lane] = mp.anchorB.x;
+      rby[pt][lane] = mp.anchorB.y;
       p.separation[lane] = mp.separation - skin;
       p.normalImpulse[lane] = cold ? Real(0) : mp.normalImpulse;
       p.tangentImpulse[lane] = cold ? Real(0) : mp.tangentImpulse;
@@ -241,9 +235,9 @@ void SoftStepSolver::FillLeanGroup(const StepContext& ctx, SoftRowGroup& g, int 
   }
   for (int pt = 0; pt < 2; ++pt) {
 #if QUADRANT_SOFT_SIMD
-    for (int lane = 0; lane < kGroupRows; lane += 4) LeanPointMath<F4>(g, pt, lane, px[pt], py[pt], cax, cay, cbx, cby, limitedLane);
+    for (int lane = 0; lane < kGroupRows; lane += 4) LeanPointMath<F4>(g, pt, lane, rax[pt], ray[pt], rbx[pt], rby[pt], limitedLane);
 #else
-    for (int lane = 0; lane < kGroupRows; ++lane) LeanPointMath<Real>(g, pt, lane, px[pt], py[pt], cax, cay, cbx, cby, limitedLane);
+    for (int lane = 0; lane < kGroupRows; ++lane) LeanPointMath<Real>(g, pt, lane, rax[pt], ray[pt], rbx[pt], rby[pt], limitedLane);
 #endif
   }
   for (int lane = 0; lane < kGroupRows; ++lane) {

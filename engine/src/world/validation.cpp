@@ -42,6 +42,8 @@ void ValidateWorldDef(const WorldDef& d) {
   Require(IsFinite(d.maxLinearCorrection) && d.maxLinearCorrection > 0, "WorldDef.maxLinearCorrection must be > 0");
   Require(IsFinite(d.speculativeDistance) && d.speculativeDistance >= 0,
           "WorldDef.speculativeDistance must be finite and >= 0");
+  Require(IsFinite(d.contactRecycleDistance) && d.contactRecycleDistance >= 0,
+          "WorldDef.contactRecycleDistance must be finite and >= 0");
   Require(IsFinite(d.restitutionThreshold) && d.restitutionThreshold >= 0,
           "WorldDef.restitutionThreshold must be finite and >= 0");
   Require(IsFinite(d.hitEventThreshold) && d.hitEventThreshold >= 0,

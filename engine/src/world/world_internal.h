@@ -82,6 +82,11 @@ struct Contact {
   Real friction = 0;
   Real restitution = 0;
   Manifold manifold;
+  /// Where the manifold was computed (with WorldDef::contactRecycleDistance): both bodies'
+  /// rotations and B's centre in A's frame relative to A's centre. {0, 0} (no rotation) where it
+  /// was computed without recycling on: its turn test fails, so it is never recycled.
+  Rot recycleQA{0, 0}, recycleQB{0, 0};
+  Vec2 recycleRel;
 
   uint64_t Key() const { return (uint64_t(uint32_t(a)) << 32) | uint32_t(b); }
 };
@@ -167,8 +172,18 @@ inline AABB SweptBox(const ShapeDef& s, const Transform& xf, const BodyVelocity&
 
 /// Narrow phase for a list of pairs: manifolds with material mixing, speculative points kept
 /// only where the gap can close within the step. Appends to `out` in pair order.
+/// Last step's contacts, from which the pair loop may recycle manifolds (contactRecycleDistance):
+/// `contacts` in strictly increasing key order, `first[a]` the index of body a's first contact as
+/// body a (-1: none; one entry per body).
+struct RecycleSource {
+  const Contact* contacts = nullptr;
+  int count = 0;
+  const int32_t* first = nullptr;
+  Real distance = 0;  ///< WorldDef::contactRecycleDistance (> 0)
+};
+
 void CollidePairs(const Bodies& bodies, const WorldDef& def, Real dt, std::span<const CandidatePair> pairs,
-                  std::vector<Contact>& out);
+                  std::vector<Contact>& out, const RecycleSource* recycle = nullptr);
 
 /// What a solver needs for one (sub-)step.
 struct StepContext {
