@@ -759,6 +759,39 @@ void HeavyChain(std::string_view engine, const HardCaseOptions&, HardCaseResult&
   r.pass = sim.finite() && stretch < 0.01 && dx < 0.05;
 }
 
+// Each joint's anchor on both of its bodies, from the poses at load (the scene gives one world
+// anchor); Max() is the widest the two have come apart since.
+class JointGaps {
+ public:
+  JointGaps(const Scene& scene, const std::vector<BodyState>& states) : joints_(&scene.joints) {
+    for (const JointDesc& j : scene.joints) {
+      locals_.push_back({ToLocal(states[size_t(j.bodyA)], j.anchor), ToLocal(states[size_t(j.bodyB)], j.anchor)});
+    }
+  }
+  double Max(const std::vector<BodyState>& states) const {
+    double gap = 0;
+    for (size_t k = 0; k < locals_.size(); ++k) {
+      const Vec2 a = ToWorld(states[size_t((*joints_)[k].bodyA)], locals_[k][0]);
+      const Vec2 b = ToWorld(states[size_t((*joints_)[k].bodyB)], locals_[k][1]);
+      gap = std::max(gap, double(Length(a - b)));
+    }
+    return gap;
+  }
+
+ private:
+  static Vec2 ToLocal(const BodyState& s, Vec2 p) {
+    const Vec2 d = p - s.position;
+    const double c = std::cos(double(s.angle)), sn = std::sin(double(s.angle));
+    return Vec2{Real(c * d.x + sn * d.y), Real(-sn * d.x + c * d.y)};
+  }
+  static Vec2 ToWorld(const BodyState& s, Vec2 p) {
+    const double c = std::cos(double(s.angle)), sn = std::sin(double(s.angle));
+    return Vec2{Real(c * p.x - sn * p.y + s.position.x), Real(sn * p.x + c * p.y + s.position.y)};
+  }
+  const std::vector<JointDesc>* joints_;
+  std::vector<std::array<Vec2, 2>> locals_;
+};
+
 void RagdollPile(std::string_view engine, const HardCaseOptions&, HardCaseResult& r) {
   r.criterion = "12 ragdolls (9 bodies, 8 revolute joints with limits and 0.2 N m joint friction each) dropped "
                 "into an 8 m box: no body ever leaves it, every joint's anchors stay within 0.05 m of each other, "
@@ -766,23 +799,7 @@ void RagdollPile(std::string_view engine, const HardCaseOptions&, HardCaseResult
   Sim sim(r, engine, MakeRagdollPile(12, MixingOf(engine)));
   const Scene& scene = sim.scene();
   double peakKe = sim.KE(), outside = 0, gap = 0;
-  // A joint's anchor on each body from the load-time poses (the scene gives a world anchor).
-  struct Local {
-    Vec2 a, b;
-  };
-  std::vector<Local> locals;
-  auto toLocal = [](const BodyState& s, Vec2 p) {
-    const Vec2 d = p - s.position;
-    const double c = std::cos(double(s.angle)), sn = std::sin(double(s.angle));
-    return Vec2{Real(c * d.x + sn * d.y), Real(-sn * d.x + c * d.y)};
-  };
-  auto toWorld = [](const BodyState& s, Vec2 p) {
-    const double c = std::cos(double(s.angle)), sn = std::sin(double(s.angle));
-    return Vec2{Real(c * p.x - sn * p.y + s.position.x), Real(sn * p.x + c * p.y + s.position.y)};
-  };
-  for (const JointDesc& j : scene.joints) {
-    locals.push_back({toLocal(sim.states()[size_t(j.bodyA)], j.anchor), toLocal(sim.states()[size_t(j.bodyB)], j.anchor)});
-  }
+  const JointGaps gaps(scene, sim.states());
   const int end = int(kWindowSeconds * kStepsPerSecond);
   while (sim.steps() < end) {
     sim.StepOnce();
@@ -791,13 +808,7 @@ void RagdollPile(std::string_view engine, const HardCaseOptions&, HardCaseResult
       const Vec2 p = sim.states()[i].position;
       outside = std::max({outside, std::abs(double(p.x)) - 4.0, -double(p.y)});
     }
-    if (sim.steps() % (kStepsPerSecond / 2) == 0) {
-      for (size_t k = 0; k < scene.joints.size(); ++k) {
-        const Vec2 a = toWorld(sim.states()[size_t(scene.joints[k].bodyA)], locals[k].a);
-        const Vec2 b = toWorld(sim.states()[size_t(scene.joints[k].bodyB)], locals[k].b);
-        gap = std::max(gap, double(Length(a - b)));
-      }
-    }
+    if (sim.steps() % (kStepsPerSecond / 2) == 0) gap = std::max(gap, gaps.Max(sim.states()));
   }
   const double keEnd = sim.KE(), speedEnd = MaxSpeed(scene, sim.states());
   Add(r, "peak_ke_J", peakKe);
@@ -806,6 +817,78 @@ void RagdollPile(std::string_view engine, const HardCaseOptions&, HardCaseResult
   Add(r, "max_joint_gap_m", gap);
   Add(r, "most_outside_box_m", std::max(0.0, outside));
   r.pass = sim.finite() && outside <= 0 && gap < 0.05 && speedEnd < 0.5 && keEnd < 0.01 * peakKe;
+}
+
+void WheelTerrain(std::string_view engine, const HardCaseOptions&, HardCaseResult& r) {
+  r.criterion = "a 2 m, 3 kg car on two wheels (r = 0.4 m) driven by revolute motors (-6 rad/s, 20 N m) along a "
+                "bumpy one-sided chain road of 1 m segments (slopes up to 0.35): over 60 s (every step) no wheel "
+                "sinks into the road by more than 0.02 m or drops through it, the chassis tilts less than 0.8 rad "
+                "and the wheel pins open by less than 0.05 m; at t = 60 s the car has driven more than 100 m "
+                "(it does not catch at the joins)";
+  Sim sim(r, engine, MakeWheelTerrain(MixingOf(engine)));
+  const Scene& scene = sim.scene();
+  const size_t chassis = scene.bodies.size() - 3;
+  const double startX = scene.bodies[chassis].position.x;
+  const JointGaps gaps(scene, sim.states());
+  // The road is the polyline through (x, TerrainHeight(x)) at whole metres.
+  auto road = [](double x) {
+    const double x0 = std::floor(x), t = x - x0;
+    return (1 - t) * TerrainHeight(x0) + t * TerrainHeight(x0 + 1);
+  };
+  auto sink = [](Vec2 c, double radius) {  // how far a wheel's circle reaches below the road
+    double nearest = 1e30;
+    for (double x0 = std::floor(double(c.x)) - 2; x0 <= std::floor(double(c.x)) + 2; ++x0) {
+      const double ax = x0, ay = TerrainHeight(x0), bx = x0 + 1, by = TerrainHeight(x0 + 1);
+      const double dx = bx - ax, dy = by - ay;
+      const double t = std::clamp(((c.x - ax) * dx + (c.y - ay) * dy) / (dx * dx + dy * dy), 0.0, 1.0);
+      nearest = std::min(nearest, std::hypot(c.x - (ax + t * dx), c.y - (ay + t * dy)));
+    }
+    return radius - nearest;
+  };
+  double deepest = 0, tilt = 0, gap = 0;
+  bool through = false;
+  while (sim.steps() < int(kWindowSeconds * kStepsPerSecond)) {
+    sim.StepOnce();
+    for (size_t w = chassis + 1; w < chassis + 3; ++w) {
+      const Vec2 c = sim.states()[w].position;
+      deepest = std::max(deepest, sink(c, 0.4));
+      through = through || double(c.y) < road(double(c.x));
+    }
+    tilt = std::max(tilt, std::abs(double(sim.states()[chassis].angle)));
+    gap = std::max(gap, gaps.Max(sim.states()));
+  }
+  const double driven = sim.states()[chassis].position.x - startX;
+  Add(r, "max_wheel_sink_m", std::max(0.0, deepest));
+  Add(r, "max_tilt_rad", tilt);
+  Add(r, "max_pin_gap_m", gap);
+  Add(r, "driven_m", driven);
+  Add(r, "wheel_below_road", through ? 1 : 0);
+  r.pass = sim.finite() && !through && deepest < 0.02 && tilt < 0.8 && gap < 0.05 && driven > 100;
+}
+
+void HangingGrid(std::string_view engine, const HardCaseOptions&, HardCaseResult& r) {
+  r.criterion = "Box2D 3's joint grid at 30 x 30 (893 circles 1 m apart, 1740 revolute joints) hung from the top "
+                "row's 7 middle bodies, falling from level, with damping 0.1 /s: every joint's anchors stay within "
+                "0.05 m of each other (sampled every 0.5 s up to t = 60 s), and at t = 60 s no body is faster "
+                "than 0.5 m/s and the kinetic energy is below 1 % of its peak";
+  Sim sim(r, engine, MakeHangingGrid(MixingOf(engine)));
+  const Scene& scene = sim.scene();
+  const JointGaps gaps(scene, sim.states());
+  double peakKe = sim.KE(), gap = 0, lowest = 0;
+  while (sim.steps() < int(kWindowSeconds * kStepsPerSecond)) {
+    sim.StepOnce();
+    peakKe = std::max(peakKe, sim.KE());
+    if (sim.steps() % (kStepsPerSecond / 2) == 0) gap = std::max(gap, gaps.Max(sim.states()));
+  }
+  for (const BodyState& b : sim.states()) lowest = std::min(lowest, double(b.position.y));
+  const double keEnd = sim.KE(), speedEnd = MaxSpeed(scene, sim.states());
+  Add(r, "peak_ke_J", peakKe);
+  Add(r, "ke_fraction_at_60s", keEnd / peakKe);
+  Add(r, "max_speed_at_60s_mps", speedEnd);
+  Add(r, "max_joint_gap_m", gap);
+  Add(r, "joint_gap_at_60s_m", gaps.Max(sim.states()));
+  Add(r, "lowest_body_at_60s_m", lowest);
+  r.pass = sim.finite() && gap < 0.05 && speedEnd < 0.5 && keEnd < 0.01 * peakKe;
 }
 
 void PrismaticStop(std::string_view engine, const HardCaseOptions&, HardCaseResult& r) {
@@ -874,6 +957,7 @@ constexpr CaseEntry kCases[] = {
     {"heavy_on_slab", HeavyOnSlab},      {"closed_box", ClosedBox},
     {"heavy_chain", HeavyChain},         {"ragdoll_pile", RagdollPile},
     {"prismatic_stop", PrismaticStop},   {"weld_beam", WeldBeam},
+    {"wheel_terrain", WheelTerrain},     {"hanging_grid", HangingGrid},
 };
 
 }  // namespace

@@ -563,4 +563,54 @@ Scene MakeWeldBeam(Mixing mixing) {
   return s;
 }
 
+
+// The bumpy road of wheel_terrain, y(x), shared by the scene and its criterion.
+double TerrainHeight(double x) { return 0.2 * std::sin(0.8 * x) + 0.1 * std::sin(1.9 * x); }
+
+Scene MakeWheelTerrain(Mixing mixing) {
+  Scene s = BaseScene("wheel_terrain");
+  // A chain of 1 m segments along y = TerrainHeight(x) from x = -10 to 230 m (slopes up to 0.35),
+  // running right to left so that it collides from above; its two end segments are ghosts.
+  std::vector<Vec2> points;
+  for (int x = 231; x >= -11; --x) points.push_back({Real(x), Real(TerrainHeight(x))});
+  for (BodyDesc& b : MakeChainBodyDescs(points, /*isLoop=*/false, Coef(mixing, Real(0.9)))) s.bodies.push_back(b);
+  // A 2 m x 0.5 m chassis of 2 kg on two wheels (r = 0.4 m, 0.5 kg) pinned 0.7 m either side of
+  // its centre, both driven by revolute motors at -6 rad/s (2.4 m/s forwards) with up to 20 N m.
+  const Vec2 c{0, Real(TerrainHeight(0) + 1.2)};
+  BodyDesc chassis = Box(c, 1, Real(0.25), true, Coef(mixing, Real(0.9)), 2);
+  const int body = int(s.bodies.size());
+  s.bodies.push_back(chassis);
+  for (Real side : {Real(-0.7), Real(0.7)}) {
+    BodyDesc wheel = Ball(c + Vec2{side, Real(-0.45)}, Real(0.4), Coef(mixing, Real(0.9)), 0);
+    wheel.density = Real(0.5 / (3.14159265358979323846 * 0.16));
+    s.bodies.push_back(wheel);
+    JointDesc j{body, int(s.bodies.size()) - 1, c + Vec2{side, Real(-0.45)}};
+    j.enableMotor = true;
+    j.motorSpeed = -6;
+    j.maxMotorTorque = 20;
+    s.joints.push_back(j);
+  }
+  s.bounds = Bounds({-15, -5}, {235, 20});
+  return s;
+}
+
+Scene MakeHangingGrid(Mixing mixing) {
+  (void)mixing;  // the circles are filtered never to collide: no material is mixed
+  // Box2D 3's joint_grid at 30 x 30 (893 dynamic circles of r = 0.4 m, 1 m apart, each pinned to
+  // its neighbours above and to the left, hung from the top row's seven middle bodies), at the
+  // hard cases' settings, with air drag (linear and angular damping 0.1 /s) so that the net's
+  // swing dies out: it falls from level, sags and must come to rest without jitter.
+  Scene grid = MakeJointGrid(30 * 30 - 7);
+  Scene s = BaseScene("hanging_grid");
+  s.effects.damping = true;
+  s.bodies = std::move(grid.bodies);
+  for (BodyDesc& b : s.bodies) {
+    b.linearDamping = Real(0.1);
+    b.angularDamping = Real(0.1);
+  }
+  s.joints = std::move(grid.joints);
+  s.bounds = Bounds({-31, -61}, {61, 2});
+  return s;
+}
+
 }  // namespace quadrant::scene

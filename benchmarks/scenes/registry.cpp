@@ -15,7 +15,8 @@ std::vector<std::string> SceneNames() {
           // 20, 5050 -> base 100).
           "vertical_stack", "pyramid", "mass_ratio_100", "mass_ratio_400", "arch", "card_house",
           "friction_ramp", "restitution_drop", "overlap_recovery", "confined", "far_from_origin",
-          "newtons_cradle", "tall_stack", "tall_stack_50", "heavy_on_supports", "heavy_on_slab", "closed_box", "heavy_chain", "ragdoll_pile", "prismatic_stop", "weld_beam"};
+          "newtons_cradle", "tall_stack", "tall_stack_50", "heavy_on_supports", "heavy_on_slab", "closed_box", "heavy_chain", "ragdoll_pile", "prismatic_stop", "weld_beam",
+          "wheel_terrain", "hanging_grid"};
 }
 
 Scene MakeScene(std::string_view name, int count, uint64_t seed) {
@@ -61,6 +62,8 @@ Scene MakeScene(std::string_view name, int count, uint64_t seed) {
   if (name == "ragdoll_pile") return MakeRagdollPile();
   if (name == "prismatic_stop") return MakePrismaticStop();
   if (name == "weld_beam") return MakeWeldBeam();
+  if (name == "wheel_terrain") return MakeWheelTerrain();
+  if (name == "hanging_grid") return MakeHangingGrid();
   std::string known;
   for (const std::string& n : SceneNames()) known += (known.empty() ? "" : ", ") + n;
   throw Error("unknown scene '" + std::string(name) + "' (known: " + known + ")");

@@ -167,6 +167,15 @@ Scene MakePrismaticStop(Mixing mixing = Mixing::kBox2d);
 /// Issue #27's weld beam: ten 1 m x 0.2 m segments welded end to end, cantilevered from a static
 /// block under gravity. Bodies: the block, the segments from the root out.
 Scene MakeWeldBeam(Mixing mixing = Mixing::kBox2d);
+/// Issue #27's wheel on a chain terrain: a 2 m chassis on two motorised wheels (revolute motors at
+/// -6 rad/s, 20 N m) on a bumpy one-sided chain road y = TerrainHeight(x), x from -10 to 230 m.
+/// Bodies: the chain's segments, the chassis, the rear and the front wheel.
+Scene MakeWheelTerrain(Mixing mixing = Mixing::kBox2d);
+double TerrainHeight(double x);
+/// Issue #27's joint grid that sags and settles: Box2D 3's joint_grid at 30 x 30 hung from the top
+/// row's seven middle bodies, with linear and angular damping 0.1 /s. Bodies and joints as
+/// MakeJointGrid(893).
+Scene MakeHangingGrid(Mixing mixing = Mixing::kBox2d);
 /// MakePyramid(20) at (1e5, -8e4).
 Scene MakeFarFromOrigin(Mixing mixing = Mixing::kBox2d);
 /// Five touching balls (r = 0.5 m) in a row at x = 0, 1, 2, 3, 4, zero gravity, friction 0,

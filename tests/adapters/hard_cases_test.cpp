@@ -1,6 +1,6 @@
 // The hard cases on Quadrant: every case's criterion (benchmarks/scenes/hard_case_checks.cpp, the
 // same code tools/quadrant hardcases runs, 60 s of simulated time per case) must pass, with the
-// default engine (soft_step, all 18) and with pgs (the 13 older cases and the closed box); the
+// default engine (soft_step, all but hanging_grid, an asserted failure) and with pgs (the 13 older cases and the closed box); the
 // closed box also with thesis and jacobi (issue #26: every solver comes to rest). The soak runs 3600 steps
 // here (60 s, as every other case) instead of the tool's 100000, to keep the suite, which CI
 // also runs under ASan, fast. Also: the scene builders' contracts (body counts, order, materials) and
@@ -28,6 +28,14 @@ std::string Describe(const HardCaseResult& r) {
   return out;
 }
 
+double Figure(const HardCaseResult& r, const std::string& name) {
+  for (const Measured& m : r.measured) {
+    if (m.name == name) return m.value;
+  }
+  ADD_FAILURE() << r.name << " reports no " << name;
+  return 0;
+}
+
 void ExpectPasses(const std::string& name, const std::string& engine) {
   HardCaseOptions options;
   options.soakSteps = kTestSoakSteps;
@@ -40,7 +48,14 @@ void ExpectPasses(const std::string& name, const std::string& engine) {
 // Every case, the tall stacks included (issue #26 item 3: they toppled over the 60-s window until
 // soft_step recycled its manifolds, kept loaded points soft past contactPushMaxDepth and
 // alternated the order of a row's two points; docs/soft_step.md).
-std::vector<std::string> DefaultCases() { return HardCaseNames(); }
+// hanging_grid is the exception: see DefaultEngineKnownFailureHangingGrid below.
+std::vector<std::string> DefaultCases() {
+  std::vector<std::string> out;
+  for (const std::string& name : HardCaseNames()) {
+    if (name != "hanging_grid") out.push_back(name);
+  }
+  return out;
+}
 
 void ExpectFails(const std::string& name, const std::string& engine) {
   HardCaseOptions options;
@@ -68,7 +83,7 @@ std::vector<std::string> PgsCases() {
   for (const std::string& name : HardCaseNames()) {
     if (name != "tall_stack" && name != "tall_stack_50" && name != "heavy_on_supports" && name != "heavy_on_slab" &&
         name != "mass_ratio_400" && name != "heavy_chain" && name != "ragdoll_pile" && name != "prismatic_stop" &&
-        name != "weld_beam") {
+        name != "weld_beam" && name != "wheel_terrain" && name != "hanging_grid") {
       out.push_back(name);
     }
   }
@@ -88,6 +103,23 @@ TEST(HardCases, JointCasesOnPgsAreUnsupportedAndThePeersDropTheHeavyChain) {
   EXPECT_FALSE(RunHardCase("heavy_chain", "box2d").pass);
   EXPECT_FALSE(RunHardCase("heavy_chain", "chipmunk").pass);
   EXPECT_FALSE(RunHardCase("heavy_chain", "bullet").supported);
+  EXPECT_FALSE(RunHardCase("wheel_terrain", "quadrant:pgs").supported);
+  EXPECT_FALSE(RunHardCase("wheel_terrain", "bullet").supported);
+}
+
+// Issue #27's joint grid that sags and settles: it comes to rest (kinetic energy 5e-6 of its peak
+// at 60 s), but the top joints, which hold the whole net from 0.5 kg circles, open by up to
+// 0.056 m while it falls (0.038 m at rest; 0.05 allowed). A soft joint's static opening is
+// load / (effective mass x (2 pi jointHertz)^2), so more sub-steps do not close it (0.054 m at 6
+// and 8). Asserted to fail, so that a fix (a direct solve of joint graphs, as the chain solve does
+// for chains) must flip it. Box2D 2.4.1 opens its joints by 0.23 m.
+TEST(HardCases, DefaultEngineKnownFailureHangingGrid) {
+  HardCaseOptions options;
+  const HardCaseResult r = RunHardCase("hanging_grid", "quadrant", options);
+  ASSERT_TRUE(r.supported) << r.unsupported;
+  EXPECT_FALSE(r.pass) << "now passes (move it back to the passing list): " << Describe(r);
+  EXPECT_LT(Figure(r, "ke_fraction_at_60s"), 0.01) << "it must still come to rest";
+  EXPECT_GT(Figure(r, "max_joint_gap_m"), 0.05);
 }
 
 class QuadrantPgsHardCase : public ::testing::TestWithParam<std::string> {};
@@ -97,13 +129,6 @@ TEST_P(QuadrantPgsHardCase, Passes) { ExpectPasses(GetParam(), "quadrant:pgs"); 
 INSTANTIATE_TEST_SUITE_P(All, QuadrantPgsHardCase, ::testing::ValuesIn(PgsCases()),
                          [](const ::testing::TestParamInfo<std::string>& info) { return info.param; });
 
-double Figure(const HardCaseResult& r, const std::string& name) {
-  for (const Measured& m : r.measured) {
-    if (m.name == name) return m.value;
-  }
-  ADD_FAILURE() << r.name << " reports no " << name;
-  return 0;
-}
 
 // soft_step with Box2D 3's settings (b3soft) at its default 4 sub-steps (not the larger budget the mass-ratio scenes state): the
 // mass ratios fail their criteria there (a 30 Hz contact sags under 1000 N, and the plank creeps),
@@ -135,7 +160,7 @@ TEST(HardCases, ClosedBoxKnownFailuresThesisAndJacobi) {
 
 TEST(HardCases, NamesAndRegistry) {
   const std::vector<std::string> cases = HardCaseNames();
-  EXPECT_EQ(cases.size(), 22u);
+  EXPECT_EQ(cases.size(), 24u);
   // Every hard-case scene is in the registry under its case name (the soak is polygon_stress).
   const std::vector<std::string> scenes = SceneNames();
   for (const std::string& c : cases) {
@@ -155,7 +180,8 @@ TEST(HardCases, ScenesAreValidUnderBothMixingRules) {
                            MakeMassRatio(400, m), MakeArch(m), MakeCardHouse(5, m), MakeFrictionRamp(m),
                            MakeRestitutionDrop(m), MakeOverlapRecovery(10, m), MakeConfined(25, 42, m),
                            MakeFarFromOrigin(m), MakeNewtonsCradle(m), MakeTallStack(30, m), MakeTallStack(50, m),
-                           MakeHeavyOnSupports(m), MakeHeavyOnSlab(m), MakeClosedBox(2000, 42, m)}) {
+                           MakeHeavyOnSupports(m), MakeHeavyOnSlab(m), MakeClosedBox(2000, 42, m), MakeWheelTerrain(m),
+                           MakeHangingGrid(m)}) {
       EXPECT_NO_THROW(ValidateScene(s)) << s.name;
       EXPECT_EQ(s.timeStep, Real(1.0 / 60.0)) << s.name;
       // Box2D 2.4's defaults (8/3), except the cases that state the solver budget they need
