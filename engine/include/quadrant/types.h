@@ -429,6 +429,9 @@ struct Counters {
   int touchingContacts = 0;  ///< manifolds with a point at separation <= 0 (with sleep on, sleeping islands' too)
   int contactPoints = 0;
   bool pairsReused = false;  ///< this step's pairs came from the pair cache (WorldDef::reusePairs)
+  /// soft_step with joints: this step kept last step's joint colouring (the joints and which of
+  /// their ends move are unchanged) instead of colouring them again.
+  bool jointColoringKept = false;
 };
 
 /// A contact as read back for validation and drawing.

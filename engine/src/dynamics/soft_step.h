@@ -84,6 +84,7 @@ struct SoftJointRow {
 class SoftStepSolver final : public Solver {
  public:
   const char* Name() const override { return "soft_step"; }
+  bool JointColoringKept() const override { return jointColoringKept_; }
   void Step(StepContext& ctx) override;
 
  private:
@@ -309,11 +310,7 @@ class SoftStepSolver final : public Solver {
   std::vector<int> jointEndsChanged_;  // per worker
   uint64_t jointsVersion_ = ~uint64_t(0);  // StepContext::jointsVersion of the colouring kept
 
- public:
-  // How many joint colourings were asked for and how many reused last step's (for the tests).
-  int64_t jointColorings_ = 0, jointColoringsReused_ = 0;
-
- private:
+  bool jointColoringKept_ = false;  // the last step's colouring was the one before (Counters)
   Softness jointSoft_;                      // the rigid rows' softness this step
   // Chains (WorldDef::jointChainSolve): chain c's rows, in order, are chainRows_[chainStart_[c]
   // .. chainStart_[c + 1]); chainShared_[k] is the body the k-th row shares with the next.

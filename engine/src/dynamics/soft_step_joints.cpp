@@ -87,8 +87,7 @@ void SoftStepSolver::PrepareJoints(const StepContext& ctx, Real h) {
   int changed = 0;
   for (int c : jointEndsChanged_) changed += c;
   const bool reuse = sameJoints && changed == 0;
-  ++jointColorings_;
-  jointColoringsReused_ += reuse ? 1 : 0;
+  jointColoringKept_ = reuse;
   std::vector<int>& colorOf = jointColorOf_;
   std::vector<int>& slotOf = jointSlotOf_;
   if (!reuse) {

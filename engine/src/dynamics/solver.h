@@ -17,6 +17,8 @@ class Solver {
   /// accumulated impulses in the contacts' manifold points (for warm starting next step).
   virtual void Step(StepContext& ctx) = 0;
   virtual const char* Name() const = 0;
+  /// Whether the last Step kept the joint colouring of the step before (Counters::jointColoringKept).
+  virtual bool JointColoringKept() const { return false; }
 };
 
 std::unique_ptr<Solver> MakeThesisSolver();

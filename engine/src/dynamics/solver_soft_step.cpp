@@ -37,6 +37,7 @@ struct SoftStepSolver::StepPlan {
 };
 
 void SoftStepSolver::Step(StepContext& ctx) {
+  jointColoringKept_ = false;  // set by the joints' preparation, when there are joints
   DispatchEffects(ctx.def->effects,
                   [&](auto rotation, auto friction) { Run<decltype(rotation)::value, decltype(friction)::value>(ctx); });
 }

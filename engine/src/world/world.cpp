@@ -785,6 +785,7 @@ void World::Impl::RunPipeline(Real dt) {
   profile.persistence += Ms(t2, t3);
 
   CountContacts(static_cast<int>(pairs.size()));
+  counters.jointColoringKept = solver->JointColoringKept();
 }
 
 // The pre-solve pass: what the solvers do not know of, as velocity changes before they run (so no
