@@ -565,11 +565,13 @@ namespace pairs_vex {
 
 namespace {
 
-// WorldDef::speculativeContacts off: drops the points of out[first..] that are still apart
-// (separation beyond the pair's polygon skin) and the contacts left with none. Outside the pair
-// loop, so the default path pays one test per block of pairs.
-// With WorldDef::box2dPolygonClip, a polygon pair's manifold is computed again as Box2D 2.4.1
-// computes it (CollidePolygonsBox2d): its touching points only.
+// Box2D 2.4.1's contacts, on out[first..] after the pair loop (so the default path pays one test
+// per block of pairs): with WorldDef::box2dPolygonClip each polygon pair's manifold is computed
+// again as Box2D computes it (CollidePolygonsBox2d: touching points only); with
+// WorldDef::speculativeContacts off every point still apart (beyond the pair's polygon skin) is
+// dropped. A contact left with no point is dropped. Only pairs the loop kept are seen: one whose
+// incident edge lies wholly beyond the face's ends but within the skin of them (a corner grazing
+// a corner) gets no contact here where Box2D's extended side planes would give it one.
 void KeepTouchingPoints(const Bodies& bodies, const WorldDef& def, std::vector<Contact>& out, size_t first) {
   size_t kept = first;
   for (size_t i = first; i < out.size(); ++i) {
