@@ -11,7 +11,10 @@
 // "b2pos" for Box2D 2.4.1's position pass instead of its push (WorldDef::thesisPositionPass),
 // "relaxfriction" for soft_step's friction in every relax pass, "b3soft"
 // for soft_step with Box2D 3's settings (one relax pass, no mass-ratio limit, damping ratio 10),
-// "nochain" for revolute chains solved joint by joint (WorldDef::jointChainSolve off).
+// "nochain" for revolute chains solved joint by joint (WorldDef::jointChainSolve off), "nospec"
+// for touching contact points only (WorldDef::speculativeContacts off, as Box2D 2.4.1), "b2clip"
+// for Box2D 2.4.1's polygon manifolds (WorldDef::box2dPolygonClip), "norecycle"
+// for manifolds computed every step (WorldDef::contactRecycleDistance 0, as Box2D 2.4.1).
 // The default is the engine's own (WorldDef: soft_step with two relax passes and a mass-ratio
 // limit of 10) with the uniform grid and the deterministic scheme.
 // relax<N> and ratio<N> override the engine's defaults; "pgs" alone is Box2D 2.4's solver.
@@ -83,6 +86,12 @@ QuadrantVariant QuadrantVariant::Parse(std::string_view variant) {
       v.thesisPositionPass = true;
     } else if (token == "nochain") {
       v.jointChainSolve = false;  // WorldDef::jointChainSolve: revolute chains joint by joint
+    } else if (token == "nospec") {
+      v.speculativeContacts = false;
+    } else if (token == "b2clip") {
+      v.box2dClip = true;
+    } else if (token == "norecycle") {
+      v.contactRecycling = false;
     } else if (token == "b2skin") {
       v.polygonSkin = Real(0.01);  // Box2D 2.4.1's b2_polygonRadius
     } else if (token == "quadtree") {
@@ -97,7 +106,7 @@ QuadrantVariant QuadrantVariant::Parse(std::string_view variant) {
       throw Error("unknown quadrant variant '" + std::string(token) +
                   "' (known: thesis, pgs, soft_step, jacobi, quadtree, grid, deterministic, quadrants, sub<N>, it<N>, "
                   "pos<N>, relax<N>, ratio<N>, passes<N>, b3soft, relaxfriction, b2rest, b2skin, coupled, points, accum, b2pos, "
-                  "nochain)");
+                  "nochain, nospec, b2clip, norecycle)");
     }
     if (end == std::string_view::npos) break;
     start = end + 1;
@@ -138,6 +147,9 @@ WorldDef QuadrantVariant::MakeWorldDef(const Scene& scene, int threads) const {
   def.thesisAccumulatedImpulse = thesisAccumulated;
   def.thesisPositionPass = thesisPositionPass;
   def.jointChainSolve = jointChainSolve;
+  def.speculativeContacts = speculativeContacts;
+  def.box2dPolygonClip = box2dClip;
+  if (!contactRecycling) def.contactRecycleDistance = 0;
   if (box2d3Soft) {
     def.softRelaxIterations = 1;
     def.softMassRatioLimit = 0;

@@ -26,6 +26,9 @@ struct QuadrantVariant {
   bool thesisAccumulated = false;  ///< accum: the thesis solver's WorldDef::thesisAccumulatedImpulse
   bool thesisPositionPass = false;  ///< b2pos: the thesis solver's WorldDef::thesisPositionPass
   bool jointChainSolve = true;   // nochain: WorldDef::jointChainSolve off
+  bool speculativeContacts = true;  ///< nospec: WorldDef::speculativeContacts off (touching points only, as Box2D 2.4.1)
+  bool box2dClip = false;           ///< b2clip: WorldDef::box2dPolygonClip (Box2D 2.4.1's polygon manifold)
+  bool contactRecycling = true;     ///< norecycle: WorldDef::contactRecycleDistance 0 (Box2D 2.4.1 recycles no manifold)
   int massRatioLimit = 0;      ///< ratio<N>: soft_step's WorldDef::softMassRatioLimit; 0: the engine's
   int relaxIterations = 0;     ///< relax<N>: soft_step's WorldDef::softRelaxIterations; 0: the engine's
   bool box2d3Soft = false;     ///< b3soft: soft_step with Box2D 3's settings (relax 1, no ratio limit, damping 10)

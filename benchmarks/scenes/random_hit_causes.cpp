@@ -81,8 +81,9 @@ std::string CauseName(HitCause c) {
 std::vector<CampaignRun> CompatibleRuns() {
   std::vector<CampaignRun> out;
   for (const CampaignRun& r : DefaultCampaignRuns()) {
-    if (r.adapter == "quadrant:pgs+b2rest+b2skin" || r.adapter == "quadrant:soft_step+b2rest+b2skin+relax4+relaxfriction" ||
-        r.adapter == "quadrant:thesis+coupled+points+b2skin+b2pos+accum+passes8") {
+    if (r.adapter == "quadrant:pgs+b2rest+b2skin+nospec+b2clip" ||
+        r.adapter == "quadrant:soft_step+b2rest+b2skin+relax4+relaxfriction+nospec+b2clip" ||
+        r.adapter == "quadrant:thesis+coupled+points+b2skin+b2pos+accum+passes8+nospec+b2clip") {
       out.push_back(r);
     }
   }

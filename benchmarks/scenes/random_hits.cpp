@@ -352,6 +352,14 @@ std::vector<CampaignRun> DefaultCampaignRuns() {
        "quadrant:thesis+coupled+points+b2skin+accum+passes8"},
       {"quadrant:thesis", "coupled+points+box2d_skin+box2d_positions+accumulated+passes8",
        "quadrant:thesis+coupled+points+b2skin+b2pos+accum+passes8"},
+      // Box2D 2.4.1's contacts (issue #31): touching points only, its polygon clip.
+      {"quadrant:pgs", "box2d_restitution+box2d_skin+touching", "quadrant:pgs+b2rest+b2skin+nospec"},
+      {"quadrant:pgs", "box2d_restitution+box2d_skin+box2d_clip", "quadrant:pgs+b2rest+b2skin+b2clip"},
+      {"quadrant:pgs", "box2d_restitution+box2d_skin+touching+box2d_clip", "quadrant:pgs+b2rest+b2skin+nospec+b2clip"},
+      {"quadrant:soft_step", "box2d_restitution+box2d_skin+relax4+relaxfriction+touching+box2d_clip",
+       "quadrant:soft_step+b2rest+b2skin+relax4+relaxfriction+nospec+b2clip"},
+      {"quadrant:thesis", "coupled+points+box2d_skin+box2d_positions+accumulated+passes8+touching+box2d_clip",
+       "quadrant:thesis+coupled+points+b2skin+b2pos+accum+passes8+nospec+b2clip"},
   };
 }
 

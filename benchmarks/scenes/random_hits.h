@@ -125,10 +125,12 @@ struct Campaign {
 /// defaults; and the single-choice switches that trace each difference (README "validation"):
 /// pgs with Box2D 2.4.1's restitution, with its polygon skin, and with both (pgs's
 /// Box2D-compatible setting); soft_step with each of those, with friction in every relax pass, with
-/// the first two, with all three (soft_step's Box2D-compatible setting) and that with four relax
-/// passes; thesis with its impulse coupled, and that with an impulse per touching point, with the
-/// skin, and with both; and that (coupled, points, skin) with Box2D's position pass, with its
-/// impulses accumulated over 8 passes, and with both (the thesis's Box2D-compatible setting).
+/// the first two, with all three and that with four relax passes; thesis with its impulse coupled,
+/// and that with an impulse per touching point, with the skin, and with both; and that (coupled,
+/// points, skin) with Box2D's position pass, with its impulses accumulated over 8 passes, and with
+/// both. Last, Box2D 2.4.1's contacts (issue #31): pgs's restitution and skin setting with touching
+/// points only (nospec), with Box2D's polygon clip (b2clip), with both; and the fullest setting of
+/// each solver with both, which are the Box2D-compatible settings (CompatibleRuns).
 std::vector<CampaignRun> DefaultCampaignRuns();
 
 /// Runs hits 0..count-1 of the campaign seeded `seed` on every run. A hit is single-point, and

@@ -15,8 +15,14 @@
 namespace quadrant::scene {
 namespace {
 
+// The settings named Box2D-compatible before issue #31's contact switches: the reproducers below
+// are their differences, and the hits that the switches took below 5 % are checked further down.
 constexpr const char* kPgs = "quadrant:pgs+b2rest+b2skin";
 constexpr const char* kSoftStep = "quadrant:soft_step+b2rest+b2skin+relax4+relaxfriction";
+// The Box2D-compatible settings (CompatibleRuns): those with Box2D 2.4.1's contacts, touching
+// points only (nospec) and its polygon clip (b2clip).
+constexpr const char* kPgsCompatible = "quadrant:pgs+b2rest+b2skin+nospec+b2clip";
+constexpr const char* kSoftStepCompatible = "quadrant:soft_step+b2rest+b2skin+relax4+relaxfriction+nospec+b2clip";
 
 struct Reproducer {
   HitCause cause;
@@ -54,6 +60,58 @@ TEST(RandomHitCauses, ReproducersDifferAboveFivePercentForTheirCause) {
     // The same difference the campaign measures.
     EXPECT_NEAR(d.difference, VelocityDifference(hit, RunRandomHit(hit, r.engine).final, RunRandomHit(hit, "box2d").final),
                 1e-12);
+  }
+}
+
+// The causes that remain in the compatible settings, one hit each (speculative contact has none
+// left: no setting of them holds a speculative point).
+constexpr Reproducer kCompatibleReproducers[] = {
+    {HitCause::kRestitutionThreshold, 19, 119, kSoftStepCompatible},  // polygon-polygon e=0.5
+    {HitCause::kRecontact, 19, 45, kPgsCompatible},                   // polygon-polygon e=0, a second impact
+    {HitCause::kSkin, 20, 8, kPgsCompatible},                         // polygon-polygon e=0
+    {HitCause::kPointOrder, 24, 120, kSoftStepCompatible},            // polygon-polygon e=0.5
+    {HitCause::kSimultaneous, 17, 71, kSoftStepCompatible},           // polygon-polygon e=1
+    {HitCause::kSolver, 19, 169, kPgsCompatible},                     // circle-polygon e=1, one point throughout
+};
+
+TEST(RandomHitCauses, CompatibleSettingsReproducersDifferAboveFivePercentForTheirCause) {
+  for (const Reproducer& r : kCompatibleReproducers) {
+    SCOPED_TRACE("seed " + std::to_string(r.seed) + " hit " + std::to_string(r.index) + " " + r.engine);
+    const CauseDiagnosis d = DiagnoseHit(MakeRandomHit(r.seed, r.index), r.engine);
+    EXPECT_GT(d.difference, kCauseThreshold);
+    EXPECT_EQ(CauseName(d.cause), CauseName(r.cause));
+  }
+}
+
+// Each contact switch's effect, one hit per behaviour: a difference above 5 % in the earlier
+// setting that the switch alone takes below 1 % (the campaign's figures, issue #31).
+struct SwitchReproducer {
+  uint64_t seed;
+  int index;
+  const char* before;
+  const char* after;
+};
+constexpr SwitchReproducer kSwitchReproducers[] = {
+    // b2clip: Box2D holds the mover's vertex alone; clipped at the face's end, pgs also held the
+    // incident edge's far end 1.6 cm off the face (the old "skin" cause, 12.7 %).
+    {17, 101, "quadrant:pgs+b2rest+b2skin", "quadrant:pgs+b2rest+b2skin+b2clip"},
+    // b2clip: two points in both, the second one 0.02 m further along the edge in Box2D (the old
+    // "simultaneous points" cause, 6.8 %).
+    {17, 71, "quadrant:pgs+b2rest+b2skin", "quadrant:pgs+b2rest+b2skin+b2clip"},
+    // nospec: a speculative point beyond the circle's reach pushed a step before Box2D's contact
+    // existed (the old "speculative contact" cause, 8.5 %).
+    {22, 182, "quadrant:pgs+b2rest+b2skin", "quadrant:pgs+b2rest+b2skin+nospec"},
+    // nospec: a spinning corner's graze, 23.2 % (named "solver difference" before: one point in both).
+    {22, 129, "quadrant:pgs+b2rest+b2skin", "quadrant:pgs+b2rest+b2skin+nospec"},
+};
+
+TEST(RandomHitCauses, ContactSwitchesTakeTheirHitsBelowOnePercent) {
+  for (const SwitchReproducer& r : kSwitchReproducers) {
+    SCOPED_TRACE("seed " + std::to_string(r.seed) + " hit " + std::to_string(r.index) + " " + r.after);
+    const RandomHit hit = MakeRandomHit(r.seed, r.index);
+    const std::vector<BodyState> box2d = RunRandomHit(hit, "box2d").final;
+    EXPECT_GT(VelocityDifference(hit, RunRandomHit(hit, r.before).final, box2d), kCauseThreshold);
+    EXPECT_LT(VelocityDifference(hit, RunRandomHit(hit, r.after).final, box2d), 0.01);
   }
 }
 
@@ -98,9 +156,9 @@ TEST(RandomHitCauses, MirroredHitGivesTheSameResponse) {
 TEST(RandomHitCauses, CompatibleRunsAreTheThreeSolvers) {
   const std::vector<CampaignRun> runs = CompatibleRuns();
   ASSERT_EQ(runs.size(), 3u);
-  EXPECT_EQ(runs[0].adapter, kPgs);
-  EXPECT_EQ(runs[1].adapter, kSoftStep);
-  EXPECT_EQ(runs[2].engine, "quadrant:thesis");
+  EXPECT_EQ(runs[0].adapter, kPgsCompatible);
+  EXPECT_EQ(runs[1].adapter, kSoftStepCompatible);
+  EXPECT_EQ(runs[2].adapter, "quadrant:thesis+coupled+points+b2skin+b2pos+accum+passes8+nospec+b2clip");
   EXPECT_THROW(DiagnoseHit(MakeRandomHit(17, 0), "box2d"), Error);
 }
 

@@ -66,6 +66,20 @@ TEST(RandomHits, Box2dCompatibleSettingStaysBelowOnePercent) {
   }
 }
 
+TEST(RandomHits, Box2dContactsHoldEveryClassOfPgsBelowFivePercent) {
+  // Issue #31: with Box2D 2.4.1's contacts too (touching points only, its polygon clip) pgs's
+  // setting has every class below 5 % (the 10-seed campaign: worst class 2.31 % on its worst seed);
+  // without them polygon-polygon classes reach 6.8-12.7 % on seed 17's hits 71, 101, 132.
+  const std::vector<CampaignRow> rows = Sample().Box2dRows();
+  const char* compat = "box2d_restitution+box2d_skin+touching+box2d_clip";
+  EXPECT_LT(Find(rows, "all", "quadrant:pgs", compat).p90, 0.01);
+  for (const char* cls : kClasses) EXPECT_LT(Find(rows, cls, "quadrant:pgs", compat).p90, 0.05) << cls;
+  EXPECT_GT(Find(rows, "polygon-polygon e=1", "quadrant:pgs", "box2d_restitution+box2d_skin").p90, 0.05);
+  // The class's largest difference left is hit 39 (6.0 %), the hit Box2D answers two ways (its own
+  // response moves by 272 % under a 1e-4 perturbation: ambiguous).
+  EXPECT_LT(Find(rows, "polygon-polygon e=1", "quadrant:pgs", compat).max, 0.07);
+}
+
 TEST(RandomHits, SoftStepBox2dCompatibleSettingStaysBelowOnePercent) {
   // soft_step's Box2D-compatible setting: Box2D's restitution, its skin and friction in each of four
   // relax passes (0.76 % here, 0.69 % on the 2000 hits; with the default two passes 1.06 % here and

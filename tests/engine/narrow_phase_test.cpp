@@ -10,6 +10,7 @@
 #include "collision/box_batch.h"
 #include "collision/narrow_phase.h"
 #include "quadrant/shapes.h"
+#include "quadrant/world.h"
 #include "test_helpers.h"
 
 namespace quadrant {
@@ -405,6 +406,111 @@ TEST(NarrowPhaseCollide, DispatchesCirclesAndPolygons) {
   Manifold pp = Collide(b1, Xf(0, 0), b2, Xf(0, Real(0.99)), kSpec);
   EXPECT_EQ(pp.pointCount, 2);
   EXPECT_TRUE(VecNear(pp.normal, Vec2{0, 1}, 1e-5));
+}
+
+// Box2D 2.4.1's polygon clip (WorldDef::box2dPolygonClip, issue #31): a box's corner sits on the
+// top face of a wide box 0.1 m from its end, its bottom edge rising at slope 0.19 past that end.
+// Clipped at the face's end (x = 1) the edge's far point lies 0.0185 m above the face, within the
+// pair's 0.02 m of skin: a second touching point. Box2D clips at x = 1.02 (the side plane moved
+// out by the skins), where the edge is 0.0223 m above the face: one point, the corner.
+TEST(NarrowPhase, Box2dClipExtendsTheSidePlanesBySkin) {
+  const Polygon ground = MakeBox(1, Real(0.5));
+  const Polygon box = MakeBox(Real(0.2), Real(0.2));
+  const double angle = std::atan(0.19), c = std::cos(angle), s = std::sin(angle);
+  // The bottom-left corner (-0.2, -0.2) at (0.9, 0.4995): 0.5 mm into the face.
+  const Real x = Real(0.9 - (-0.2 * c + 0.2 * s)), y = Real(0.4995 - (-0.2 * s - 0.2 * c));
+  const Transform xfBox = Xf(x, y, Real(angle));
+  const Real skin = Real(0.02);
+  const Manifold own = CollidePolygons(ground, Xf(0, 0), box, xfBox, skin);
+  const Manifold b2 = CollidePolygonsBox2d(ground, Xf(0, 0), box, xfBox, skin);
+  ASSERT_EQ(own.pointCount, 2);
+  EXPECT_NEAR(std::max(own.points[0].separation, own.points[1].separation), 0.0185, 2e-4);
+  ASSERT_EQ(b2.pointCount, 1);
+  EXPECT_NEAR(b2.points[0].separation, -0.0005, 1e-4);
+  EXPECT_NEAR(b2.points[0].point.x, 0.9, 1e-4);
+  EXPECT_TRUE(VecNear(b2.normal, own.normal, 1e-6));
+  // Where both keep the point (a gentler slope), both clip the same edge to the same points but
+  // for the side plane's offset: the far point moves 0.02 m along the edge.
+  const double gentle = std::atan(0.05);
+  const Transform xf2 = Xf(Real(0.9 - (-0.2 * std::cos(gentle) + 0.2 * std::sin(gentle))),
+                           Real(0.4995 - (-0.2 * std::sin(gentle) - 0.2 * std::cos(gentle))), Real(gentle));
+  const Manifold own2 = CollidePolygons(ground, Xf(0, 0), box, xf2, skin);
+  const Manifold b22 = CollidePolygonsBox2d(ground, Xf(0, 0), box, xf2, skin);
+  ASSERT_EQ(own2.pointCount, 2);
+  ASSERT_EQ(b22.pointCount, 2);
+  const Real farOwn = std::max(own2.points[0].point.x, own2.points[1].point.x);
+  const Real farB2 = std::max(b22.points[0].point.x, b22.points[1].point.x);
+  EXPECT_NEAR(farB2 - farOwn, 0.02, 2e-4);
+}
+
+// WorldDef::speculativeContacts off (issue #31): a contact holds touching points only, as Box2D
+// 2.4.1's do. Two circles 0.01 m apart closing at 1 m/s: by default a speculative contact acts in
+// the first step (the gap closes, no more); without speculative points nothing acts until they
+// overlap, and then the contact is there.
+TEST(NarrowPhase, WithoutSpeculativeContactsOnlyTouchingPointsAreKept) {
+  auto run = [](bool speculative, int steps) {
+    WorldDef def;
+    def.gravity = {0, 0};
+    def.solver = SolverType::kPgs;
+    def.effects.continuous = false;
+    def.speculativeContacts = speculative;
+    World world(def);
+    BodyDef a;
+    a.type = BodyType::kDynamic;
+    a.shape.type = ShapeType::kCircle;
+    a.shape.circle.radius = Real(0.5);
+    a.position = {0, 0};
+    a.linearVelocity = {1, 0};
+    BodyDef b = a;
+    b.position = {Real(1.01), 0};
+    b.linearVelocity = {0, 0};
+    world.CreateBody(a);
+    world.CreateBody(b);
+    for (int k = 0; k < steps; ++k) world.Step(Real(1.0 / 60));
+    return world.GetContacts();
+  };
+  const std::vector<ContactInfo> own = run(true, 1), touching = run(false, 1);
+  ASSERT_EQ(own.size(), 1u);
+  EXPECT_GT(own[0].separations[0], 0);  // speculative: still apart when found
+  EXPECT_TRUE(touching.empty());
+  // One step later (moved 1/60 m: 0.0067 m into each other) the contact exists, touching.
+  const std::vector<ContactInfo> later = run(false, 2);
+  ASSERT_EQ(later.size(), 1u);
+  EXPECT_LE(later[0].separations[0], 0);
+}
+
+// Box2D 2.4.1's contacts (speculativeContacts off, box2dPolygonClip, its skin) on a pile of boxes
+// and triangles dropped under gravity: the same state on one and on two threads (the filter runs
+// on each block of pairs, in order), and a different one from the engine's own contacts.
+TEST(NarrowPhase, Box2dContactsGiveTheSameStateOnAnyThreadCount) {
+  auto run = [](int threads, bool box2d) {
+    WorldDef def;
+    def.solver = SolverType::kPgs;
+    def.threadCount = threads;
+    def.minParallelItems = 8;  // the narrow phase in blocks of one pair and up: several blocks
+    def.speculativeContacts = !box2d;
+    def.box2dPolygonClip = box2d;
+    def.polygonSkin = box2d ? Real(0.01) : Real(0);
+    World world(def);
+    BodyDef ground;
+    ground.shape.type = ShapeType::kPolygon;
+    ground.shape.polygon = MakeBox(20, Real(0.5));
+    world.CreateBody(ground);
+    const Vec2 tri[] = {{Real(-0.3), Real(-0.2)}, {Real(0.3), Real(-0.2)}, {0, Real(0.3)}};
+    for (int i = 0; i < 60; ++i) {
+      BodyDef b;
+      b.type = BodyType::kDynamic;
+      b.shape.type = ShapeType::kPolygon;
+      b.shape.polygon = i % 2 == 0 ? MakeBox(Real(0.25), Real(0.2)) : MakePolygon(tri);
+      b.position = {Real(-3 + (i % 10) * 0.62), Real(1 + (i / 10) * 0.7)};
+      b.angle = Real(0.1 * (i % 7));
+      world.CreateBody(b);
+    }
+    for (int k = 0; k < 120; ++k) world.Step(Real(1.0 / 60));
+    return world.StateHash();
+  };
+  EXPECT_EQ(run(1, true), run(2, true));
+  EXPECT_NE(run(1, true), run(1, false));
 }
 
 }  // namespace

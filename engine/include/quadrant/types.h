@@ -324,6 +324,19 @@ struct WorldDef {
   /// RestitutionPolicy::kBox2d Quadrant reproduces Box2D's responses (docs/validation.md).
   /// Deterministic scheme only (World refuses it with kQuadrants).
   Real polygonSkin = 0;
+  /// Speculative contact points: a manifold point still apart (beyond the pair's polygonSkin) is
+  /// a row that lets the gap close within the step, no more. false: only touching points (within
+  /// the skin) reach the solvers, as in Box2D 2.4.1, whose manifolds hold no point beyond its
+  /// polygon radius; a pair that is still apart gets its contact in the first step its shapes
+  /// overlap, as there. true (the default): the engine's own contacts. docs/validation.md
+  /// (the random campaign) gives what it changes.
+  bool speculativeContacts = true;
+  /// Polygon pairs' manifolds as Box2D 2.4.1 computes them: the incident edge is clipped to the
+  /// reference face's side planes moved out by the pair's polygonSkin (Box2D extends them by its
+  /// polygon radii), and only touching points are kept. A vertex hitting a face then keeps the
+  /// incident edge's far end only where Box2D does. false (the default): side planes through the
+  /// face's ends. docs/validation.md (the random campaign) gives what it changes.
+  bool box2dPolygonClip = false;
   /// thesis solver: solve its one impulse per contact with the normal and friction parts coupled
   /// (the 2x2 effective mass and the Coulomb cone) instead of by two separate formulas. Off (the
   /// default): the thesis's method. docs/validation.md gives what it changes.

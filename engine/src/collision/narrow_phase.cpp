@@ -12,6 +12,7 @@
 
 #include "collision/box_batch.h"
 #include "collision/broad_phase.h"
+#include "dynamics/restitution_policy.h"
 #include "world/world_internal.h"
 
 #include <cfloat>
@@ -260,7 +261,9 @@ inline Real MaxSeparationFour(const Polygon& a, Four b, int* edgeOut) {
 // The part of CollidePolygonsT after the two axis searches: given each polygon's vertices in the
 // other's frame and the best face of each (edge, separation), picks the reference face, finds the
 // incident edge and clips it. Shared by the general search below and the boxes' eight-lane one.
-template <int kA, int kB>
+// kSideSkin (WorldDef::box2dPolygonClip only): the reference face's side planes are moved out by
+// `speculative`, as Box2D 2.4.1 extends them by its polygon radii (b2CollidePolygons).
+template <int kA, int kB, bool kSideSkin = false>
 [[gnu::always_inline]] inline Manifold ClipPolygons(const Polygon& a, const Transform& xfA, const Polygon& b, const Transform& xfB,
                                                     Real speculative, Real sepA, int edgeA, Real sepB, int edgeB,
                                                     const Vec2* aVerts, const Vec2* bVerts, Rot bInAq, Rot aInBq) {
@@ -312,6 +315,9 @@ template <int kA, int kB>
     // comparison with it in NarrowPhaseBoxes checks this one too).
     if (!ClipToTwo(clip1[0], clip1[1], incident[0], incident[1], -tangent, -Dot(tangent, r1), 0)) return m;
     if (!ClipToTwo(clip2[0], clip2[1], clip1[0], clip1[1], tangent, Dot(tangent, r2), 1)) return m;
+  } else if constexpr (kSideSkin) {
+    if (ClipSegment(clip1, incident, -tangent, -Dot(tangent, r1) + speculative, 0) < 2) return m;
+    if (ClipSegment(clip2, clip1, tangent, Dot(tangent, r2) + speculative, 1) < 2) return m;
   } else {
     if (ClipSegment(clip1, incident, -tangent, -Dot(tangent, r1), 0) < 2) return m;
     if (ClipSegment(clip2, clip1, tangent, Dot(tangent, r2), 1) < 2) return m;
@@ -335,7 +341,7 @@ template <int kA, int kB>
   return m;
 }
 
-template <int kA, int kB>
+template <int kA, int kB, bool kSideSkin = false>
 [[gnu::always_inline]] inline Manifold CollidePolygonsT(const Polygon& a, Transform xfA, const Polygon& b, Transform xfB, Real speculative) {
   const int aCount = kA > 0 ? kA : a.count;
   const int bCount = kB > 0 ? kB : b.count;
@@ -366,7 +372,8 @@ template <int kA, int kB>
     sepB = MaxSeparation<kB, kA>(b, aVerts, aCount, &edgeB);
     if (sepB > speculative) return Manifold{};
   }
-  return ClipPolygons<kA, kB>(a, xfA, b, xfB, speculative, sepA, edgeA, sepB, edgeB, aVerts, bVerts, bInA.q, aInB.q);
+  return ClipPolygons<kA, kB, kSideSkin>(a, xfA, b, xfB, speculative, sepA, edgeA, sepB, edgeB, aVerts, bVerts, bInA.q,
+                                         aInB.q);
 }
 
 #if QUADRANT_NARROW_SIMD && defined(__x86_64__) && defined(__GNUC__)
@@ -503,6 +510,10 @@ Manifold CollidePolygonsGeneral(const Polygon& a, Transform xfA, const Polygon& 
   return CollideAnyPolygons(a, xfA, b, xfB, speculative);
 }
 
+Manifold CollidePolygonsBox2d(const Polygon& a, Transform xfA, const Polygon& b, Transform xfB, Real radius) {
+  return CollidePolygonsT<0, 0, true>(a, xfA, b, xfB, radius);
+}
+
 Manifold Collide(const ShapeDef& a, Transform xfA, const ShapeDef& b, Transform xfB, Real speculative) {
   return CollideInline(a, xfA, b, xfB, speculative);
 }
@@ -552,8 +563,45 @@ namespace pairs_vex {
 
 }  // namespace
 
-void CollidePairs(const Bodies& bodies, const WorldDef& def, Real dt, std::span<const CandidatePair> pairs,
-                  std::vector<Contact>& out, const RecycleSource* recycle) {
+namespace {
+
+// Box2D 2.4.1's contacts, on out[first..] after the pair loop (so the default path pays one test
+// per block of pairs): with WorldDef::box2dPolygonClip each polygon pair's manifold is computed
+// again as Box2D computes it (CollidePolygonsBox2d: touching points only); with
+// WorldDef::speculativeContacts off every point still apart (beyond the pair's polygon skin) is
+// dropped. A contact left with no point is dropped. Only pairs the loop kept are seen: one whose
+// incident edge lies wholly beyond the face's ends but within the skin of them (a corner grazing
+// a corner) gets no contact here where Box2D's extended side planes would give it one.
+void KeepTouchingPoints(const Bodies& bodies, const WorldDef& def, std::vector<Contact>& out, size_t first) {
+  size_t kept = first;
+  for (size_t i = first; i < out.size(); ++i) {
+    Contact c = out[i];
+    const ShapeDef& sa = bodies.shape[c.a];
+    const ShapeDef& sb = bodies.shape[c.b];
+    const Real skin = PolygonSkin(def, sa.type == ShapeType::kPolygon, sb.type == ShapeType::kPolygon);
+    if (def.box2dPolygonClip && sa.type == ShapeType::kPolygon && sb.type == ShapeType::kPolygon) {
+      const Manifold m = CollidePolygonsBox2d(sa.polygon, bodies.xf[c.a], sb.polygon, bodies.xf[c.b], skin);
+      c.manifold = m;
+      for (int k = 0; k < m.pointCount; ++k) {
+        ManifoldPoint& mp = c.manifold.points[k];
+        mp.anchorA = mp.point - bodies.center[c.a];
+        mp.anchorB = mp.point - bodies.center[c.b];
+        mp.baseSeparation = mp.separation;
+      }
+      c.recycleQA = c.recycleQB = Rot{0, 0};  // never recycled
+    }
+    int n = 0;
+    for (int k = 0; k < c.manifold.pointCount; ++k) {
+      if (def.speculativeContacts || c.manifold.points[k].separation <= skin) c.manifold.points[n++] = c.manifold.points[k];
+    }
+    c.manifold.pointCount = n;
+    if (n > 0) out[kept++] = c;
+  }
+  out.resize(kept);
+}
+
+void CollideAllPairs(const Bodies& bodies, const WorldDef& def, Real dt, std::span<const CandidatePair> pairs,
+                     std::vector<Contact>& out, const RecycleSource* recycle) {
   if (!def.effects.continuous && bodies.bulletCount > 0) {  // bullets without continuous collision
     pairs_default::PairLoop<CallBoxes, true>(bodies, def, dt, pairs, out, CallBoxes{}, recycle);
     return;
@@ -565,6 +613,19 @@ void CollidePairs(const Bodies& bodies, const WorldDef& def, Real dt, std::span<
   }
 #endif
   pairs_default::PairLoop(bodies, def, dt, pairs, out, CallBoxes{}, recycle);
+}
+
+}  // namespace
+
+void CollidePairs(const Bodies& bodies, const WorldDef& def, Real dt, std::span<const CandidatePair> pairs,
+                  std::vector<Contact>& out, const RecycleSource* recycle) {
+  if (!def.speculativeContacts || def.box2dPolygonClip) [[unlikely]] {
+    const size_t first = out.size();
+    CollideAllPairs(bodies, def, dt, pairs, out, recycle);
+    KeepTouchingPoints(bodies, def, out, first);
+    return;
+  }
+  CollideAllPairs(bodies, def, dt, pairs, out, recycle);
 }
 
 }  // namespace quadrant

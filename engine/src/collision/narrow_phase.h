@@ -46,6 +46,10 @@ Manifold CollidePolygons(const Polygon& a, Transform xfA, const Polygon& b, Tran
 /// CollidePolygons by its general path (vertex counts read at run time, no SIMD), which the
 /// four-vertex pairs' SSE2 and AVX paths must match bit for bit: for the tests.
 Manifold CollidePolygonsGeneral(const Polygon& a, Transform xfA, const Polygon& b, Transform xfB, Real speculative);
+/// Box2D 2.4.1's polygon manifold (b2CollidePolygons): the reference face's side planes are
+/// extended by `radius` (the pair's polygon skins) before the incident edge is clipped, and only
+/// points within `radius` are kept. WorldDef::box2dPolygonClip's collider, out of the pair loop.
+Manifold CollidePolygonsBox2d(const Polygon& a, Transform xfA, const Polygon& b, Transform xfB, Real radius);
 
 /// Capsule pairs (capsule_collide.cpp). CollideWithCapsule takes any pair with a capsule in it.
 Manifold CollideCapsuleAndCircle(const Capsule& a, Transform xfA, const Circle& b, Transform xfB, Real speculative);
