@@ -165,6 +165,7 @@ void ValidateScene(const Scene& scene) {
   if (scene.velocityIterations < 1) throw Error("scene velocity iterations must be >= 1");
   if (scene.positionIterations < 0) throw Error("scene position iterations must be >= 0");
   if (scene.restitutionThreshold < 0) throw Error("scene restitution threshold must be >= 0");
+  if (scene.groupBodies < 0) throw Error("scene groupBodies must be >= 0");
   for (int i = 0; i < static_cast<int>(scene.bodies.size()); ++i) {
     const BodyDesc& b = scene.bodies[i];
     if (b.dynamic && b.kinematic) Fail(i, "a body is either dynamic or kinematic, not both");

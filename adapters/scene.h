@@ -100,7 +100,7 @@ struct JointDesc {
   Vec2 anchorB{};                                    ///< distance: bodyB's world anchor
   Real length = 0, minLength = Real(0.005), maxLength = Real(1e6);  ///< m (distance)
   Real angularHertz = 0, angularDampingRatio = 0;    ///< weld
-  /// Revolute: added to bodyB's angle minus bodyA's at load to give the angle where the joint
+  /// Revolute, prismatic and weld: added to bodyB's angle minus bodyA's at load to give the angle where the joint
   /// angle (its limits' and spring's) is zero (Box2D 3's rotated local frame A).
   Real referenceAngle = 0;
 };
@@ -137,6 +137,9 @@ struct Scene {
   /// Every kind of group the driver adds (one sample of each): Load validates them and refuses,
   /// as Unsupported, a scene whose groups the engine cannot run, so that no refusal comes mid-run.
   std::vector<BodyGroup> groupSamples;
+  /// The most dynamic bodies the driver's groups hold at once (rain: its ragdolls' bodies), counted
+  /// with the scene's own where a body count is reported (the suite's N).
+  int groupBodies = 0;
   uint64_t seed = 0;                  ///< the seed it was generated with (0 = hand-built)
 };
 
