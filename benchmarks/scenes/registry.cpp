@@ -97,4 +97,29 @@ std::vector<int> DefaultBenchCounts(std::string_view name) {
   throw Error("no default bench counts for scene '" + std::string(name) + "'");
 }
 
+namespace {
+struct Box2d3Entry {
+  const char* scene;
+  int count, steps;
+};
+// benchmark/main.c's table and shared/benchmarks.c's sizes.
+constexpr Box2d3Entry kBox2d3[] = {{"joint_grid", 9993, 500}, {"junkyard", 8000, 800}, {"pyramid", 5050, 500},
+                                   {"many_pyramids", 22000, 200}, {"rain", 11000, 1000}, {"smash", 9600, 300},
+                                   {"spinner", 6076, 500}, {"tumbler", 2025, 750}};
+const Box2d3Entry& FindBox2d3(std::string_view name) {
+  for (const Box2d3Entry& e : kBox2d3) {
+    if (name == e.scene) return e;
+  }
+  throw Error("'" + std::string(name) + "' is not one of Box2D 3's benchmark scenes in the suite");
+}
+}  // namespace
+
+std::vector<std::string> Box2d3Scenes() {
+  std::vector<std::string> out;
+  for (const Box2d3Entry& e : kBox2d3) out.push_back(e.scene);
+  return out;
+}
+int Box2d3Count(std::string_view name) { return FindBox2d3(name).count; }
+int Box2d3Steps(std::string_view name) { return FindBox2d3(name).steps; }
+
 }  // namespace quadrant::scene

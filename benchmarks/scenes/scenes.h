@@ -97,6 +97,16 @@ std::vector<std::string> DefaultBenchScenes();
 /// few minutes to the default run). Throws quadrant::Error for a scene the suite does not bench.
 std::vector<int> DefaultBenchCounts(std::string_view name);
 
+/// Box2D 3's benchmark protocol (its benchmark/main.c) for the eight of its ten scenes the suite
+/// has (compounds and washer need several shapes per body): the scene names (its large_pyramid is
+/// `pyramid` at 5050 boxes), the count that builds each at Box2D 3's size, and its step count
+/// (Box2D 3 runs the first step untimed and times the others; 4 sub-steps or 8 velocity
+/// iterations; continuous collision on). Box2d3Count and Box2d3Steps throw quadrant::Error for
+/// other scenes.
+std::vector<std::string> Box2d3Scenes();
+int Box2d3Count(std::string_view name);
+int Box2d3Steps(std::string_view name);
+
 /// Builds a named scene with `count` bodies (ignored by fixed-size scenes) and a seed.
 /// Throws quadrant::Error for unknown names or bad counts.
 Scene MakeScene(std::string_view name, int count, uint64_t seed = 42);
