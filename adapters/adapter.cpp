@@ -69,6 +69,7 @@ std::unique_ptr<Adapter> MakeAdapter(std::string_view name) {
 
 void Adapter::Load(const Scene& scene, int threads) {
   ValidateScene(scene);
+  for (const BodyGroup& g : scene.groupSamples) ValidateGroup(scene, g);
   // Fewer than one thread is bad input (an Error); more than the engine runs is a limit of the
   // engine (Unsupported), which the suite reports and skips.
   if (threads < 1) throw Error(Name() + ": threads must be >= 1, got " + std::to_string(threads));
@@ -77,10 +78,40 @@ void Adapter::Load(const Scene& scene, int threads) {
     throw Unsupported(Name() + " runs at most " + std::to_string(caps.maxThreads) + " thread(s), asked for " +
                       std::to_string(threads) + (caps.threadLimit.empty() ? "" : ": " + caps.threadLimit));
   }
+  for (const BodyGroup& g : scene.groupSamples) CheckGroup(scene, g);
   DoLoad(scene, threads);  // throws before replacing the world: the old one stays loaded
   loaded_ = true;
   driver_ = scene.driver;
   step_ = 0;
+  settings_ = scene;
+  settings_.bodies.clear();
+  settings_.joints.clear();
+  settings_.groupSamples.clear();
+  settings_.driver = nullptr;
+  nextGroup_ = 0;
+  groupLive_.clear();
+}
+
+int Adapter::AddGroup(const BodyGroup& group) {
+  if (!loaded_) throw Error(Name() + ": AddGroup before Load");
+  try {
+    ValidateGroup(settings_, group);
+  } catch (const Error& e) {
+    throw Error(Name() + ": AddGroup: " + e.what());
+  }
+  CheckGroup(settings_, group);
+  DoAddGroup(nextGroup_, group);
+  groupLive_.push_back(true);
+  return nextGroup_++;
+}
+
+void Adapter::RemoveGroup(int group) {
+  if (!loaded_ || group < 0 || group >= nextGroup_ || !groupLive_[size_t(group)]) {
+    throw Error(Name() + ": RemoveGroup: " + std::to_string(group) + " is not a group in the world (" +
+                (group >= 0 && group < nextGroup_ ? "removed already" : "never added since the last Load") + ")");
+  }
+  DoRemoveGroup(group);
+  groupLive_[size_t(group)] = false;
 }
 
 void Adapter::Step() {

@@ -78,6 +78,19 @@ class Adapter {
   virtual void ReadBodies(std::vector<BodyState>& out) const = 0;
   /// Touching contacts (manifolds with at least one point) after the last step.
   virtual int ContactCount() const = 0;
+  /// Adds a group of bodies and joints to the loaded world (a scene driver's call: rain's
+  /// ragdolls) and returns its id: 0, 1, 2, ... in the order of the calls since Load, never
+  /// reused. Throws quadrant::Error, changing nothing, before a Load or for a group
+  /// ValidateGroup refuses; Unsupported for one the engine cannot run (Load refuses a scene
+  /// whose groupSamples it cannot run, so a scene's own groups never get there).
+  ///
+  /// Body indices (ReadBodies, SetVelocity, BodyCount): the scene's bodies first, in scene
+  /// order, then the bodies of the groups still in the world by ascending group id, each group's
+  /// in its own order. Removing a group moves the bodies of later groups down by its size.
+  int AddGroup(const BodyGroup& group);
+  /// Removes a group's bodies, and their joints with them. Throws quadrant::Error, changing
+  /// nothing, for an id that AddGroup has not returned since the last Load or that was removed.
+  void RemoveGroup(int group);
   /// Sets a body's velocity (for drivers and validation cases). Throws quadrant::Error, changing
   /// nothing, for an index outside [0, BodyCount()) or a non-finite value.
   void SetVelocity(int body, Vec2 velocity, Real angularVelocity);
@@ -99,9 +112,20 @@ class Adapter {
   virtual void DoStep() = 0;
   /// The body index is valid and the values finite.
   virtual void DoSetVelocity(int body, Vec2 velocity, Real angularVelocity) = 0;
+  /// Throws Unsupported for a group (valid, ValidateGroup) that the engine cannot run, with the
+  /// reason; Load calls it on every groupSample before DoLoad, AddGroup before DoAddGroup.
+  virtual void CheckGroup(const Scene& scene, const BodyGroup& group) const = 0;
+  /// Adds a valid, supported group under the id `group` (the next one); its bodies come after
+  /// every live group's. Nothing changes if it throws.
+  virtual void DoAddGroup(int group, const BodyGroup& group_desc) = 0;
+  /// Removes the live group `group`.
+  virtual void DoRemoveGroup(int group) = 0;
 
  private:
   bool loaded_ = false;
+  Scene settings_;  ///< the loaded scene's settings (no bodies), for ValidateGroup and CheckGroup
+  int nextGroup_ = 0;
+  std::vector<bool> groupLive_;  ///< by group id since Load
   Driver driver_;
   int step_ = 0;  ///< steps since Load: the driver's step index
 };

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <memory>
 #include <numbers>
 #include <stdexcept>
@@ -152,9 +153,65 @@ class BulletAdapter final : public Adapter {
   }
 
   void DoLoad(const Scene& scene, int /*threads: 1*/) override {
+    Refuse(scene.bodies, scene.joints);
+    // Built aside and swapped in at the end, so a throwing Load keeps the previous world.
+    auto next = std::make_unique<BulletWorld>();
+    auto filtered = [](const BodyDesc& b) { return b.categoryBits != 1 || b.maskBits != 0xFFFFFFFFu; };
+    next->filtered = std::any_of(scene.bodies.begin(), scene.bodies.end(), filtered);
+    for (const BodyGroup& g : scene.groupSamples) {
+      next->filtered = next->filtered || std::any_of(g.bodies.begin(), g.bodies.end(), filtered);
+    }
+    BuildWorld(scene, *next);
+    for (size_t i = 0; i < scene.bodies.size(); ++i) AddBody(scene, scene.bodies[i], *next);
+    world_ = std::move(next);
+    settings_ = scene;
+    settings_.bodies.clear();
+    settings_.joints.clear();
+    settings_.groupSamples.clear();
+    settings_.driver = nullptr;
+    sceneBodies_ = scene.bodies.size();
+    groups_.clear();
+  }
+
+  void CheckGroup(const Scene& /*scene*/, const BodyGroup& group) const override {
+    Refuse(group.bodies, group.joints);
+    // At Load the world is made filtered for the scene's groupSamples too; a group added to a
+    // world loaded without filters cannot bring its own.
+    if (world_ && !world_->filtered && std::any_of(group.bodies.begin(), group.bodies.end(), [](const BodyDesc& b) {
+          return b.categoryBits != 1 || b.maskBits != 0xFFFFFFFFu;
+        })) {
+      throw Unsupported("bullet: a group with collision filters added to a world loaded without any (list it in the scene's groupSamples)");
+    }
+  }
+
+  // A group's bodies go at the end of the body vectors, which stay in the adapter's order; its
+  // shapes stay with the world until the next Load.
+  void DoAddGroup(int group, const BodyGroup& desc) override {
+    for (const BodyDesc& b : desc.bodies) AddBody(settings_, b, *world_);
+    groups_.emplace(group, desc.bodies.size());
+  }
+
+  void DoRemoveGroup(int group) override {
+    size_t first = sceneBodies_;
+    for (const auto& [id, size] : groups_) {
+      if (id == group) break;
+      first += size;
+    }
+    const size_t count = groups_.at(group);
+    BulletWorld& w = *world_;
+    for (size_t i = first; i < first + count; ++i) w.world->removeRigidBody(w.bodies[i].get());
+    w.bodies.erase(w.bodies.begin() + std::ptrdiff_t(first), w.bodies.begin() + std::ptrdiff_t(first + count));
+    w.localCenters.erase(w.localCenters.begin() + std::ptrdiff_t(first), w.localCenters.begin() + std::ptrdiff_t(first + count));
+    w.dynamic.erase(w.dynamic.begin() + std::ptrdiff_t(first), w.dynamic.begin() + std::ptrdiff_t(first + count));
+    groups_.erase(group);
+  }
+
+ private:
+  // What the adapter cannot run among these bodies and joints, as Unsupported.
+  static void Refuse(const std::vector<BodyDesc>& bodies, const std::vector<JointDesc>& joints) {
     // Bullet moves a kinematic body by its motion state's transform, which the caller sets each
     // step, not by a velocity; the scene API drives kinematic bodies by velocity (SetVelocity).
-    for (const BodyDesc& b : scene.bodies) {
+    for (const BodyDesc& b : bodies) {
       if (b.kinematic) throw Unsupported("bullet: kinematic bodies move by transform in Bullet, not by velocity");
       // btCapsuleShapeX lies along the body's x axis, centred on its origin; anything else would
       // need a compound shape, which the plane constraint (btConvex2dShape) cannot wrap.
@@ -168,18 +225,12 @@ class BulletAdapter final : public Adapter {
         throw Unsupported("bullet: no segment or chain shape in Bullet's 2D mode (a thin box would be another shape)");
       }
     }
-    if (!scene.joints.empty()) {
+    if (!joints.empty()) {
       throw Unsupported("bullet: the adapter does not load joints (Bullet's constraints are not mapped to the plane yet)");
     }
-    // Built aside and swapped in at the end, so a throwing Load keeps the previous world.
-    auto next = std::make_unique<BulletWorld>();
-    next->filtered = std::any_of(scene.bodies.begin(), scene.bodies.end(), [](const BodyDesc& b) {
-      return b.categoryBits != 1 || b.maskBits != 0xFFFFFFFFu;
-    });
-    BuildWorld(scene, *next);
-    for (size_t i = 0; i < scene.bodies.size(); ++i) AddBody(scene, scene.bodies[i], *next);
-    world_ = std::move(next);
   }
+
+ public:
 
   void DoStep() override { world_->world->stepSimulation(world_->timeStep, 0); }
 
@@ -391,6 +442,9 @@ class BulletAdapter final : public Adapter {
   }
 
   std::unique_ptr<BulletWorld> world_;
+  Scene settings_;                 // the loaded scene's settings, for the groups' bodies
+  size_t sceneBodies_ = 0;
+  std::map<int, size_t> groups_;   // live groups by id: their body counts
 };
 
 }  // namespace

@@ -12,6 +12,7 @@ extern "C" {
 
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -117,31 +118,9 @@ class ChipmunkAdapter final : public Adapter {
   void DoLoad(const Scene& scene, int threads) override {
     // Refuse before touching the current space, so a refused Load leaves it usable.
     const Effects& fx = scene.effects;
-    if (fx.continuous) throw Unsupported("chipmunk: no continuous collision detection");
-    if (!fx.warmStarting) throw Unsupported("chipmunk: warm starting cannot be switched off");
-    for (const JointDesc& d : scene.joints) {
-      if (d.kind == JointKind::kWheel) throw Unsupported("chipmunk: no wheel joint (a groove with a spring is not mapped)");
-      if (d.kind == JointKind::kPrismatic && (d.enableMotor || d.enableSpring)) {
-        throw Unsupported("chipmunk: a groove joint has no motor or spring along its axis");
-      }
-      if (d.kind == JointKind::kWeld && d.hertz > 0) throw Unsupported("chipmunk: a pivot cannot be soft (weld linear hertz)");
-    }
-    // Chipmunk damps every body by one space-wide fraction per second, linear and angular
-    // alike; a scene whose dynamic bodies differ cannot be given to it.
     double damping = 0;
     bool dampingSet = false;
-    if (fx.damping) {
-      for (const BodyDesc& b : scene.bodies) {
-        if (!b.dynamic) continue;
-        const bool same = b.linearDamping == b.angularDamping && (!dampingSet || double(b.linearDamping) == damping);
-        if (!same) {
-          throw Unsupported("chipmunk: damping is one space-wide rate for linear and angular motion; this scene's "
-                            "bodies have different or unequal rates");
-        }
-        damping = double(b.linearDamping);
-        dampingSet = true;
-      }
-    }
+    Refuse(fx, scene.bodies, scene.joints, damping, dampingSet);
 
     WarmUpOnce();
     Release();
@@ -166,70 +145,203 @@ class ChipmunkAdapter final : public Adapter {
     rotation_ = fx.rotation;
 
     bodies_.reserve(scene.bodies.size());
+    fx_ = fx;
+    damping_ = damping;
+    dampingSet_ = dampingSet;
+    bodies_.reserve(scene.bodies.size());
     shapes_.reserve(scene.bodies.size());
-    for (const BodyDesc& desc : scene.bodies) {
-      cpBody* body;
-      if (desc.dynamic) {
-        const MassProperties mp = ComputeMassProperties(desc);
-        body = cpBodyNew(cpFloat(mp.mass), fx.rotation ? cpFloat(mp.inertia) : INFINITY);
-        // Chipmunk keeps the centre of gravity's world position fixed when the angle or the
-        // centre changes, so the centre goes first, then the angle, then the origin position.
-        cpBodySetCenterOfGravity(body, ToCp(mp.localCenter));
-      } else if (desc.kinematic) {
-        body = cpBodyNewKinematic();  // rotates about its origin: kinematic scene bodies are centred
-      } else {
-        body = cpBodyNewStatic();
-      }
-      bodies_.push_back(body);  // owned from here on, even if a later call throws
-      cpBodySetAngle(body, cpFloat(desc.angle));
-      cpBodySetPosition(body, ToCp(desc.position));
-      if (desc.dynamic || desc.kinematic) {
-        cpBodySetVelocity(body, ToCp(desc.velocity));
-        cpBodySetAngularVelocity(body, fx.rotation ? cpFloat(desc.angularVelocity) : 0.0);
-      }
-      // Static bodies are placed before their shapes are added, which caches the shapes'
-      // bounds once at the right transform; Chipmunk never reindexes static shapes itself.
-      cpSpaceAddBody(space_, body);
+    for (const BodyDesc& desc : scene.bodies) MakeBody(desc, bodies_, shapes_);
+    MakeJoints(scene.bodies, bodies_, scene.joints, constraints_);
+    all_ = bodies_;
+  }
 
-      cpShape* shape;
-      if (desc.shape == ShapeKind::kCircle) {
-        shape = cpCircleShapeNew(body, cpFloat(desc.radius), cpvzero);
-      } else if (desc.shape == ShapeKind::kCapsule) {
-        // Chipmunk's segment with a radius is a capsule.
-        shape = cpSegmentShapeNew(body, ToCp(desc.vertices[0]), ToCp(desc.vertices[1]), cpFloat(desc.radius));
-      } else if (desc.shape == ShapeKind::kSegment) {
-        shape = cpSegmentShapeNew(body, ToCp(desc.vertices[0]), ToCp(desc.vertices[1]), 0.0);
-      } else if (desc.shape == ShapeKind::kChainSegment) {
-        // Chipmunk's neighbours keep a body from catching on the joins, as the ghost vertices do,
-        // but its segment stays two-sided: a body behind the chain collides with it there.
-        shape = cpSegmentShapeNew(body, ToCp(desc.vertices[1]), ToCp(desc.vertices[2]), 0.0);
-        cpSegmentShapeSetNeighbors(shape, ToCp(desc.vertices[0]), ToCp(desc.vertices[3]));
-      } else {
-        std::vector<cpVect> verts;
-        verts.reserve(desc.vertices.size());
-        for (Vec2 v : desc.vertices) verts.push_back(ToCp(v));
-        shape = cpPolyShapeNew(body, static_cast<int>(verts.size()), verts.data(),
-                               cpTransformIdentity, 0.0);
-      }
-      shapes_.push_back(shape);
-      cpShapeSetFriction(shape, fx.friction ? cpFloat(desc.friction) : 0.0);
-      cpShapeSetElasticity(shape, fx.restitution ? cpFloat(desc.restitution) : 0.0);
-      // Chipmunk's filter rule is Box2D's (each category in the other's mask), without a group.
-      cpShapeSetFilter(shape, cpShapeFilterNew(CP_NO_GROUP, cpBitmask(desc.categoryBits), cpBitmask(desc.maskBits)));
-      cpSpaceAddShape(space_, shape);
-      if (!desc.awake) cpBodySleep(body);  // after its shape: a sleeping body keeps its shapes' bounds
+  void CheckGroup(const Scene& scene, const BodyGroup& group) const override {
+    // At Load the rate is the new scene's; during a run, the loaded one's.
+    double rate = damping_;
+    bool rateSet = dampingSet_;
+    if (!scene.bodies.empty()) {
+      rate = 0;
+      rateSet = false;
+      Refuse(scene.effects, scene.bodies, {}, rate, rateSet);
     }
-    // Joints. Revolute: a pivot, and for the limit, motor and spring Chipmunk's rotary limit (on
-    // the absolute angle difference, so offset by the one at load), simple motor (its rate drives
-    // wA - wB: the scene's speed negated) and damped rotary spring (stiffness and damping from
-    // hertz and damping ratio on the pair's reduced inertia). Prismatic: a groove on bodyA
-    // between the limits (a long one without) and a rotary limit of zero width. Distance: a pin
-    // joint (rod), a slide joint (rope), a damped spring. Weld: a pivot and a zero-width rotary
-    // limit, or a damped rotary spring. No wheel joint (refused in the pass above).
-    for (const JointDesc& d : scene.joints) {
+    Refuse(scene.effects, group.bodies, group.joints, rate, rateSet);
+  }
+
+  void DoAddGroup(int group, const BodyGroup& desc) override {
+    Owned& made = groups_[group];
+    for (const BodyDesc& body : desc.bodies) MakeBody(body, made.bodies, made.shapes);
+    MakeJoints(desc.bodies, made.bodies, desc.joints, made.constraints);
+    all_.insert(all_.end(), made.bodies.begin(), made.bodies.end());  // the highest id so far: it goes last
+  }
+
+  void DoRemoveGroup(int group) override {
+    auto it = groups_.find(group);
+    Owned& made = it->second;
+    // Constraints, then shapes, then bodies (Chipmunk wakes a sleeping body it removes).
+    for (cpConstraint* c : made.constraints) {
+      cpSpaceRemoveConstraint(space_, c);
+      cpConstraintFree(c);
+    }
+    for (cpShape* s : made.shapes) {
+      cpSpaceRemoveShape(space_, s);
+      cpShapeFree(s);
+    }
+    for (cpBody* b : made.bodies) {
+      cpSpaceRemoveBody(space_, b);
+      cpBodyFree(b);
+    }
+    groups_.erase(it);
+    all_ = bodies_;
+    for (const auto& [id, g] : groups_) all_.insert(all_.end(), g.bodies.begin(), g.bodies.end());
+  }
+
+  void DoStep() override {
+    if (hasty_) {
+      cpHastySpaceStep(space_, timeStep_);
+    } else {
+      cpSpaceStep(space_, timeStep_);
+    }
+  }
+
+  int BodyCount() const override { return static_cast<int>(all_.size()); }
+
+  void ReadBodies(std::vector<BodyState>& out) const override {
+    out.resize(all_.size());
+    for (size_t i = 0; i < all_.size(); ++i) {
+      const cpBody* body = all_[i];
+      out[i].position = FromCp(cpBodyGetPosition(body));  // the origin, not the centre
+      out[i].angle = Real(cpBodyGetAngle(body));
+      out[i].velocity = FromCp(cpBodyGetVelocity(body));  // of the centre of gravity
+      out[i].angularVelocity = Real(cpBodyGetAngularVelocity(body));
+    }
+  }
+
+  int ContactCount() const override {
+    // Every touching arbiter has a dynamic body (static pairs never collide), and sleeping
+    // bodies keep their arbiters threaded, so walking the dynamic bodies finds them all; a
+    // pair of dynamic bodies lists its arbiter twice, hence the set.
+    std::unordered_set<const cpArbiter*> touching;
+    for (cpBody* body : all_) {
+      if (cpBodyGetType(body) != CP_BODY_TYPE_DYNAMIC) continue;
+      cpBodyEachArbiter(
+          body,
+          [](cpBody*, cpArbiter* arbiter, void* data) {
+            if (cpArbiterGetCount(arbiter) > 0) {
+              static_cast<std::unordered_set<const cpArbiter*>*>(data)->insert(arbiter);
+            }
+          },
+          &touching);
+    }
+    return static_cast<int>(touching.size());
+  }
+
+  void DoSetVelocity(int body, Vec2 velocity, Real angularVelocity) override {
+    cpBody* b = all_[static_cast<size_t>(body)];
+    // A static body with a velocity would act as a moving surface in Chipmunk's solver; Box2D
+    // ignores velocities of static bodies, and so does every adapter.
+    if (cpBodyGetType(b) == CP_BODY_TYPE_STATIC) return;
+    cpBodySetVelocity(b, ToCp(velocity));  // also wakes a sleeping body
+    // With rotation off the moment is infinite: a set spin would never stop, while every
+    // engine keeps angular velocity at zero then (Quadrant's definition).
+    cpBodySetAngularVelocity(b, rotation_ ? cpFloat(angularVelocity) : 0.0);
+  }
+
+ private:
+  // What Chipmunk cannot run among these bodies and joints in a space of `fx`, as Unsupported;
+  // with damping, the one space-wide rate they share (`rate`, `rateSet` carry it across calls).
+  static void Refuse(const Effects& fx, const std::vector<BodyDesc>& bodies, const std::vector<JointDesc>& joints,
+                     double& rate, bool& rateSet) {
+    if (fx.continuous) throw Unsupported("chipmunk: no continuous collision detection");
+    if (!fx.warmStarting) throw Unsupported("chipmunk: warm starting cannot be switched off");
+    for (const JointDesc& d : joints) {
+      if (d.kind == JointKind::kWheel) throw Unsupported("chipmunk: no wheel joint (a groove with a spring is not mapped)");
+      if (d.kind == JointKind::kPrismatic && (d.enableMotor || d.enableSpring)) {
+        throw Unsupported("chipmunk: a groove joint has no motor or spring along its axis");
+      }
+      if (d.kind == JointKind::kWeld && d.hertz > 0) throw Unsupported("chipmunk: a pivot cannot be soft (weld linear hertz)");
+    }
+    if (fx.damping) {
+      for (const BodyDesc& b : bodies) {
+        if (!b.dynamic) continue;
+        const bool same = b.linearDamping == b.angularDamping && (!rateSet || double(b.linearDamping) == rate);
+        if (!same) {
+          throw Unsupported("chipmunk: damping is one space-wide rate for linear and angular motion; this scene's "
+                            "bodies have different or unequal rates");
+        }
+        rate = double(b.linearDamping);
+        rateSet = true;
+      }
+    }
+  }
+
+  // A scene body as a Chipmunk body and shape added to the space, owned by `bodies` and `shapes`.
+  void MakeBody(const BodyDesc& desc, std::vector<cpBody*>& bodies_, std::vector<cpShape*>& shapes_) {
+    const Effects& fx = fx_;
+    cpBody* body;
+    if (desc.dynamic) {
+      const MassProperties mp = ComputeMassProperties(desc);
+      body = cpBodyNew(cpFloat(mp.mass), fx.rotation ? cpFloat(mp.inertia) : INFINITY);
+      // Chipmunk keeps the centre of gravity's world position fixed when the angle or the
+      // centre changes, so the centre goes first, then the angle, then the origin position.
+      cpBodySetCenterOfGravity(body, ToCp(mp.localCenter));
+    } else if (desc.kinematic) {
+      body = cpBodyNewKinematic();  // rotates about its origin: kinematic scene bodies are centred
+    } else {
+      body = cpBodyNewStatic();
+    }
+    bodies_.push_back(body);  // owned from here on, even if a later call throws
+    cpBodySetAngle(body, cpFloat(desc.angle));
+    cpBodySetPosition(body, ToCp(desc.position));
+    if (desc.dynamic || desc.kinematic) {
+      cpBodySetVelocity(body, ToCp(desc.velocity));
+      cpBodySetAngularVelocity(body, fx.rotation ? cpFloat(desc.angularVelocity) : 0.0);
+    }
+    // Static bodies are placed before their shapes are added, which caches the shapes'
+    // bounds once at the right transform; Chipmunk never reindexes static shapes itself.
+    cpSpaceAddBody(space_, body);
+
+    cpShape* shape;
+    if (desc.shape == ShapeKind::kCircle) {
+      shape = cpCircleShapeNew(body, cpFloat(desc.radius), cpvzero);
+    } else if (desc.shape == ShapeKind::kCapsule) {
+      // Chipmunk's segment with a radius is a capsule.
+      shape = cpSegmentShapeNew(body, ToCp(desc.vertices[0]), ToCp(desc.vertices[1]), cpFloat(desc.radius));
+    } else if (desc.shape == ShapeKind::kSegment) {
+      shape = cpSegmentShapeNew(body, ToCp(desc.vertices[0]), ToCp(desc.vertices[1]), 0.0);
+    } else if (desc.shape == ShapeKind::kChainSegment) {
+      // Chipmunk's neighbours keep a body from catching on the joins, as the ghost vertices do,
+      // but its segment stays two-sided: a body behind the chain collides with it there.
+      shape = cpSegmentShapeNew(body, ToCp(desc.vertices[1]), ToCp(desc.vertices[2]), 0.0);
+      cpSegmentShapeSetNeighbors(shape, ToCp(desc.vertices[0]), ToCp(desc.vertices[3]));
+    } else {
+      std::vector<cpVect> verts;
+      verts.reserve(desc.vertices.size());
+      for (Vec2 v : desc.vertices) verts.push_back(ToCp(v));
+      shape = cpPolyShapeNew(body, static_cast<int>(verts.size()), verts.data(),
+                             cpTransformIdentity, 0.0);
+    }
+    shapes_.push_back(shape);
+    cpShapeSetFriction(shape, fx.friction ? cpFloat(desc.friction) : 0.0);
+    cpShapeSetElasticity(shape, fx.restitution ? cpFloat(desc.restitution) : 0.0);
+    // Chipmunk's filter rule is Box2D's (each category in the other's mask), without a group.
+    cpShapeSetFilter(shape, cpShapeFilterNew(CP_NO_GROUP, cpBitmask(desc.categoryBits), cpBitmask(desc.maskBits)));
+    cpSpaceAddShape(space_, shape);
+    if (!desc.awake) cpBodySleep(body);  // after its shape: a sleeping body keeps its shapes' bounds
+  }
+
+  // The joints among `descs` (made as `bodies_`; joint indices index both), owned by `constraints_`.
+  // Joints. Revolute: a pivot, and for the limit, motor and spring Chipmunk's rotary limit (on
+  // the absolute angle difference, so offset by the one at load), simple motor (its rate drives
+  // wA - wB: the scene's speed negated) and damped rotary spring (stiffness and damping from
+  // hertz and damping ratio on the pair's reduced inertia). Prismatic: a groove on bodyA
+  // between the limits (a long one without) and a rotary limit of zero width. Distance: a pin
+  // joint (rod), a slide joint (rope), a damped spring. Weld: a pivot and a zero-width rotary
+  void MakeJoints(const std::vector<BodyDesc>& descs, const std::vector<cpBody*>& bodies_, const std::vector<JointDesc>& joints,
+                  std::vector<cpConstraint*>& constraints_) {
+    for (const JointDesc& d : joints) {
       // A joint of two bodies that never move does nothing in any engine; Chipmunk aborts on its
       // infinite mass ("Unsolvable constraint"), so it is not made.
-      if (!scene.bodies[size_t(d.bodyA)].dynamic && !scene.bodies[size_t(d.bodyB)].dynamic) continue;
+      if (!descs[size_t(d.bodyA)].dynamic && !descs[size_t(d.bodyB)].dynamic) continue;
       cpBody* a = bodies_[size_t(d.bodyA)];
       cpBody* b = bodies_[size_t(d.bodyB)];
       auto add = [&](cpConstraint* c) {
@@ -239,16 +351,16 @@ class ChipmunkAdapter final : public Adapter {
         return c;
       };
       auto inertia = [&](int i) {
-        const BodyDesc& bd = scene.bodies[size_t(i)];
+        const BodyDesc& bd = descs[size_t(i)];
         return bd.dynamic ? cpFloat(ComputeMassProperties(bd).inertia) : INFINITY;
       };
       auto mass = [&](int i) {
-        const BodyDesc& bd = scene.bodies[size_t(i)];
+        const BodyDesc& bd = descs[size_t(i)];
         return bd.dynamic ? cpFloat(ComputeMassProperties(bd).mass) : INFINITY;
       };
       auto reduced = [](cpFloat x, cpFloat y) { return std::isinf(x) ? y : std::isinf(y) ? x : x * y / (x + y); };
       const cpFloat twoPi = 2 * 3.14159265358979323846;
-      const cpFloat reference = cpFloat(scene.bodies[size_t(d.bodyB)].angle - scene.bodies[size_t(d.bodyA)].angle);
+      const cpFloat reference = cpFloat(descs[size_t(d.bodyB)].angle - descs[size_t(d.bodyA)].angle + d.referenceAngle);
       auto rotarySpring = [&](Real hertz, Real ratio) {
         const cpFloat i = reduced(inertia(d.bodyA), inertia(d.bodyB)), omega = twoPi * cpFloat(hertz);
         add(cpDampedRotarySpringNew(a, b, reference, i * omega * omega, 2 * cpFloat(ratio) * i * omega));
@@ -297,58 +409,6 @@ class ChipmunkAdapter final : public Adapter {
     }
   }
 
-  void DoStep() override {
-    if (hasty_) {
-      cpHastySpaceStep(space_, timeStep_);
-    } else {
-      cpSpaceStep(space_, timeStep_);
-    }
-  }
-
-  int BodyCount() const override { return static_cast<int>(bodies_.size()); }
-
-  void ReadBodies(std::vector<BodyState>& out) const override {
-    out.resize(bodies_.size());
-    for (size_t i = 0; i < bodies_.size(); ++i) {
-      const cpBody* body = bodies_[i];
-      out[i].position = FromCp(cpBodyGetPosition(body));  // the origin, not the centre
-      out[i].angle = Real(cpBodyGetAngle(body));
-      out[i].velocity = FromCp(cpBodyGetVelocity(body));  // of the centre of gravity
-      out[i].angularVelocity = Real(cpBodyGetAngularVelocity(body));
-    }
-  }
-
-  int ContactCount() const override {
-    // Every touching arbiter has a dynamic body (static pairs never collide), and sleeping
-    // bodies keep their arbiters threaded, so walking the dynamic bodies finds them all; a
-    // pair of dynamic bodies lists its arbiter twice, hence the set.
-    std::unordered_set<const cpArbiter*> touching;
-    for (cpBody* body : bodies_) {
-      if (cpBodyGetType(body) != CP_BODY_TYPE_DYNAMIC) continue;
-      cpBodyEachArbiter(
-          body,
-          [](cpBody*, cpArbiter* arbiter, void* data) {
-            if (cpArbiterGetCount(arbiter) > 0) {
-              static_cast<std::unordered_set<const cpArbiter*>*>(data)->insert(arbiter);
-            }
-          },
-          &touching);
-    }
-    return static_cast<int>(touching.size());
-  }
-
-  void DoSetVelocity(int body, Vec2 velocity, Real angularVelocity) override {
-    cpBody* b = bodies_[static_cast<size_t>(body)];
-    // A static body with a velocity would act as a moving surface in Chipmunk's solver; Box2D
-    // ignores velocities of static bodies, and so does every adapter.
-    if (cpBodyGetType(b) == CP_BODY_TYPE_STATIC) return;
-    cpBodySetVelocity(b, ToCp(velocity));  // also wakes a sleeping body
-    // With rotation off the moment is infinite: a set spin would never stop, while every
-    // engine keeps angular velocity at zero then (Quadrant's definition).
-    cpBodySetAngularVelocity(b, rotation_ ? cpFloat(angularVelocity) : 0.0);
-  }
-
- private:
   // The space does not own bodies or shapes; it must go first because freeing it wakes
   // every sleeping body, which touches them.
   void Release() {
@@ -356,7 +416,7 @@ class ChipmunkAdapter final : public Adapter {
       // Chipmunk 7.0.3's space teardown wakes sleeping components from inside its own body
       // iteration, which misses some of them and leaks the contacts they saved (found with
       // LeakSanitizer, two sleeping piles). Waking them here, outside any iteration, frees them.
-      for (cpBody* b : bodies_) {
+      for (cpBody* b : all_) {
         if (cpBodyGetType(b) == CP_BODY_TYPE_DYNAMIC) cpBodyActivate(b);
       }
       if (hasty_) {
@@ -372,6 +432,13 @@ class ChipmunkAdapter final : public Adapter {
     for (cpBody* b : bodies_) cpBodyFree(b);
     shapes_.clear();
     bodies_.clear();
+    for (auto& [id, g] : groups_) {
+      for (cpConstraint* c : g.constraints) cpConstraintFree(c);
+      for (cpShape* s : g.shapes) cpShapeFree(s);
+      for (cpBody* b : g.bodies) cpBodyFree(b);
+    }
+    groups_.clear();
+    all_.clear();
   }
 
   cpSpace* space_ = nullptr;
@@ -379,6 +446,16 @@ class ChipmunkAdapter final : public Adapter {
   std::vector<cpBody*> bodies_;  // scene body index -> Chipmunk body (owned)
   std::vector<cpShape*> shapes_;  // owned
   std::vector<cpConstraint*> constraints_;  // owned
+  struct Owned {
+    std::vector<cpBody*> bodies;
+    std::vector<cpShape*> shapes;
+    std::vector<cpConstraint*> constraints;
+  };
+  std::map<int, Owned> groups_;  // live groups by id (AddGroup), owned
+  std::vector<cpBody*> all_;     // the adapter's body order: scene bodies, then the groups'
+  Effects fx_;
+  double damping_ = 0;           // the space's one damping rate (1/s) and whether a body set it
+  bool dampingSet_ = false;
   cpFloat timeStep_ = 1.0 / 60.0;
   bool rotation_ = true;
 };

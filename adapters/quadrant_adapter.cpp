@@ -1,6 +1,7 @@
 // The Quadrant adapter: a scene becomes a World once, at load time. Which world (solver, broad
 // phase, scheme, the soft_step budget) is quadrant_variant.cpp's policy; this file translates.
 #include <algorithm>
+#include <map>
 #include <string>
 
 #include "adapter_factories.h"
@@ -38,19 +39,7 @@ class QuadrantAdapter final : public Adapter {
       throw Unsupported("quadrant's quadrants scheme has no sleeping (the deterministic scheme has)");
     }
     const WorldDef def = v_.MakeWorldDef(scene, threads);
-    if (!scene.joints.empty() && (def.solver != SolverType::kSoftStep || def.scheme != ParallelScheme::kDeterministic)) {
-      throw Unsupported("joints are solved by quadrant's soft_step solver with the deterministic scheme only");
-    }
-    if (def.scheme == ParallelScheme::kQuadrants) {
-      for (const BodyDesc& b : scene.bodies) {
-        if (b.categoryBits != 1 || b.maskBits != 0xFFFFFFFFu) {
-          throw Unsupported("quadrant's quadrants scheme has no collision filters (the deterministic scheme has)");
-        }
-        if (b.shape == ShapeKind::kSegment || b.shape == ShapeKind::kChainSegment) {
-          throw Unsupported("quadrant's quadrants scheme has no segments (the deterministic scheme has)");
-        }
-      }
-    }
+    Refuse(def, scene.bodies, scene.joints);
     auto world = std::make_unique<World>(def);
     std::vector<BodyId> ids;
     ids.reserve(scene.bodies.size());
@@ -59,101 +48,46 @@ class QuadrantAdapter final : public Adapter {
       bd.userData = i;  // the scene index, for Contacts()
       ids.push_back(world->CreateBody(bd));
     }
-    for (const JointDesc& d : scene.joints) {
-      const BodyId a = ids[size_t(d.bodyA)], b = ids[size_t(d.bodyB)];
-      const Real reference = scene.bodies[size_t(d.bodyB)].angle - scene.bodies[size_t(d.bodyA)].angle;
-      const Vec2 axisA = InvRotate(world->GetRotation(a), d.axis);  // the axis in bodyA's frame
-      // The fields every definition has: the bodies, the anchor (one world point) and the filter.
-      auto common = [&](auto& j) {
-        j.bodyA = a;
-        j.bodyB = b;
-        j.localAnchorA = world->GetLocalPoint(a, d.anchor);
-        j.localAnchorB = world->GetLocalPoint(b, d.anchor);
-        j.collideConnected = d.collideConnected;
-      };
-      switch (d.kind) {
-        case JointKind::kRevolute: {
-          RevoluteJointDef j;
-          common(j);
-          j.referenceAngle = reference;
-          j.enableLimit = d.enableLimit;
-          j.lowerAngle = d.lowerAngle;
-          j.upperAngle = d.upperAngle;
-          j.enableMotor = d.enableMotor;
-          j.motorSpeed = d.motorSpeed;
-          j.maxMotorTorque = d.maxMotorTorque;
-          j.enableSpring = d.enableSpring;
-          j.hertz = d.hertz;
-          j.dampingRatio = d.dampingRatio;
-          world->CreateRevoluteJoint(j);
-          break;
-        }
-        case JointKind::kPrismatic: {
-          PrismaticJointDef j;
-          common(j);
-          j.localAxisA = axisA;
-          j.referenceAngle = reference;
-          j.enableLimit = d.enableLimit;
-          j.lowerTranslation = d.lowerTranslation;
-          j.upperTranslation = d.upperTranslation;
-          j.enableMotor = d.enableMotor;
-          j.motorSpeed = d.motorSpeed;
-          j.maxMotorForce = d.maxMotorForce;
-          j.enableSpring = d.enableSpring;
-          j.hertz = d.hertz;
-          j.dampingRatio = d.dampingRatio;
-          world->CreatePrismaticJoint(j);
-          break;
-        }
-        case JointKind::kDistance: {
-          DistanceJointDef j;
-          common(j);
-          j.localAnchorB = world->GetLocalPoint(b, d.anchorB);
-          j.length = d.length > 0 ? d.length : Length(d.anchorB - d.anchor);
-          j.enableSpring = d.enableSpring;
-          j.hertz = d.hertz;
-          j.dampingRatio = d.dampingRatio;
-          j.enableLimit = d.enableLimit;
-          j.minLength = d.minLength;
-          j.maxLength = d.maxLength;
-          world->CreateDistanceJoint(j);
-          break;
-        }
-        case JointKind::kWeld: {
-          WeldJointDef j;
-          common(j);
-          j.referenceAngle = reference;
-          j.linearHertz = d.hertz;
-          j.linearDampingRatio = d.dampingRatio;
-          j.angularHertz = d.angularHertz;
-          j.angularDampingRatio = d.angularDampingRatio;
-          world->CreateWeldJoint(j);
-          break;
-        }
-        case JointKind::kWheel: {
-          WheelJointDef j;
-          common(j);
-          j.localAxisA = axisA;
-          j.enableSpring = d.enableSpring;
-          j.hertz = d.hertz;
-          j.dampingRatio = d.dampingRatio;
-          j.enableLimit = d.enableLimit;
-          j.lowerTranslation = d.lowerTranslation;
-          j.upperTranslation = d.upperTranslation;
-          j.enableMotor = d.enableMotor;
-          j.motorSpeed = d.motorSpeed;
-          j.maxMotorTorque = d.maxMotorTorque;
-          world->CreateWheelJoint(j);
-          break;
-        }
-      }
-    }
+    CreateJoints(*world, ids, scene.bodies, scene.joints);
     world_ = std::move(world);
     ids_ = std::move(ids);
+    groups_.clear();
     scene_ = &scene;
     dt_ = scene.timeStep;
     pipelineRepeats_ = scene.pipelineRepeats;
     totals_ = Profile{};
+  }
+
+  void CheckGroup(const Scene& scene, const BodyGroup& group) const override {
+    if (scene.effects.sleep && v_.scheme == ParallelScheme::kQuadrants) {
+      throw Unsupported("quadrant's quadrants scheme has no sleeping (the deterministic scheme has)");
+    }
+    Refuse(v_.MakeWorldDef(scene, 1), group.bodies, group.joints);
+  }
+
+  void DoAddGroup(int group, const BodyGroup& desc) override {
+    // CreateBody and the joints' Create* validate before adding anything, and ValidateGroup ran
+    // the engine's own rules: a throw here would be a bug, and the bodies made so far go again.
+    std::vector<BodyId> ids;
+    ids.reserve(desc.bodies.size());
+    try {
+      for (size_t i = 0; i < desc.bodies.size(); ++i) {
+        BodyDef bd = ToBodyDef(desc.bodies[i]);
+        bd.userData = (uint64_t(group) + 1) << 32 | i;  // group + 1 and the index in it, for Contacts()
+        ids.push_back(world_->CreateBody(bd));
+      }
+      CreateJoints(*world_, ids, desc.bodies, desc.joints);
+    } catch (...) {
+      for (BodyId id : ids) world_->DestroyBody(id);
+      throw;
+    }
+    groups_.emplace(group, std::move(ids));
+  }
+
+  void DoRemoveGroup(int group) override {
+    auto it = groups_.find(group);
+    for (BodyId id : it->second) world_->DestroyBody(id);  // their joints go with them
+    groups_.erase(it);
   }
 
   void DoStep() override {
@@ -176,11 +110,16 @@ class QuadrantAdapter final : public Adapter {
 
   int BodyCount() const override { return world_ ? world_->GetBodyCount() : 0; }
 
+  // Scene bodies, then each live group's (adapter.h's order).
   void ReadBodies(std::vector<BodyState>& out) const override {
-    out.resize(ids_.size());
-    for (size_t i = 0; i < ids_.size(); ++i) {
-      out[i] = {world_->GetPosition(ids_[i]), world_->GetAngle(ids_[i]), world_->GetLinearVelocity(ids_[i]),
-                world_->GetAngularVelocity(ids_[i])};
+    out.clear();
+    out.reserve(size_t(BodyCount()));
+    auto read = [&](BodyId id) {
+      out.push_back({world_->GetPosition(id), world_->GetAngle(id), world_->GetLinearVelocity(id), world_->GetAngularVelocity(id)});
+    };
+    for (BodyId id : ids_) read(id);
+    for (const auto& [group, ids] : groups_) {
+      for (BodyId id : ids) read(id);
     }
   }
 
@@ -190,8 +129,19 @@ class QuadrantAdapter final : public Adapter {
   std::vector<ContactReadback> Contacts() const override {
     std::vector<ContactReadback> out;
     if (!world_) return out;
-    // Each body carries its scene index as user data (DoLoad).
-    auto sceneIndex = [&](BodyId id) { return static_cast<int>(world_->GetUserData(id)); };
+    // Each body carries its scene index as user data (DoLoad), a group's body its group + 1 in
+    // the upper half and its index in the group in the lower (DoAddGroup).
+    std::map<uint64_t, int> groupOffset;
+    int offset = int(ids_.size());
+    for (const auto& [group, ids] : groups_) {
+      groupOffset[uint64_t(group) + 1] = offset;
+      offset += int(ids.size());
+    }
+    auto sceneIndex = [&](BodyId id) {
+      const uint64_t data = world_->GetUserData(id);
+      if ((data >> 32) == 0) return static_cast<int>(data);
+      return groupOffset.at(data >> 32) + static_cast<int>(data & 0xFFFFFFFFu);
+    };
     for (const ContactInfo& c : world_->GetContacts()) {
       ContactReadback r;
       r.bodyA = sceneIndex(c.bodyA);
@@ -210,8 +160,9 @@ class QuadrantAdapter final : public Adapter {
   }
 
   void DoSetVelocity(int body, Vec2 velocity, Real angularVelocity) override {
-    world_->SetLinearVelocity(ids_[body], velocity);
-    world_->SetAngularVelocity(ids_[body], angularVelocity);
+    const BodyId id = BodyAt(body);
+    world_->SetLinearVelocity(id, velocity);
+    world_->SetAngularVelocity(id, angularVelocity);
   }
 
   uint64_t StateHash() const override { return world_ ? world_->StateHash() : 0; }
@@ -219,12 +170,136 @@ class QuadrantAdapter final : public Adapter {
   World* GetWorld() { return world_.get(); }
 
  private:
+  // The body at a valid index, in adapter.h's order.
+  BodyId BodyAt(int index) const {
+    if (size_t(index) < ids_.size()) return ids_[size_t(index)];
+    size_t rest = size_t(index) - ids_.size();
+    for (const auto& [group, ids] : groups_) {
+      if (rest < ids.size()) return ids[rest];
+      rest -= ids.size();
+    }
+    return {};  // not reached: Adapter::SetVelocity checked the index
+  }
+
+  // What a world of `def` cannot run among these bodies and joints, as Unsupported.
+  static void Refuse(const WorldDef& def, const std::vector<BodyDesc>& bodies, const std::vector<JointDesc>& joints) {
+    if (!joints.empty() && (def.solver != SolverType::kSoftStep || def.scheme != ParallelScheme::kDeterministic)) {
+      throw Unsupported("joints are solved by quadrant's soft_step solver with the deterministic scheme only");
+    }
+    if (def.scheme == ParallelScheme::kQuadrants) {
+      for (const BodyDesc& b : bodies) {
+        if (b.categoryBits != 1 || b.maskBits != 0xFFFFFFFFu) {
+          throw Unsupported("quadrant's quadrants scheme has no collision filters (the deterministic scheme has)");
+        }
+        if (b.shape == ShapeKind::kSegment || b.shape == ShapeKind::kChainSegment) {
+          throw Unsupported("quadrant's quadrants scheme has no segments (the deterministic scheme has)");
+        }
+      }
+    }
+  }
+
+  // The joints among `bodies` (made as `ids`; joint indices index both).
+  static void CreateJoints(World& world, const std::vector<BodyId>& ids, const std::vector<BodyDesc>& bodies,
+                           const std::vector<JointDesc>& joints) {
+    World* const w = &world;
+    for (const JointDesc& d : joints) {
+      const BodyId a = ids[size_t(d.bodyA)], b = ids[size_t(d.bodyB)];
+      const Real reference = bodies[size_t(d.bodyB)].angle - bodies[size_t(d.bodyA)].angle + d.referenceAngle;
+      const Vec2 axisA = InvRotate(w->GetRotation(a), d.axis);  // the axis in bodyA's frame
+      // The fields every definition has: the bodies, the anchor (one world point) and the filter.
+      auto common = [&](auto& j) {
+        j.bodyA = a;
+        j.bodyB = b;
+        j.localAnchorA = w->GetLocalPoint(a, d.anchor);
+        j.localAnchorB = w->GetLocalPoint(b, d.anchor);
+        j.collideConnected = d.collideConnected;
+      };
+      switch (d.kind) {
+        case JointKind::kRevolute: {
+          RevoluteJointDef j;
+          common(j);
+          j.referenceAngle = reference;
+          j.enableLimit = d.enableLimit;
+          j.lowerAngle = d.lowerAngle;
+          j.upperAngle = d.upperAngle;
+          j.enableMotor = d.enableMotor;
+          j.motorSpeed = d.motorSpeed;
+          j.maxMotorTorque = d.maxMotorTorque;
+          j.enableSpring = d.enableSpring;
+          j.hertz = d.hertz;
+          j.dampingRatio = d.dampingRatio;
+          w->CreateRevoluteJoint(j);
+          break;
+        }
+        case JointKind::kPrismatic: {
+          PrismaticJointDef j;
+          common(j);
+          j.localAxisA = axisA;
+          j.referenceAngle = reference;
+          j.enableLimit = d.enableLimit;
+          j.lowerTranslation = d.lowerTranslation;
+          j.upperTranslation = d.upperTranslation;
+          j.enableMotor = d.enableMotor;
+          j.motorSpeed = d.motorSpeed;
+          j.maxMotorForce = d.maxMotorForce;
+          j.enableSpring = d.enableSpring;
+          j.hertz = d.hertz;
+          j.dampingRatio = d.dampingRatio;
+          w->CreatePrismaticJoint(j);
+          break;
+        }
+        case JointKind::kDistance: {
+          DistanceJointDef j;
+          common(j);
+          j.localAnchorB = w->GetLocalPoint(b, d.anchorB);
+          j.length = d.length > 0 ? d.length : Length(d.anchorB - d.anchor);
+          j.enableSpring = d.enableSpring;
+          j.hertz = d.hertz;
+          j.dampingRatio = d.dampingRatio;
+          j.enableLimit = d.enableLimit;
+          j.minLength = d.minLength;
+          j.maxLength = d.maxLength;
+          w->CreateDistanceJoint(j);
+          break;
+        }
+        case JointKind::kWeld: {
+          WeldJointDef j;
+          common(j);
+          j.referenceAngle = reference;
+          j.linearHertz = d.hertz;
+          j.linearDampingRatio = d.dampingRatio;
+          j.angularHertz = d.angularHertz;
+          j.angularDampingRatio = d.angularDampingRatio;
+          w->CreateWeldJoint(j);
+          break;
+        }
+        case JointKind::kWheel: {
+          WheelJointDef j;
+          common(j);
+          j.localAxisA = axisA;
+          j.enableSpring = d.enableSpring;
+          j.hertz = d.hertz;
+          j.dampingRatio = d.dampingRatio;
+          j.enableLimit = d.enableLimit;
+          j.lowerTranslation = d.lowerTranslation;
+          j.upperTranslation = d.upperTranslation;
+          j.enableMotor = d.enableMotor;
+          j.motorSpeed = d.motorSpeed;
+          j.maxMotorTorque = d.maxMotorTorque;
+          w->CreateWheelJoint(j);
+          break;
+        }
+      }
+    }
+  }
+
   std::string variant_;
   QuadrantVariant v_;
   static constexpr int kMaxThreads = 64;
 
   std::unique_ptr<World> world_;
-  std::vector<BodyId> ids_;
+  std::vector<BodyId> ids_;                      ///< the scene's bodies
+  std::map<int, std::vector<BodyId>> groups_;    ///< live groups by id (AddGroup)
   const Scene* scene_ = nullptr;
   Real dt_ = Real(1.0 / 60.0);
   int pipelineRepeats_ = 1;

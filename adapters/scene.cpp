@@ -165,6 +165,7 @@ void ValidateScene(const Scene& scene) {
   if (scene.velocityIterations < 1) throw Error("scene velocity iterations must be >= 1");
   if (scene.positionIterations < 0) throw Error("scene position iterations must be >= 0");
   if (scene.restitutionThreshold < 0) throw Error("scene restitution threshold must be >= 0");
+  if (scene.groupBodies < 0) throw Error("scene groupBodies must be >= 0");
   for (int i = 0; i < static_cast<int>(scene.bodies.size()); ++i) {
     const BodyDesc& b = scene.bodies[i];
     if (b.dynamic && b.kinematic) Fail(i, "a body is either dynamic or kinematic, not both");
@@ -196,7 +197,7 @@ void ValidateScene(const Scene& scene) {
         !IsFinite(d.maxMotorTorque) || !IsFinite(d.hertz) || !IsFinite(d.dampingRatio) || !IsFinite(d.axis) ||
         !IsFinite(d.lowerTranslation) || !IsFinite(d.upperTranslation) || !IsFinite(d.maxMotorForce) ||
         !IsFinite(d.anchorB) || !IsFinite(d.length) || !IsFinite(d.minLength) || !IsFinite(d.maxLength) ||
-        !IsFinite(d.angularHertz) || !IsFinite(d.angularDampingRatio)) {
+        !IsFinite(d.angularHertz) || !IsFinite(d.angularDampingRatio) || !IsFinite(d.referenceAngle)) {
       fail("a value is not finite");
     }
     if (d.kind != JointKind::kRevolute && d.kind != JointKind::kPrismatic && d.kind != JointKind::kDistance &&
@@ -217,6 +218,29 @@ void ValidateScene(const Scene& scene) {
       fail("lowerAngle <= upperAngle within [-pi, pi] required");
     }
     if (d.maxMotorTorque < 0 || d.hertz < 0 || d.dampingRatio < 0) fail("maxMotorTorque, hertz and dampingRatio must be >= 0");
+  }
+}
+
+void ValidateGroup(const Scene& scene, const BodyGroup& group) {
+  if (group.bodies.empty()) throw Error("group: a group needs at least one body");
+  // The scene's rules on a scene of the group alone (settings copied, not the scene's bodies),
+  // with the messages renamed: "scene body 3: ..." -> "group body 3: ...".
+  Scene alone;
+  alone.gravity = scene.gravity;
+  alone.timeStep = scene.timeStep;
+  alone.pipelineRepeats = scene.pipelineRepeats;
+  alone.velocityIterations = scene.velocityIterations;
+  alone.positionIterations = scene.positionIterations;
+  alone.restitutionThreshold = scene.restitutionThreshold;
+  alone.effects = scene.effects;
+  alone.bodies = group.bodies;
+  alone.joints = group.joints;
+  try {
+    ValidateScene(alone);
+  } catch (const Error& e) {
+    std::string what = e.what();
+    if (what.starts_with("scene ")) what.replace(0, 6, "group ");
+    throw Error(what);
   }
 }
 

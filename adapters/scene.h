@@ -100,12 +100,25 @@ struct JointDesc {
   Vec2 anchorB{};                                    ///< distance: bodyB's world anchor
   Real length = 0, minLength = Real(0.005), maxLength = Real(1e6);  ///< m (distance)
   Real angularHertz = 0, angularDampingRatio = 0;    ///< weld
+  /// Revolute, prismatic and weld: added to bodyB's angle minus bodyA's at load to give the angle where the joint
+  /// angle (its limits' and spring's) is zero (Box2D 3's rotated local frame A).
+  Real referenceAngle = 0;
+};
+
+/// Bodies and joints a scene's driver adds during a run (Adapter::AddGroup) and removes as one
+/// (Adapter::RemoveGroup): Box2D 3's rain spawns ragdolls this way. Joint body indices are the
+/// group's own (0 .. bodies.size() - 1); a group cannot join a scene body.
+struct BodyGroup {
+  std::vector<BodyDesc> bodies;
+  std::vector<JointDesc> joints;
 };
 
 class Adapter;
 
-/// Called before every step with the step index (0-based); may push or spawn nothing else
-/// than what the Adapter interface offers. Used by scenes that drive bodies.
+/// Called before every step with the step index (0-based); may push, add and remove nothing else
+/// than what the Adapter interface offers (SetVelocity, AddGroup, RemoveGroup). Used by scenes
+/// that drive bodies. Each Load takes its own copy, so state a driver keeps (the group ids it
+/// was given) starts afresh with every Load.
 using Driver = std::function<void(int step, Adapter& adapter)>;
 
 struct Scene {
@@ -121,6 +134,12 @@ struct Scene {
   std::vector<BodyDesc> bodies;
   std::vector<JointDesc> joints;      ///< loaded after the bodies
   Driver driver;                      ///< optional
+  /// Every kind of group the driver adds (one sample of each): Load validates them and refuses,
+  /// as Unsupported, a scene whose groups the engine cannot run, so that no refusal comes mid-run.
+  std::vector<BodyGroup> groupSamples;
+  /// The most dynamic bodies the driver's groups hold at once (rain: its ragdolls' bodies), counted
+  /// with the scene's own where a body count is reported (the suite's N).
+  int groupBodies = 0;
   uint64_t seed = 0;                  ///< the seed it was generated with (0 = hand-built)
 };
 
@@ -169,5 +188,10 @@ BodyDef ToBodyDef(const BodyDesc& body);
 /// [-pi, pi], maxMotorTorque, hertz and dampingRatio >= 0 ("scene joint <j>: ..."), the engine's
 /// own rules (quadrant::MakeJoint's) for the rest.
 void ValidateScene(const Scene& scene);
+
+/// Validates a group to be added to a world of `scene`'s settings by the rules of ValidateScene
+/// (messages "group body <i>: ..." and "group joint <j>: ...", joint indices the group's own).
+/// Throws quadrant::Error; an empty group is refused too.
+void ValidateGroup(const Scene& scene, const BodyGroup& group);
 
 }  // namespace quadrant::scene

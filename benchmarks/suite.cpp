@@ -73,7 +73,7 @@ namespace {
 namespace qs = quadrant::scene;
 
 struct Options {
-  std::vector<std::string> scenes = qs::DefaultBenchScenes();
+  std::vector<std::string> scenes;   // empty: DefaultBenchScenes, or Box2d3Scenes with --protocol box2d3
   std::vector<std::string> engines;  // empty: every adapter
   std::vector<int> counts;           // empty: each scene's DefaultBenchCounts
   std::vector<int> threads{1, 2, 3, 4};
@@ -82,6 +82,7 @@ struct Options {
   uint64_t seed = 42;
   int frameRate = 0;  // Hz; 0: back to back
   bool list = false;
+  std::string protocol = "suite";  // or "box2d3": Box2D 3's sizes, step counts and continuous collision
 };
 
 template <typename T>
@@ -101,10 +102,11 @@ std::string JoinList(const std::vector<T>& items, std::string_view sep = ",") {
 Options ParseOwnFlags(quadrant::cli::Parser& p, int& argc, char** argv) {
   Options opts;
   std::string counts;
-  for (const std::string& scene : opts.scenes) {
+  for (const std::string& scene : qs::DefaultBenchScenes()) {
     counts += fmt::format("{}{} {}", counts.empty() ? "" : ", ", scene, JoinList(qs::DefaultBenchCounts(scene)));
   }
-  p.NameList("--scenes", &opts.scenes, qs::SceneNames(), "scene", "scenes");
+  p.NameList("--scenes", &opts.scenes, qs::SceneNames(), "scene", "scenes")
+      .Default(JoinList(qs::DefaultBenchScenes()) + "; with --protocol box2d3: " + JoinList(qs::Box2d3Scenes()));
   p.NameList("--engines", &opts.engines, {}, "engine", "engines")
       .Accepts(quadrant::cli::kEngineList)
       .Check(quadrant::cli::EngineProblem)
@@ -117,6 +119,10 @@ Options ParseOwnFlags(quadrant::cli::Parser& p, int& argc, char** argv) {
   p.Int("--seed", &opts.seed, 0, INT64_MAX, "scene seed");
   p.Int("--frame-rate", &opts.frameRate, 0, 10'000,
         "frames a second: sleep after each step to the next frame boundary and time the steps only (0: back to back)");
+  p.Name("--protocol", &opts.protocol, {"suite", "box2d3"}, "protocol",
+         "suite: --steps timed after --warmup, each scene as defined; box2d3: Box2D 3's benchmark protocol "
+         "(its sizes where --counts is not given, its step count per scene with the first untimed, "
+         "continuous collision on)");
   p.Flag("--list", &opts.list, "print the engine and scene names and exit");
   p.PassThrough("--benchmark_",
                 "The rest goes to Google Benchmark, e.g. --benchmark_repetitions=3 --benchmark_out=bench.json\n"
@@ -282,9 +288,19 @@ class MemoryProbe {
 
 // ---- Scenes --------------------------------------------------------------------------------
 
-/// The scene's dynamic bodies: the N a benchmark is named and reported by.
+/// The scene's dynamic bodies, with the most its driver's groups hold at once (rain): the N a
+/// benchmark is named and reported by.
+/// The scene a job runs: the named scene, with continuous collision on under Box2D 3's protocol
+/// (its benchmark app's default).
+qs::Scene BuildScene(const std::string& name, int count, uint64_t seed, const std::string& protocol) {
+  qs::Scene scene = qs::MakeScene(name, count, seed);
+  if (protocol == "box2d3") scene.effects.continuous = true;
+  return scene;
+}
+
 int DynamicBodies(const qs::Scene& scene) {
-  return int(std::count_if(scene.bodies.begin(), scene.bodies.end(), [](const qs::BodyDesc& b) { return b.dynamic; }));
+  return scene.groupBodies +
+         int(std::count_if(scene.bodies.begin(), scene.bodies.end(), [](const qs::BodyDesc& b) { return b.dynamic; }));
 }
 
 /// One line saying how a scene is set up, computed from the scene itself.
@@ -384,6 +400,7 @@ struct Job {
   uint64_t seed = 42;
   int frameRate = 0;
   std::string name;
+  std::string protocol = "suite";
 };
 
 quadrant::bench::RunSpec SpecOf(const Job& job) {
@@ -400,7 +417,7 @@ std::string RunJob(benchmark::State& state, const Job& job) {
   MemoryProbe memory;
   FramePacer pacer(job.frameRate);  // --frame-rate: warm-up and timed steps alike, each a frame
   try {
-    const qs::Scene scene = qs::MakeScene(job.scene, job.count, job.seed);
+    const qs::Scene scene = BuildScene(job.scene, job.count, job.seed, job.protocol);
     memory.Begin();
     adapter = qs::MakeAdapter(job.engine);
     adapter->Load(scene, job.threads);
@@ -549,11 +566,17 @@ int main(int argc, char** argv) {
     // base, many_pyramids to a multiple of 55, a fixed-size scene ignores it), so that n:<N> and
     // the report's "N = " are the count that ran; counts that build the same scene run once.
     // Building a scene with its own count gives the same scene.
+    const bool box2d3 = opts.protocol == "box2d3";
+    if (opts.scenes.empty()) opts.scenes = box2d3 ? qs::Box2d3Scenes() : qs::DefaultBenchScenes();
+    if (box2d3) {
+      for (const std::string& scene : opts.scenes) (void)qs::Box2d3Steps(scene);  // a scene Box2D 3 has: else an error
+    }
     std::vector<std::vector<int>> sceneCounts;
     std::vector<std::string> countsText, rounded;
     for (const std::string& sceneName : opts.scenes) {
       std::vector<int>& built = sceneCounts.emplace_back();
-      for (int asked : opts.counts.empty() ? qs::DefaultBenchCounts(sceneName) : opts.counts) {
+      const std::vector<int> defaults = box2d3 ? std::vector<int>{qs::Box2d3Count(sceneName)} : qs::DefaultBenchCounts(sceneName);
+      for (int asked : opts.counts.empty() ? defaults : opts.counts) {
         const int n = DynamicBodies(qs::MakeScene(sceneName, asked, opts.seed));
         if (n != asked) rounded.push_back(fmt::format("{}:{}->{}", sceneName, asked, n));
         if (std::find(built.begin(), built.end(), n) == built.end()) built.push_back(n);
@@ -569,7 +592,7 @@ int main(int argc, char** argv) {
     // on N; the body count and box size do).
     for (size_t s = 0; s < opts.scenes.size(); ++s) {
       const int smallest = *std::min_element(sceneCounts[s].begin(), sceneCounts[s].end());
-      const qs::Scene scene = qs::MakeScene(opts.scenes[s], smallest, opts.seed);
+      const qs::Scene scene = BuildScene(opts.scenes[s], smallest, opts.seed, opts.protocol);
       benchmark::AddCustomContext(fmt::format("scene_{}", opts.scenes[s]),
                                   fmt::format("n={}: {}{}", smallest, qs::IsDenseScene(opts.scenes[s]) ? "dense; " : "",
                                               DescribeScene(scene)));
@@ -579,12 +602,17 @@ int main(int argc, char** argv) {
     for (size_t s = 0; s < opts.scenes.size(); ++s) {
       const std::string& sceneName = opts.scenes[s];
       for (int count : sceneCounts[s]) {
-        const qs::Scene scene = qs::MakeScene(sceneName, count, opts.seed);
+        const qs::Scene scene = BuildScene(sceneName, count, opts.seed, opts.protocol);
         for (int threads : opts.threads) {
           for (size_t e = 0; e < opts.engines.size(); ++e) {
             const std::string& engine = opts.engines[e];
             Job job{sceneName, engine, count, threads, opts.steps, opts.warmup, opts.seed, opts.frameRate,
-                    fmt::format("{}/{}/n:{}/threads:{}", sceneName, engine, count, threads)};
+                    fmt::format("{}/{}/n:{}/threads:{}", sceneName, engine, count, threads), opts.protocol};
+            if (box2d3) {
+              // Box2D 3 steps once untimed after creation, then times the rest of its count.
+              job.warmup = 1;
+              job.steps = qs::Box2d3Steps(sceneName) - 1;
+            }
             std::string reason;
             if (threads > caps[e].maxThreads) {
               reason = fmt::format("{} runs at most {} thread(s)", engine, caps[e].maxThreads);
@@ -661,6 +689,8 @@ int main(int argc, char** argv) {
     benchmark::AddCustomContext("thread_counts", JoinList(opts.threads));
     benchmark::AddCustomContext("steps", fmt::format("{}", opts.steps));
     benchmark::AddCustomContext("warmup", fmt::format("{}", opts.warmup));
+    // box2d3: steps and warm-up per scene (Box2D 3's count less one, after one), continuous on.
+    benchmark::AddCustomContext("protocol", opts.protocol);
     benchmark::AddCustomContext("seed", fmt::format("{}", opts.seed));
     // Frames a second of the frame loop (0: steps back to back).
     benchmark::AddCustomContext("frame_rate", fmt::format("{}", opts.frameRate));

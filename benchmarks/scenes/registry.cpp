@@ -9,7 +9,7 @@ namespace quadrant::scene {
 
 std::vector<std::string> SceneNames() {
   return {"circle_stress", "polygon_stress", "circle_stress_clumped", "polygon_stress_clumped",
-          "many_pyramids", "tumbler", "joint_grid", "junkyard", "smash",
+          "many_pyramids", "tumbler", "joint_grid", "junkyard", "smash", "spinner", "rain",
           // The hard cases (hard_cases.cpp): fixed size except pyramid, where `count` is the
           // number of boxes and the base the largest b with b (b + 1) / 2 <= count (210 -> base
           // 20, 5050 -> base 100).
@@ -42,6 +42,8 @@ Scene MakeScene(std::string_view name, int count, uint64_t seed) {
   if (name == "joint_grid") return MakeJointGrid(count);
   if (name == "junkyard") return MakeJunkyard(count);
   if (name == "smash") return MakeSmash(count);
+  if (name == "spinner") return MakeSpinner(count);
+  if (name == "rain") return MakeRain(count);
   if (name == "vertical_stack") return MakeVerticalStack();
   if (name == "mass_ratio_100") return MakeMassRatio(100);
   if (name == "mass_ratio_400") return MakeMassRatio(400);
@@ -71,7 +73,7 @@ Scene MakeScene(std::string_view name, int count, uint64_t seed) {
 
 bool IsDenseScene(std::string_view name) {
   return name == "pyramid" || name == "many_pyramids" || name == "tumbler" || name == "joint_grid" || name == "junkyard" ||
-         name == "smash";
+         name == "smash" || name == "spinner" || name == "rain";
 }
 
 std::vector<std::string> DefaultBenchScenes() {
@@ -93,7 +95,34 @@ std::vector<int> DefaultBenchCounts(std::string_view name) {
   if (name == "joint_grid") return {2493, 9993};  // N = 50 and Box2D 3's N = 100
   if (name == "junkyard") return {2000, 8000};
   if (name == "smash") return {2400, 9600};
+  if (name == "spinner") return {1519, 6076};
+  if (name == "rain") return {2200, 11000};  // ragdoll bodies at most: 1 and Box2D 3's 5 storeys
   throw Error("no default bench counts for scene '" + std::string(name) + "'");
 }
+
+namespace {
+struct Box2d3Entry {
+  const char* scene;
+  int count, steps;
+};
+// benchmark/main.c's table and shared/benchmarks.c's sizes.
+constexpr Box2d3Entry kBox2d3[] = {{"joint_grid", 9993, 500}, {"junkyard", 8000, 800}, {"pyramid", 5050, 500},
+                                   {"many_pyramids", 22000, 200}, {"rain", 11000, 1000}, {"smash", 9600, 300},
+                                   {"spinner", 6076, 500}, {"tumbler", 2025, 750}};
+const Box2d3Entry& FindBox2d3(std::string_view name) {
+  for (const Box2d3Entry& e : kBox2d3) {
+    if (name == e.scene) return e;
+  }
+  throw Error("'" + std::string(name) + "' is not one of Box2D 3's benchmark scenes in the suite");
+}
+}  // namespace
+
+std::vector<std::string> Box2d3Scenes() {
+  std::vector<std::string> out;
+  for (const Box2d3Entry& e : kBox2d3) out.push_back(e.scene);
+  return out;
+}
+int Box2d3Count(std::string_view name) { return FindBox2d3(name).count; }
+int Box2d3Steps(std::string_view name) { return FindBox2d3(name).steps; }
 
 }  // namespace quadrant::scene

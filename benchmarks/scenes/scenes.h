@@ -66,10 +66,26 @@ Scene MakeJunkyard(int count);
 /// (80 <= count <= 1000000); sleep on. Box2D 3 runs 9600.
 Scene MakeSmash(int count);
 
+/// Box2D 3's "spinner" (500 steps there): a loop of 360 one-sided chain segments on a circle of
+/// radius 40 m about (0, 32) facing in (bodies 0..359, static), a 40 m paddle turned about (0, 12)
+/// at 5 rad/s by a revolute motor of unbounded torque (body 360; its joint's bodyA is body 0), and
+/// `count` bodies (1 <= count <= 10000) in turn a capsule, a circle and a square, density 0.25,
+/// friction 0.1, restitution 0.1, in rows of 92 from (-23, 2); sleep on. Box2D 3 runs 6076.
+Scene MakeSpinner(int count);
+/// Box2D 3's "rain" (1000 steps there): storeys of 501 static 0.5 m boxes 45 m apart (bodies, all
+/// static), and a driver that every 8 steps from step 0 adds a column of ragdoll groups (five
+/// ragdolls of 11 capsules and 10 revolute joints with limits, springs and joint friction, one group
+/// per storey, Adapter::AddGroup) 40 m above each floor until there are 40 columns, then removes the
+/// oldest column's groups and adds them again. `count` is the ragdoll bodies at most (groupBodies:
+/// 2200 a storey, rounded down, 2200 <= count <= 44000); sleep and damping on. Box2D 3 runs 5
+/// storeys (11000 bodies, 2505 boxes).
+Scene MakeRain(int count);
+
 /// Scene names known to the suite: the stress scenes, the dense scenes and the hard cases.
 std::vector<std::string> SceneNames();
 
-/// Whether `name` is a dense, solver-bound scene (pyramid, many_pyramids, tumbler, junkyard, smash) rather than a
+/// Whether `name` is a dense, solver-bound scene (pyramid, many_pyramids, tumbler, joint_grid, junkyard, smash,
+/// spinner, rain) rather than a
 /// sparse one (the stress scenes: about 4 % of the bodies touch at any moment).
 bool IsDenseScene(std::string_view name);
 
@@ -80,6 +96,16 @@ std::vector<std::string> DefaultBenchScenes();
 /// for the stress scenes, sizes of their own for the dense ones (chosen so the dense scenes add a
 /// few minutes to the default run). Throws quadrant::Error for a scene the suite does not bench.
 std::vector<int> DefaultBenchCounts(std::string_view name);
+
+/// Box2D 3's benchmark protocol (its benchmark/main.c) for the eight of its ten scenes the suite
+/// has (compounds and washer need several shapes per body): the scene names (its large_pyramid is
+/// `pyramid` at 5050 boxes), the count that builds each at Box2D 3's size, and its step count
+/// (Box2D 3 runs the first step untimed and times the others; 4 sub-steps or 8 velocity
+/// iterations; continuous collision on). Box2d3Count and Box2d3Steps throw quadrant::Error for
+/// other scenes.
+std::vector<std::string> Box2d3Scenes();
+int Box2d3Count(std::string_view name);
+int Box2d3Steps(std::string_view name);
 
 /// Builds a named scene with `count` bodies (ignored by fixed-size scenes) and a seed.
 /// Throws quadrant::Error for unknown names or bad counts.
