@@ -88,7 +88,9 @@ void ContactSorter::SortPart(const std::vector<Contact>& in, int bodyCount, bool
       keys[j] = k;
       moves += i - j;
       if (moves > budget) {
-        std::sort(keys.begin(), keys.end(), [](const SortKey& x, const SortKey& y) { return x.key < y.key; });
+        // Equal keys (a compound body's contacts with one body) stay in input order, which is
+        // the narrow phase's shape order: the order must not depend on the part's other contacts.
+        std::stable_sort(keys.begin(), keys.end(), [](const SortKey& x, const SortKey& y) { return x.key < y.key; });
         for (size_t m = 1; m < count; ++m) part.increasing = part.increasing && keys[m - 1].key < keys[m].key;
         break;
       }

@@ -1,0 +1,99 @@
+// Compound bodies: several shapes on one body (BodyDef::extraShapes), without making one-shape
+// bodies any slower.
+//
+// The design:
+// - Storage. A one-shape body is unchanged: its ShapeDef sits in Bodies::shape, where every hot
+//   loop reads it. A compound body keeps all its shapes (first one first) in a side array,
+//   Bodies::compound, and its Bodies::shape becomes a stand-in of type kCompoundShape (bit 3 of the
+//   type byte; not a type a user can give) whose polygon is the box around all the shapes in body
+//   coordinates and whose materials are the first shape's.
+// - Mass. The body's mass is the sum of its shapes', its centre of mass their mass-weighted
+//   centre, its inertia the sum of theirs moved there by the parallel-axis theorem, in double
+//   (validation.cpp, CompoundMass); its bound radius is the farthest shape point from that centre.
+// - Broad phase. One box per body as before: the stand-in's, so it covers every shape. The hot box
+//   update sends any type above kPolygon out of line already (ShapeBox), and that path reads the
+//   stand-in's polygon. (Box2D 3 makes every shape a broad-phase proxy and finds shape pairs; here
+//   the unit stays the body, so the one-shape scenes keep their pair loop and contact keys.)
+// - Narrow phase. The pair loop's existing test for rare shapes ((type A | type B) > kPolygon)
+//   also catches the stand-in; a second test of bit 3 sends the pair here, so circle, polygon and
+//   box pairs pay nothing new. Here every pair of shapes whose boxes (grown by the pair's
+//   speculative distance) overlap is collided exactly as two one-shape bodies would be, and each
+//   manifold that keeps a point becomes one ordinary Contact of the two bodies, with that pair of
+//   shapes' materials. Its points' feature ids carry the two shape indices (kCompoundFeature).
+// - Contacts. Several contacts of one body pair share the key (a, b); the pair loop emits them
+//   together in shape order, the sorter keeps equal keys in that order (its sorts are stable), so
+//   the list is the same for any thread count. The cache (contact_cache.cpp) matches a point by
+//   key and feature id among all of last step's entries of that key, so each shape pair warm
+//   starts from its own impulses. A compound contact is never recycled (it carries no recycling
+//   pose) and the world then stores impulses instead of keeping the list (keys repeat).
+// - The solver, islands and sleep see ordinary contacts; events dedupe by pair already. Queries,
+//   drawing, GetAABB and the sensor test walk the shapes (BodyShapes). The state hash is of the
+//   bodies' poses and velocities and needs nothing. The quadrants scheme and the distributed world
+//   refuse compound bodies.
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+#include "collision/narrow_phase.h"
+#include "world/world_internal.h"
+
+namespace quadrant {
+
+void CollideCompoundPair(const Bodies& bodies, int a, int b, Real speculative, Real baseDistance, Real sweep,
+                         std::vector<Contact>& out) {
+  const std::span<const ShapeDef> shapesA = BodyShapes(bodies, a), shapesB = BodyShapes(bodies, b);
+  const Transform xfA = bodies.xf[size_t(a)], xfB = bodies.xf[size_t(b)];
+  const Vec2 ca = bodies.center[size_t(a)], cb = bodies.center[size_t(b)];
+  const BodyVelocity va = bodies.vel[size_t(a)], vb = bodies.vel[size_t(b)];
+  const Vec2 grow{speculative, speculative};
+  std::array<AABB, kMaxBodyShapes> boxesB;
+  for (size_t j = 0; j < shapesB.size(); ++j) boxesB[j] = ComputeShapeAABB(shapesB[j], xfB);
+  for (size_t i = 0; i < shapesA.size(); ++i) {
+    const ShapeDef& sa = shapesA[i];
+    AABB boxA = ComputeShapeAABB(sa, xfA);
+    boxA.lower = boxA.lower - grow;
+    boxA.upper = boxA.upper + grow;
+    for (size_t j = 0; j < shapesB.size(); ++j) {
+      const AABB& boxB = boxesB[j];
+      if (boxA.lower.x > boxB.upper.x || boxB.lower.x > boxA.upper.x || boxA.lower.y > boxB.upper.y ||
+          boxB.lower.y > boxA.upper.y) {
+        continue;
+      }
+      const ShapeDef& sb = shapesB[j];
+      Manifold m = Collide(sa, xfA, sb, xfB, speculative);
+      // The pair loop's rule: a point still apart beyond the base distance stays only if it can
+      // close within the step at its current approach speed.
+      int kept = 0;
+      for (int k = 0; k < m.pointCount; ++k) {
+        const ManifoldPoint& mp = m.points[k];
+        if (mp.separation > baseDistance) {
+          const Vec2 rA = mp.point - ca;
+          const Vec2 rB = mp.point - cb;
+          const Vec2 dv = vb.v + Cross(vb.w, rB) - va.v - Cross(va.w, rA);
+          const Real approach = -Dot(dv, m.normal);
+          if (mp.separation > baseDistance + sweep * approach) continue;
+        }
+        m.points[kept++] = mp;
+      }
+      m.pointCount = kept;
+      if (kept == 0) continue;
+      Contact c;
+      c.a = a;
+      c.b = b;
+      c.friction = std::sqrt(sa.friction * sb.friction);
+      c.restitution = std::max(sa.restitution, sb.restitution);
+      c.manifold = m;
+      for (int k = 0; k < m.pointCount; ++k) {
+        ManifoldPoint& mp = c.manifold.points[k];
+        mp.id = CompoundFeatureId(mp.id, int(i), int(j));
+        mp.anchorA = mp.point - ca;
+        mp.anchorB = mp.point - cb;
+        mp.baseSeparation = mp.separation;
+      }
+      // recycleQA and recycleQB stay {0, 0}: the recycling turn test fails, so never recycled.
+      out.push_back(c);
+    }
+  }
+}
+
+}  // namespace quadrant
