@@ -202,6 +202,33 @@ TEST(CompoundTest, TrianglePileHashIsTheSameAtOneTwoAndFourThreads) {
   EXPECT_EQ(TrianglePileHash(4), one);
 }
 
+TEST(CompoundTest, OneShapePairsAreCollidedAsWithoutACompoundInTheWorld) {
+  // With a compound body in the world the narrow phase splits its pairs off and sends the rest
+  // to the pair loops in runs: a pile of boxes and circles far from it moves bit for bit as beside
+  // a one-shape body.
+  auto pile = [](bool compound) {
+    WorldDef wd;
+    wd.threadCount = 2;
+    wd.minParallelItems = 4;
+    World world(wd);
+    AddGround(world);
+    BodyDef far = TwoBoxes({100, 100});
+    far.type = BodyType::kKinematic;
+    if (!compound) far.extraShapes.clear();
+    world.CreateBody(far);
+    std::vector<BodyId> ids;
+    for (int k = 0; k < 40; ++k) {
+      ids.push_back(k % 3 == 0 ? AddCircle(world, {Real(-3 + 0.3 * (k % 7)), Real(1 + 1.1 * k)}, Real(0.4))
+                               : AddBox(world, {Real(-3 + 0.35 * (k % 5)), Real(1 + 1.1 * k)}, Real(0.4), Real(0.3)));
+    }
+    for (int i = 0; i < 90; ++i) world.Step(kDt);
+    std::vector<Real> state;
+    for (BodyId id : ids) state.insert(state.end(), {world.GetPosition(id).x, world.GetPosition(id).y, world.GetAngle(id)});
+    return state;
+  };
+  EXPECT_EQ(pile(true), pile(false));
+}
+
 TEST(CompoundTest, TrianglesStackWithoutSinking) {
   World world(WorldDef{});
   AddGround(world);

@@ -477,21 +477,12 @@ bool BoxesVex() {
   return CollideAnyPolygons(a, xfA, b, xfB, speculative);
 }
 
-[[gnu::always_inline]] inline Manifold CollideCommonInline(const ShapeDef& a, const Transform& xfA, const ShapeDef& b,
-                                                           const Transform& xfB, Real speculative);
-
 [[gnu::always_inline]] inline Manifold CollideInline(const ShapeDef& a, const Transform& xfA, const ShapeDef& b,
                                                      const Transform& xfB, Real speculative) {
   // One test for a capsule or a segment on either side (every type after kPolygon has a bit
   // above bit 0 set; circles and polygons none).
   static_assert(uint8_t(ShapeType::kPolygon) == 1 && uint8_t(ShapeType::kCircle) == 0);
   if ((uint8_t(a.type) | uint8_t(b.type)) > 1) [[unlikely]] return CollideRareShapes(a, xfA, b, xfB, speculative);
-  return CollideCommonInline(a, xfA, b, xfB, speculative);
-}
-
-// CollideInline for two shapes each a circle or a polygon (the caller has ruled out the rest).
-[[gnu::always_inline]] inline Manifold CollideCommonInline(const ShapeDef& a, const Transform& xfA, const ShapeDef& b,
-                                                           const Transform& xfB, Real speculative) {
   if (a.type == ShapeType::kCircle) {
     if (b.type == ShapeType::kCircle) return CollideCircles(a.circle, xfA, b.circle, xfB, speculative);
     Manifold m = CollidePolygonAndCircle(b.polygon, xfB, a.circle, xfA, speculative);
@@ -563,6 +554,17 @@ namespace pairs_vex {
 
 void CollidePairs(const Bodies& bodies, const WorldDef& def, Real dt, std::span<const CandidatePair> pairs,
                   std::vector<Contact>& out, const RecycleSource* recycle) {
+  // Compound bodies (narrow_phase_compound.cpp) never reach the pair loops below: with any in the
+  // world, their pairs are split off here, so the loops are the same code with or without them.
+  if (bodies.compoundCount > 0) [[unlikely]] {
+    CollidePairsWithCompounds(bodies, def, dt, pairs, out, recycle);
+    return;
+  }
+  CollideSimplePairs(bodies, def, dt, pairs, out, recycle);
+}
+
+void CollideSimplePairs(const Bodies& bodies, const WorldDef& def, Real dt, std::span<const CandidatePair> pairs,
+                        std::vector<Contact>& out, const RecycleSource* recycle) {
   if (!def.effects.continuous && bodies.bulletCount > 0) {  // bullets without continuous collision
     pairs_default::PairLoop<CallBoxes, true>(bodies, def, dt, pairs, out, CallBoxes{}, recycle);
     return;

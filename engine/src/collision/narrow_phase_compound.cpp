@@ -14,9 +14,10 @@
 //   update sends any type above kPolygon out of line already (ShapeBox), and that path reads the
 //   stand-in's polygon. (Box2D 3 makes every shape a broad-phase proxy and finds shape pairs; here
 //   the unit stays the body, so the one-shape scenes keep their pair loop and contact keys.)
-// - Narrow phase. The pair loop's existing test for rare shapes ((type A | type B) > kPolygon)
-//   also catches the stand-in; a second test of bit 3 sends the pair here, so circle, polygon and
-//   box pairs pay nothing new. Here every pair of shapes whose boxes (grown by the pair's
+// - Narrow phase. While the world has a compound body, CollidePairs splits the pairs with one off
+//   the block (a test of the stand-in's type bit per pair) and the rest go to the pair loops as
+//   before; without one the pair loops are reached exactly as before, so circle, polygon and box
+//   pairs pay nothing new (one test of a count per block). Every pair of shapes whose boxes (grown by the pair's
 //   speculative distance) overlap is collided exactly as two one-shape bodies would be, and each
 //   manifold that keeps a point becomes one ordinary Contact of the two bodies, with that pair of
 //   shapes' materials. Its points' feature ids carry the two shape indices (kCompoundFeature).
@@ -34,17 +35,31 @@
 #include <array>
 #include <cmath>
 
+#include "collision/broad_phase.h"
 #include "collision/narrow_phase.h"
 #include "world/world_internal.h"
 
 namespace quadrant {
 
-void CollideCompoundPair(const Bodies& bodies, int a, int b, Real speculative, Real baseDistance, Real sweep,
-                         std::vector<Contact>& out) {
+namespace {
+
+// A pair (a < b) in which either body is compound: the pair loop's tests (a dynamic body, the
+// bounding circles within reach), then every pair of shapes whose boxes, grown by the pair's
+// speculative distance, overlap.
+void CollideCompoundPair(const Bodies& bodies, const WorldDef& def, Real dt, int a, int b, std::vector<Contact>& out) {
+  if (!(bodies.dynamic[size_t(a)] | bodies.dynamic[size_t(b)])) return;
+  const BodyVelocity va = bodies.vel[size_t(a)], vb = bodies.vel[size_t(b)];
+  const Vec2 ca = bodies.center[size_t(a)], cb = bodies.center[size_t(b)];
+  const Real ra = bodies.boundRadius[size_t(a)], rb = bodies.boundRadius[size_t(b)];
+  const Real base = def.speculativeDistance;
+  const bool bullet = bodies.bulletCount > 0 && (bodies.bullet[size_t(a)] | bodies.bullet[size_t(b)]) != 0;
+  const Real sweep = def.effects.continuous || bullet ? dt : Real(0);
+  const Real speculative =
+      sweep > 0 ? base + sweep * (Length(vb.v - va.v) + std::abs(va.w) * ra + std::abs(vb.w) * rb) : base;
+  const Real reach = ra + rb + speculative;
+  if (LengthSquared(cb - ca) > reach * reach) return;
   const std::span<const ShapeDef> shapesA = BodyShapes(bodies, a), shapesB = BodyShapes(bodies, b);
   const Transform xfA = bodies.xf[size_t(a)], xfB = bodies.xf[size_t(b)];
-  const Vec2 ca = bodies.center[size_t(a)], cb = bodies.center[size_t(b)];
-  const BodyVelocity va = bodies.vel[size_t(a)], vb = bodies.vel[size_t(b)];
   const Vec2 grow{speculative, speculative};
   std::array<AABB, kMaxBodyShapes> boxesB;
   for (size_t j = 0; j < shapesB.size(); ++j) boxesB[j] = ComputeShapeAABB(shapesB[j], xfB);
@@ -66,12 +81,10 @@ void CollideCompoundPair(const Bodies& bodies, int a, int b, Real speculative, R
       int kept = 0;
       for (int k = 0; k < m.pointCount; ++k) {
         const ManifoldPoint& mp = m.points[k];
-        if (mp.separation > baseDistance) {
-          const Vec2 rA = mp.point - ca;
-          const Vec2 rB = mp.point - cb;
-          const Vec2 dv = vb.v + Cross(vb.w, rB) - va.v - Cross(va.w, rA);
+        if (mp.separation > base) {
+          const Vec2 dv = vb.v + Cross(vb.w, mp.point - cb) - va.v - Cross(va.w, mp.point - ca);
           const Real approach = -Dot(dv, m.normal);
-          if (mp.separation > baseDistance + sweep * approach) continue;
+          if (mp.separation > base + sweep * approach) continue;
         }
         m.points[kept++] = mp;
       }
@@ -90,10 +103,26 @@ void CollideCompoundPair(const Bodies& bodies, int a, int b, Real speculative, R
         mp.anchorB = mp.point - cb;
         mp.baseSeparation = mp.separation;
       }
-      // recycleQA and recycleQB stay {0, 0}: the recycling turn test fails, so never recycled.
+      // recycleQA and recycleQB stay {0, 0}: the recycling turn test fails, so it is never recycled.
       out.push_back(c);
     }
   }
+}
+
+}  // namespace
+
+void CollidePairsWithCompounds(const Bodies& bodies, const WorldDef& def, Real dt, std::span<const CandidatePair> pairs,
+                               std::vector<Contact>& out, const RecycleSource* recycle) {
+  const ShapeDef* const shape = bodies.shape.data();
+  size_t run = 0;  // the first pair of the current run without a compound body
+  for (size_t i = 0; i < pairs.size(); ++i) {
+    const CandidatePair p = pairs[i];
+    if (!IsCompoundType(ShapeType(uint8_t(shape[p.a].type) | uint8_t(shape[p.b].type)))) continue;
+    if (i > run) CollideSimplePairs(bodies, def, dt, pairs.subspan(run, i - run), out, recycle);
+    run = i + 1;
+    CollideCompoundPair(bodies, def, dt, p.a, p.b, out);
+  }
+  if (run < pairs.size()) CollideSimplePairs(bodies, def, dt, pairs.subspan(run), out, recycle);
 }
 
 }  // namespace quadrant

@@ -215,12 +215,15 @@ struct RecycleSource {
 void CollidePairs(const Bodies& bodies, const WorldDef& def, Real dt, std::span<const CandidatePair> pairs,
                   std::vector<Contact>& out, const RecycleSource* recycle = nullptr);
 
-/// The narrow phase of a pair (a < b) in which either body is compound (Bodies::compound;
-/// narrow_phase_compound.cpp): a contact for each pair of shapes whose manifold keeps a point, in
-/// shape order (A's shapes, then B's), appended to `out`. `speculative` (the pair's reach),
-/// `baseDistance` (WorldDef::speculativeDistance) and `sweep` are the pair loop's.
-void CollideCompoundPair(const Bodies& bodies, int a, int b, Real speculative, Real baseDistance, Real sweep,
-                         std::vector<Contact>& out);
+/// CollidePairs for pairs of one-shape bodies only (the pair loops, narrow_pair_loop.inc).
+void CollideSimplePairs(const Bodies& bodies, const WorldDef& def, Real dt, std::span<const CandidatePair> pairs,
+                        std::vector<Contact>& out, const RecycleSource* recycle);
+
+/// CollidePairs in a world with compound bodies (Bodies::compound; narrow_phase_compound.cpp): runs
+/// of pairs without a compound body go to CollideSimplePairs; a pair with one gets a contact for
+/// each pair of shapes whose manifold keeps a point, in shape order (A's shapes, then B's).
+void CollidePairsWithCompounds(const Bodies& bodies, const WorldDef& def, Real dt, std::span<const CandidatePair> pairs,
+                               std::vector<Contact>& out, const RecycleSource* recycle);
 
 /// What a solver needs for one (sub-)step.
 struct StepContext {
