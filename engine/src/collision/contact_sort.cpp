@@ -9,7 +9,10 @@ namespace quadrant {
 
 // Contacts are solved in pair-key order, not broad-phase order, so the result does not depend
 // on which broad phase found them or on how threads split the work. Keys are unique (the
-// broad phase reports a pair once), so the order is the same whichever way it is reached:
+// broad phase reports a pair once), except a compound body's several contacts with one body,
+// which one worker emits together in shape order and every sort below keeps in that order
+// (all are stable, and a key's contacts are never in two parts); so the order is the same
+// whichever way it is reached:
 // every worker sorts its own contacts' (key, index) pairs, then each worker merges one range
 // of keys of all parts and gathers those contacts into the output, restoring last step's
 // impulses as it goes. Both stages are one parallel region (one hand-over, one barrier), and
