@@ -9,7 +9,7 @@ namespace quadrant::scene {
 
 std::vector<std::string> SceneNames() {
   return {"circle_stress", "polygon_stress", "circle_stress_clumped", "polygon_stress_clumped",
-          "many_pyramids", "tumbler", "joint_grid", "junkyard", "smash",
+          "many_pyramids", "tumbler", "joint_grid", "junkyard", "smash", "compounds", "washer",
           // The hard cases (hard_cases.cpp): fixed size except pyramid, where `count` is the
           // number of boxes and the base the largest b with b (b + 1) / 2 <= count (210 -> base
           // 20, 5050 -> base 100).
@@ -41,6 +41,8 @@ Scene MakeScene(std::string_view name, int count, uint64_t seed) {
   if (name == "joint_grid") return MakeJointGrid(count);
   if (name == "junkyard") return MakeJunkyard(count);
   if (name == "smash") return MakeSmash(count);
+  if (name == "compounds") return MakeCompounds(count);
+  if (name == "washer") return MakeWasher(count);
   if (name == "vertical_stack") return MakeVerticalStack();
   if (name == "mass_ratio_100") return MakeMassRatio(100);
   if (name == "mass_ratio_400") return MakeMassRatio(400);
@@ -68,7 +70,7 @@ Scene MakeScene(std::string_view name, int count, uint64_t seed) {
 
 bool IsDenseScene(std::string_view name) {
   return name == "pyramid" || name == "many_pyramids" || name == "tumbler" || name == "joint_grid" || name == "junkyard" ||
-         name == "smash";
+         name == "smash" || name == "compounds" || name == "washer";
 }
 
 std::vector<std::string> DefaultBenchScenes() {
@@ -90,6 +92,8 @@ std::vector<int> DefaultBenchCounts(std::string_view name) {
   if (name == "joint_grid") return {2493, 9993};  // N = 50 and Box2D 3's N = 100
   if (name == "junkyard") return {2000, 8000};
   if (name == "smash") return {2400, 9600};
+  if (name == "compounds") return {760, 3000};
+  if (name == "washer") return {2025, 8100};
   throw Error("no default bench counts for scene '" + std::string(name) + "'");
 }
 

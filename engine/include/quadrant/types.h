@@ -6,6 +6,7 @@
 
 #include <array>
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "quadrant/error.h"
@@ -177,6 +178,11 @@ std::vector<BodyDef> MakeChainBodies(const ChainDef& def);
 /// ParallelScheme::kQuadrants). For tools that check a description before they have a World:
 /// the scene API's ValidateScene runs every scene body through it.
 void CheckBodyDef(const BodyDef& def);
+
+/// The mass data of validated shapes as one rigid body (a compound body's: BodyDef::extraShapes),
+/// each at its own density: the summed mass, the mass-weighted centre (body coordinates) and the
+/// inertia about it (parallel axes), summed in double; exactly what CreateBody gives the body.
+MassData ComputeBodyMass(std::span<const ShapeDef> shapes);
 
 enum class SolverType : uint8_t {
   kThesis,  ///< the 2013 thesis: mass-ratio separation + one impulse per contact, no iterations

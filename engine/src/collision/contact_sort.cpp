@@ -89,6 +89,8 @@ void ContactSorter::SortPart(const std::vector<Contact>& in, int bodyCount, bool
       size_t j = i;
       for (; j > 0 && keys[j - 1].key > k.key; --j) keys[j] = keys[j - 1];
       keys[j] = k;
+      // A key moved back next to an equal one repeats too (a compound body's contacts).
+      if (j > 0 && keys[j - 1].key == k.key) part.increasing = false;
       moves += i - j;
       if (moves > budget) {
         // Equal keys (a compound body's contacts with one body) stay in input order, which is

@@ -230,4 +230,9 @@ void RequireDynamicMass(std::span<const ShapeDef> shapes, const std::string& pre
 
 void CheckBodyDef(const BodyDef& def) { (void)ValidateBodyDef(def); }
 
+MassData ComputeBodyMass(std::span<const ShapeDef> shapes) {
+  Require(!shapes.empty(), "ComputeBodyMass: no shapes");
+  return CompoundMass(shapes);
+}
+
 }  // namespace quadrant
