@@ -45,7 +45,7 @@ namespace {
 
 // A pair (a < b) in which either body is compound: the pair loop's tests (a dynamic body, the
 // bounding circles within reach), then every pair of shapes whose boxes, grown by the pair's
-// speculative distance, overlap.
+// speculative distance, overlap, in a fixed order (the other body's shapes, then M's).
 void CollideCompoundPair(const Bodies& bodies, const WorldDef& def, Real dt, int a, int b, std::vector<Contact>& out) {
   if (!(bodies.dynamic[size_t(a)] | bodies.dynamic[size_t(b)])) return;
   const BodyVelocity va = bodies.vel[size_t(a)], vb = bodies.vel[size_t(b)];
@@ -60,20 +60,39 @@ void CollideCompoundPair(const Bodies& bodies, const WorldDef& def, Real dt, int
   if (LengthSquared(cb - ca) > reach * reach) return;
   const std::span<const ShapeDef> shapesA = BodyShapes(bodies, a), shapesB = BodyShapes(bodies, b);
   const Transform xfA = bodies.xf[size_t(a)], xfB = bodies.xf[size_t(b)];
-  const Vec2 grow{speculative, speculative};
-  std::array<AABB, kMaxBodyShapes> boxesB;
-  for (size_t j = 0; j < shapesB.size(); ++j) boxesB[j] = ComputeShapeAABB(shapesB[j], xfB);
-  for (size_t i = 0; i < shapesA.size(); ++i) {
-    const ShapeDef& sa = shapesA[i];
-    AABB boxA = ComputeShapeAABB(sa, xfA);
-    boxA.lower = boxA.lower - grow;
-    boxA.upper = boxA.upper + grow;
-    for (size_t j = 0; j < shapesB.size(); ++j) {
-      const AABB& boxB = boxesB[j];
-      if (boxA.lower.x > boxB.upper.x || boxB.lower.x > boxA.upper.x || boxA.lower.y > boxB.upper.y ||
-          boxB.lower.y > boxA.upper.y) {
+  // Which pairs of shapes may touch, tested in the frame of the body with more shapes (M), against
+  // its shapes' boxes kept in body coordinates (Bodies::compoundBoxes): each shape of the other
+  // body (O) gives one box in M's frame (its world box's corners taken there), so a drum of 40
+  // pieces costs a box test per piece, not 40 boxes turned into the world.
+  const bool mIsA = shapesA.size() >= shapesB.size();
+  const int bodyM = mIsA ? a : b;
+  const std::span<const ShapeDef> shapesO = mIsA ? shapesB : shapesA;
+  const Transform xfM = mIsA ? xfA : xfB, xfO = mIsA ? xfB : xfA;
+  const std::vector<AABB>& boxesM = bodies.compoundBoxes[size_t(bodyM)];
+  for (size_t o = 0; o < shapesO.size(); ++o) {
+    const AABB world = ComputeShapeAABB(shapesO[o], xfO);
+    const Vec2 corners[4] = {world.lower, {world.upper.x, world.lower.y}, world.upper, {world.lower.x, world.upper.y}};
+    AABB boxO{InvTransformPoint(xfM, corners[0]), InvTransformPoint(xfM, corners[0])};
+    for (const Vec2& c : corners) {
+      const Vec2 local = InvTransformPoint(xfM, c);
+      boxO.lower = Min(boxO.lower, local);
+      boxO.upper = Max(boxO.upper, local);
+    }
+    // Grown by the reach and a little for the rounding of the two transforms (relative to the
+    // coordinates' size: float's 1.2e-7 a few times over, with room to spare).
+    const Real far = std::max({std::abs(world.lower.x), std::abs(world.lower.y), std::abs(world.upper.x),
+                               std::abs(world.upper.y), std::abs(xfM.p.x), std::abs(xfM.p.y)});
+    const Real pad = speculative + Real(1e-5) * (Real(1) + far);
+    boxO.lower = boxO.lower - Vec2{pad, pad};
+    boxO.upper = boxO.upper + Vec2{pad, pad};
+    for (size_t mi = 0; mi < boxesM.size(); ++mi) {
+      const AABB& boxM = boxesM[mi];
+      if (boxO.lower.x > boxM.upper.x || boxM.lower.x > boxO.upper.x || boxO.lower.y > boxM.upper.y ||
+          boxM.lower.y > boxO.upper.y) {
         continue;
       }
+      const size_t i = mIsA ? mi : o, j = mIsA ? o : mi;
+      const ShapeDef& sa = shapesA[i];
       const ShapeDef& sb = shapesB[j];
       Manifold m = Collide(sa, xfA, sb, xfB, speculative);
       // The pair loop's rule: a point still apart beyond the base distance stays only if it can

@@ -432,6 +432,7 @@ int AppendBody(Bodies& b, const BodyDef& def, const WorldDef& worldDef, uint32_t
   b.bullet[i] = def.isBullet ? 1 : 0;
   b.bulletCount += def.isBullet ? 1 : 0;
   b.compoundCount += compound.empty() ? 0 : 1;
+  for (const ShapeDef& s : compound) b.compoundBoxes[i].push_back(ComputeShapeAABB(s, Transform{}));
   b.compound[i] = std::move(compound);
   b.aabb[i] = BroadPhaseBox(b, i, worldDef, 0);
   return i;

@@ -67,6 +67,7 @@ struct Bodies {
   // coordinates (the broad-phase box) and whose materials are the first shape's. No hot loop reads
   // this array: the stand-in's type sends the body down the rare-shape paths.
   std::vector<std::vector<ShapeDef>> compound;
+  std::vector<std::vector<AABB>> compoundBoxes;  ///< each of `compound`'s shapes' box, body coordinates
   int compoundCount = 0;  ///< bodies with shapes in `compound`
 
   int Count() const { return static_cast<int>(type.size()); }
@@ -78,7 +79,7 @@ struct Bodies {
     fn(type), fn(xf), fn(center), fn(localCenter), fn(vel), fn(inv), fn(mass), fn(inertia);
     fn(linearDamping), fn(angularDamping), fn(shape), fn(boundRadius), fn(aabb), fn(dynamic);
     fn(slot), fn(awake), fn(sleepTime), fn(islandOf), fn(filter), fn(userData), fn(gravityScale);
-    fn(fixedRotation), fn(bullet), fn(compound);
+    fn(fixedRotation), fn(bullet), fn(compound), fn(compoundBoxes);
   }
 };
 
@@ -221,7 +222,7 @@ void CollideSimplePairs(const Bodies& bodies, const WorldDef& def, Real dt, std:
 
 /// CollidePairs in a world with compound bodies (Bodies::compound; narrow_phase_compound.cpp): runs
 /// of pairs without a compound body go to CollideSimplePairs; a pair with one gets a contact for
-/// each pair of shapes whose manifold keeps a point, in shape order (A's shapes, then B's).
+/// each pair of shapes whose manifold keeps a point, in a fixed shape order.
 void CollidePairsWithCompounds(const Bodies& bodies, const WorldDef& def, Real dt, std::span<const CandidatePair> pairs,
                                std::vector<Contact>& out, const RecycleSource* recycle);
 
