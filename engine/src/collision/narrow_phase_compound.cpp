@@ -17,7 +17,9 @@
 // - Narrow phase. While the world has a compound body, CollidePairs splits the pairs with one off
 //   the block (a test of the stand-in's type bit per pair) and the rest go to the pair loops as
 //   before; without one the pair loops are reached exactly as before, so circle, polygon and box
-//   pairs pay nothing new (one test of a count per block). Every pair of shapes whose boxes (grown by the pair's
+//   pairs pay nothing new (one test of a count per block). Every pair of shapes whose boxes (the
+//   other body's shape boxed in the compound's frame against the compound's shapes' boxes kept in
+//   body coordinates, Bodies::compoundBoxes; grown by the pair's
 //   speculative distance) overlap is collided exactly as two one-shape bodies would be, and each
 //   manifold that keeps a point becomes one ordinary Contact of the two bodies, with that pair of
 //   shapes' materials. Its points' feature ids carry the two shape indices (kCompoundFeature).
