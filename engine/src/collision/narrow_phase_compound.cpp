@@ -23,8 +23,8 @@
 //   speculative distance) overlap is collided exactly as two one-shape bodies would be, and each
 //   manifold that keeps a point becomes one ordinary Contact of the two bodies, with that pair of
 //   shapes' materials. Its points' feature ids carry the two shape indices (kCompoundFeature).
-// - Contacts. Several contacts of one body pair share the key (a, b); the pair loop emits them
-//   together in shape order, the sorter keeps equal keys in that order (its sorts are stable), so
+// - Contacts. Several contacts of one body pair share the key (a, b); CollideCompoundPair emits them
+//   together in a fixed shape order, the sorter keeps equal keys in that order (its sorts are stable), so
 //   the list is the same for any thread count. The cache (contact_cache.cpp) matches a point by
 //   key and feature id among all of last step's entries of that key, so each shape pair warm
 //   starts from its own impulses. A compound contact is never recycled (it carries no recycling
