@@ -27,7 +27,7 @@ Vec2 FromB2(const b2Vec2& v) { return {Real(v.x), Real(v.y)}; }
 // Box2D welds polygon vertices closer than half its linear slop and, if fewer than three are
 // left, silently replaces the polygon by a 2 m box. Refuse such a polygon instead of
 // simulating a different body.
-void RequireWeldSafePolygon(const BodyDesc& body, int index) {
+void RequireWeldSafePolygon(const ShapeDesc& body, int index) {
   const float minDistance = 0.5f * b2_linearSlop;
   const size_t n = body.vertices.size();
   for (size_t i = 0; i < n; ++i) {
@@ -184,7 +184,9 @@ class Box2dAdapter final : public Adapter {
   // What Box2D 2.4.1 cannot run among these bodies and joints, as Unsupported ("scene body 3 ...").
   static void Refuse(const std::vector<BodyDesc>& bodies, const std::vector<JointDesc>& joints, const char* what) {
     for (int i = 0; i < static_cast<int>(bodies.size()); ++i) {
-      if (bodies[i].shape == ShapeKind::kPolygon) RequireWeldSafePolygon(bodies[i], i);
+      for (const ShapeDesc& shape : ShapesOf(bodies[i])) {
+        if (shape.shape == ShapeKind::kPolygon) RequireWeldSafePolygon(shape, i);
+      }
       // With every category in 16 bits, a mask's upper bits never match one: Box2D's 16-bit
       // masks give the same pairs.
       if (bodies[i].categoryBits > 0xFFFFu) {
@@ -215,64 +217,70 @@ class Box2dAdapter final : public Adapter {
     def.angularDamping = fx.damping ? static_cast<float>(desc.angularDamping) : 0.0f;
     b2Body* body = world_->CreateBody(&def);
 
-    b2CircleShape circle;
-    b2PolygonShape polygon;
-    b2FixtureDef fixture;
-    // A capsule is Box2D 2.4's way: a box along its segment and a circle on each end, on one
-    // body, with the capsule's exact mass set after (the three fixtures' own overlap).
-    b2PolygonShape capsuleBox;
-    b2CircleShape capsuleEnds[2];
-    // Segments are b2EdgeShape: two-sided, or one-sided with its ghost vertices (v0, v3) for a
-    // chain segment. Box2D 2.4.1's one-sided edge collides on the right of v1 -> v2, the
-    // scene's convention, so the vertices pass in their order.
-    b2EdgeShape edge;
-    if (desc.shape == ShapeKind::kCircle) {
-      circle.m_radius = static_cast<float>(desc.radius);
-      fixture.shape = &circle;
-    } else if (desc.shape == ShapeKind::kSegment) {
-      edge.SetTwoSided(ToB2(desc.vertices[0]), ToB2(desc.vertices[1]));
-      fixture.shape = &edge;
-    } else if (desc.shape == ShapeKind::kChainSegment) {
-      edge.SetOneSided(ToB2(desc.vertices[0]), ToB2(desc.vertices[1]), ToB2(desc.vertices[2]), ToB2(desc.vertices[3]));
-      fixture.shape = &edge;
-    } else if (desc.shape == ShapeKind::kCapsule) {
-      const Vec2 c1 = desc.vertices[0], c2 = desc.vertices[1];
-      const Vec2 axis = c2 - c1;
-      capsuleBox.SetAsBox(0.5f * static_cast<float>(Length(axis)), static_cast<float>(desc.radius), ToB2(Real(0.5) * (c1 + c2)),
-                          std::atan2(static_cast<float>(axis.y), static_cast<float>(axis.x)));
-      fixture.shape = &capsuleBox;
-      for (int e = 0; e < 2; ++e) {
-        capsuleEnds[e].m_radius = static_cast<float>(desc.radius);
-        capsuleEnds[e].m_p = ToB2(desc.vertices[e]);
+    // One fixture per scene shape (several for a compound body); a capsule is Box2D 2.4's
+    // way: a box along its segment and a circle on each end, on one body, with the body's exact
+    // mass set after (the three fixtures' own overlap).
+    bool capsule = false;
+    for (const ShapeDesc& shape : ShapesOf(desc)) {
+      b2CircleShape circle;
+      b2PolygonShape polygon;
+      b2FixtureDef fixture;
+      b2PolygonShape capsuleBox;
+      b2CircleShape capsuleEnds[2];
+      // Segments are b2EdgeShape: two-sided, or one-sided with its ghost vertices (v0, v3) for a
+      // chain segment. Box2D 2.4.1's one-sided edge collides on the right of v1 -> v2, the
+      // scene's convention, so the vertices pass in their order.
+      b2EdgeShape edge;
+      if (shape.shape == ShapeKind::kCircle) {
+        circle.m_radius = static_cast<float>(shape.radius);
+        circle.m_p = ToB2(shape.center);
+        fixture.shape = &circle;
+      } else if (shape.shape == ShapeKind::kSegment) {
+        edge.SetTwoSided(ToB2(shape.vertices[0]), ToB2(shape.vertices[1]));
+        fixture.shape = &edge;
+      } else if (shape.shape == ShapeKind::kChainSegment) {
+        edge.SetOneSided(ToB2(shape.vertices[0]), ToB2(shape.vertices[1]), ToB2(shape.vertices[2]), ToB2(shape.vertices[3]));
+        fixture.shape = &edge;
+      } else if (shape.shape == ShapeKind::kCapsule) {
+        capsule = true;
+        const Vec2 c1 = shape.vertices[0], c2 = shape.vertices[1];
+        const Vec2 axis = c2 - c1;
+        capsuleBox.SetAsBox(0.5f * static_cast<float>(Length(axis)), static_cast<float>(shape.radius),
+                            ToB2(Real(0.5) * (c1 + c2)), std::atan2(static_cast<float>(axis.y), static_cast<float>(axis.x)));
+        fixture.shape = &capsuleBox;
+        for (int e = 0; e < 2; ++e) {
+          capsuleEnds[e].m_radius = static_cast<float>(shape.radius);
+          capsuleEnds[e].m_p = ToB2(shape.vertices[e]);
+        }
+      } else {
+        std::vector<b2Vec2> points;
+        points.reserve(shape.vertices.size());
+        for (Vec2 v : shape.vertices) points.push_back(ToB2(v));
+        polygon.Set(points.data(), static_cast<int32>(points.size()));
+        fixture.shape = &polygon;
       }
-    } else {
-      std::vector<b2Vec2> points;
-      points.reserve(desc.vertices.size());
-      for (Vec2 v : desc.vertices) points.push_back(ToB2(v));
-      polygon.Set(points.data(), static_cast<int32>(points.size()));
-      fixture.shape = &polygon;
+      fixture.density = desc.dynamic ? static_cast<float>(shape.density) : 0.0f;
+      fixture.friction = fx.friction ? static_cast<float>(shape.friction) : 0.0f;
+      fixture.restitution = fx.restitution ? static_cast<float>(shape.restitution) : 0.0f;
+      fixture.restitutionThreshold = static_cast<float>(restitutionThreshold_);
+      fixture.filter.categoryBits = static_cast<uint16>(desc.categoryBits);
+      fixture.filter.maskBits = static_cast<uint16>(desc.maskBits & 0xFFFFu);
+      body->CreateFixture(&fixture);
+      if (shape.shape == ShapeKind::kCapsule) {
+        for (b2CircleShape& end : capsuleEnds) {
+          fixture.shape = &end;
+          body->CreateFixture(&fixture);
+        }
+      }
     }
-    fixture.density = desc.dynamic ? static_cast<float>(desc.density) : 0.0f;
-    fixture.friction = fx.friction ? static_cast<float>(desc.friction) : 0.0f;
-    fixture.restitution = fx.restitution ? static_cast<float>(desc.restitution) : 0.0f;
-    fixture.restitutionThreshold = static_cast<float>(restitutionThreshold_);
-    fixture.filter.categoryBits = static_cast<uint16>(desc.categoryBits);
-    fixture.filter.maskBits = static_cast<uint16>(desc.maskBits & 0xFFFFu);
-    body->CreateFixture(&fixture);
-    if (desc.shape == ShapeKind::kCapsule) {
-      for (b2CircleShape& end : capsuleEnds) {
-        fixture.shape = &end;
-        body->CreateFixture(&fixture);
-      }
-      if (desc.dynamic) {
-        const MassProperties mp = ComputeMassProperties(desc);
-        b2MassData md;
-        md.mass = static_cast<float>(mp.mass);
-        md.center = ToB2(mp.localCenter);
-        // Box2D's I is about the body origin.
-        md.I = static_cast<float>(mp.inertia + mp.mass * Dot(mp.localCenter, mp.localCenter));
-        body->SetMassData(&md);
-      }
+    if (capsule && desc.dynamic) {
+      const MassProperties mp = ComputeMassProperties(desc);
+      b2MassData md;
+      md.mass = static_cast<float>(mp.mass);
+      md.center = ToB2(mp.localCenter);
+      // Box2D's I is about the body origin.
+      md.I = static_cast<float>(mp.inertia + mp.mass * Dot(mp.localCenter, mp.localCenter));
+      body->SetMassData(&md);
     }
 
     // Set after the fixture: b2BodyDef's velocity would be taken as the origin's and shifted

@@ -224,6 +224,13 @@ class BulletAdapter final : public Adapter {
       if (b.shape == ShapeKind::kSegment || b.shape == ShapeKind::kChainSegment) {
         throw Unsupported("bullet: no segment or chain shape in Bullet's 2D mode (a thin box would be another shape)");
       }
+      // Several shapes on one body would be a btCompoundShape of btConvex2dShape children, its
+      // principal axes moved to the scene's centre of mass: not written (nor checked against the
+      // other engines) yet, so refused rather than loaded as something else.
+      if (!b.extraShapes.empty()) {
+        throw Unsupported("bullet: the adapter does not load compound bodies yet (a btCompoundShape of "
+                          "btConvex2dShape children is not mapped)");
+      }
     }
     if (!joints.empty()) {
       throw Unsupported("bullet: the adapter does not load joints (Bullet's constraints are not mapped to the plane yet)");

@@ -300,32 +300,35 @@ class ChipmunkAdapter final : public Adapter {
     // bounds once at the right transform; Chipmunk never reindexes static shapes itself.
     cpSpaceAddBody(space_, body);
 
-    cpShape* shape;
-    if (desc.shape == ShapeKind::kCircle) {
-      shape = cpCircleShapeNew(body, cpFloat(desc.radius), cpvzero);
-    } else if (desc.shape == ShapeKind::kCapsule) {
-      // Chipmunk's segment with a radius is a capsule.
-      shape = cpSegmentShapeNew(body, ToCp(desc.vertices[0]), ToCp(desc.vertices[1]), cpFloat(desc.radius));
-    } else if (desc.shape == ShapeKind::kSegment) {
-      shape = cpSegmentShapeNew(body, ToCp(desc.vertices[0]), ToCp(desc.vertices[1]), 0.0);
-    } else if (desc.shape == ShapeKind::kChainSegment) {
-      // Chipmunk's neighbours keep a body from catching on the joins, as the ghost vertices do,
-      // but its segment stays two-sided: a body behind the chain collides with it there.
-      shape = cpSegmentShapeNew(body, ToCp(desc.vertices[1]), ToCp(desc.vertices[2]), 0.0);
-      cpSegmentShapeSetNeighbors(shape, ToCp(desc.vertices[0]), ToCp(desc.vertices[3]));
-    } else {
-      std::vector<cpVect> verts;
-      verts.reserve(desc.vertices.size());
-      for (Vec2 v : desc.vertices) verts.push_back(ToCp(v));
-      shape = cpPolyShapeNew(body, static_cast<int>(verts.size()), verts.data(),
-                             cpTransformIdentity, 0.0);
+    // One Chipmunk shape per scene shape (several for a compound body; the body's mass, centre
+    // and inertia were set above from all of them).
+    for (const ShapeDesc& sd : ShapesOf(desc)) {
+      cpShape* shape;
+      if (sd.shape == ShapeKind::kCircle) {
+        shape = cpCircleShapeNew(body, cpFloat(sd.radius), ToCp(sd.center));
+      } else if (sd.shape == ShapeKind::kCapsule) {
+        // Chipmunk's segment with a radius is a capsule.
+        shape = cpSegmentShapeNew(body, ToCp(sd.vertices[0]), ToCp(sd.vertices[1]), cpFloat(sd.radius));
+      } else if (sd.shape == ShapeKind::kSegment) {
+        shape = cpSegmentShapeNew(body, ToCp(sd.vertices[0]), ToCp(sd.vertices[1]), 0.0);
+      } else if (sd.shape == ShapeKind::kChainSegment) {
+        // Chipmunk's neighbours keep a body from catching on the joins, as the ghost vertices do,
+        // but its segment stays two-sided: a body behind the chain collides with it there.
+        shape = cpSegmentShapeNew(body, ToCp(sd.vertices[1]), ToCp(sd.vertices[2]), 0.0);
+        cpSegmentShapeSetNeighbors(shape, ToCp(sd.vertices[0]), ToCp(sd.vertices[3]));
+      } else {
+        std::vector<cpVect> verts;
+        verts.reserve(sd.vertices.size());
+        for (Vec2 v : sd.vertices) verts.push_back(ToCp(v));
+        shape = cpPolyShapeNew(body, static_cast<int>(verts.size()), verts.data(), cpTransformIdentity, 0.0);
+      }
+      shapes_.push_back(shape);
+      cpShapeSetFriction(shape, fx.friction ? cpFloat(sd.friction) : 0.0);
+      cpShapeSetElasticity(shape, fx.restitution ? cpFloat(sd.restitution) : 0.0);
+      // Chipmunk's filter rule is Box2D's (each category in the other's mask), without a group.
+      cpShapeSetFilter(shape, cpShapeFilterNew(CP_NO_GROUP, cpBitmask(desc.categoryBits), cpBitmask(desc.maskBits)));
+      cpSpaceAddShape(space_, shape);
     }
-    shapes_.push_back(shape);
-    cpShapeSetFriction(shape, fx.friction ? cpFloat(desc.friction) : 0.0);
-    cpShapeSetElasticity(shape, fx.restitution ? cpFloat(desc.restitution) : 0.0);
-    // Chipmunk's filter rule is Box2D's (each category in the other's mask), without a group.
-    cpShapeSetFilter(shape, cpShapeFilterNew(CP_NO_GROUP, cpBitmask(desc.categoryBits), cpBitmask(desc.maskBits)));
-    cpSpaceAddShape(space_, shape);
     if (!desc.awake) cpBodySleep(body);  // after its shape: a sleeping body keeps its shapes' bounds
   }
 

@@ -194,6 +194,9 @@ class QuadrantAdapter final : public Adapter {
         if (b.shape == ShapeKind::kSegment || b.shape == ShapeKind::kChainSegment) {
           throw Unsupported("quadrant's quadrants scheme has no segments (the deterministic scheme has)");
         }
+        if (!b.extraShapes.empty()) {
+          throw Unsupported("quadrant's quadrants scheme has no compound bodies (the deterministic scheme has)");
+        }
       }
     }
   }

@@ -20,23 +20,23 @@ void RequireFinite(bool ok, const char* field) {
 
 // Checks that the given vertex order is the convex hull's own counter-clockwise order, so a
 // clockwise, self-intersecting or non-convex list is refused with a message saying which.
-void ValidatePolygonOrder(const BodyDesc& b, int index) {
+void ValidatePolygonOrder(const std::vector<Vec2>& vertices, int index) {
   Polygon hull;
   try {
-    hull = MakePolygon(b.vertices, /*requireConvex=*/true);
+    hull = MakePolygon(vertices, /*requireConvex=*/true);
   } catch (const Error& e) {
     Fail(index, e.what());
   }
-  const int n = static_cast<int>(b.vertices.size());
+  const int n = static_cast<int>(vertices.size());
   int start = -1;
   for (int i = 0; i < n; ++i) {
-    if (b.vertices[i] == hull.vertices[0]) start = i;
+    if (vertices[i] == hull.vertices[0]) start = i;
   }
   bool ccw = true;
   bool cw = true;
   for (int i = 0; i < n; ++i) {
-    ccw = ccw && b.vertices[(start + i) % n] == hull.vertices[i];
-    cw = cw && b.vertices[(start - i + n) % n] == hull.vertices[i];
+    ccw = ccw && vertices[(start + i) % n] == hull.vertices[i];
+    cw = cw && vertices[(start - i + n) % n] == hull.vertices[i];
   }
   if (ccw) return;
   if (cw) Fail(index, "polygon vertices are clockwise; the scene API takes counter-clockwise");
@@ -101,6 +101,51 @@ std::vector<BodyDesc> MakeChainBodyDescs(const std::vector<Vec2>& points, bool i
   return out;
 }
 
+std::vector<ShapeDesc> ShapesOf(const BodyDesc& b) {
+  std::vector<ShapeDesc> shapes;
+  shapes.reserve(1 + b.extraShapes.size());
+  shapes.push_back(ShapeDesc{b.shape, b.radius, Vec2{}, b.vertices, b.density, b.friction, b.restitution});
+  shapes.insert(shapes.end(), b.extraShapes.begin(), b.extraShapes.end());
+  return shapes;
+}
+
+namespace {
+
+ShapeDef ToShapeDef(const ShapeDesc& b) {
+  ShapeDef shape;
+  if (b.shape == ShapeKind::kCircle) {
+    shape.type = ShapeType::kCircle;
+    shape.circle = Circle{b.center, b.radius};
+  } else if (b.shape == ShapeKind::kCapsule) {
+    if (b.vertices.size() != 2) throw Error("a capsule has 2 centres, got " + std::to_string(b.vertices.size()));
+    shape.type = ShapeType::kCapsule;
+    shape.capsule = Capsule{b.vertices[0], b.vertices[1], b.radius};
+  } else if (b.shape == ShapeKind::kSegment) {
+    if (b.vertices.size() != 2) throw Error("a segment has 2 points, got " + std::to_string(b.vertices.size()));
+    shape.type = ShapeType::kSegment;
+    shape.segment = Segment{b.vertices[0], b.vertices[1]};
+  } else if (b.shape == ShapeKind::kChainSegment) {
+    if (b.vertices.size() != 4) {
+      throw Error("a chain segment has 4 vertices (ghost1, point1, point2, ghost2), got " + std::to_string(b.vertices.size()));
+    }
+    shape.type = ShapeType::kChainSegment;
+    shape.chainSegment = ChainSegment{b.vertices[0], Segment{b.vertices[1], b.vertices[2]}, b.vertices[3]};
+  } else {
+    if (b.vertices.size() > size_t(kMaxPolygonVertices)) {
+      throw Error("a polygon has at most 8 vertices, got " + std::to_string(b.vertices.size()));
+    }
+    shape.type = ShapeType::kPolygon;
+    std::copy(b.vertices.begin(), b.vertices.end(), shape.polygon.vertices.begin());
+    shape.polygon.count = static_cast<int>(b.vertices.size());
+  }
+  shape.density = b.density;
+  shape.friction = b.friction;
+  shape.restitution = b.restitution;
+  return shape;
+}
+
+}  // namespace
+
 BodyDef ToBodyDef(const BodyDesc& b) {
   BodyDef bd;
   bd.type = b.dynamic ? BodyType::kDynamic : b.kinematic ? BodyType::kKinematic : BodyType::kStatic;
@@ -111,40 +156,31 @@ BodyDef ToBodyDef(const BodyDesc& b) {
   bd.isAwake = b.awake;
   bd.linearDamping = b.linearDamping;  // the engine applies them only with effects.damping
   bd.angularDamping = b.angularDamping;
-  if (b.shape == ShapeKind::kCircle) {
-    bd.shape.type = ShapeType::kCircle;
-    bd.shape.circle = Circle{{0, 0}, b.radius};
-  } else if (b.shape == ShapeKind::kCapsule) {
-    if (b.vertices.size() != 2) throw Error("a capsule has 2 centres, got " + std::to_string(b.vertices.size()));
-    bd.shape.type = ShapeType::kCapsule;
-    bd.shape.capsule = Capsule{b.vertices[0], b.vertices[1], b.radius};
-  } else if (b.shape == ShapeKind::kSegment) {
-    if (b.vertices.size() != 2) throw Error("a segment has 2 points, got " + std::to_string(b.vertices.size()));
-    bd.shape.type = ShapeType::kSegment;
-    bd.shape.segment = Segment{b.vertices[0], b.vertices[1]};
-  } else if (b.shape == ShapeKind::kChainSegment) {
-    if (b.vertices.size() != 4) {
-      throw Error("a chain segment has 4 vertices (ghost1, point1, point2, ghost2), got " + std::to_string(b.vertices.size()));
+  const std::vector<ShapeDesc> shapes = ShapesOf(b);
+  bd.shape = ToShapeDef(shapes[0]);
+  for (size_t k = 1; k < shapes.size(); ++k) {
+    try {
+      bd.extraShapes.push_back(ToShapeDef(shapes[k]));
+    } catch (const Error& e) {
+      throw Error("extra shape " + std::to_string(k - 1) + ": " + e.what());
     }
-    bd.shape.type = ShapeType::kChainSegment;
-    bd.shape.chainSegment = ChainSegment{b.vertices[0], Segment{b.vertices[1], b.vertices[2]}, b.vertices[3]};
-  } else {
-    if (b.vertices.size() > size_t(kMaxPolygonVertices)) {
-      throw Error("a polygon has at most 8 vertices, got " + std::to_string(b.vertices.size()));
-    }
-    bd.shape.type = ShapeType::kPolygon;
-    std::copy(b.vertices.begin(), b.vertices.end(), bd.shape.polygon.vertices.begin());
-    bd.shape.polygon.count = static_cast<int>(b.vertices.size());
   }
-  bd.shape.density = b.density;
-  bd.shape.friction = b.friction;
-  bd.shape.restitution = b.restitution;
   bd.filter.categoryBits = b.categoryBits;
   bd.filter.maskBits = b.maskBits;
   return bd;
 }
 
 MassProperties ComputeMassProperties(const BodyDesc& body) {
+  if (!body.extraShapes.empty()) {  // a compound body: the engine's exact sum over its shapes
+    const BodyDef def = ToBodyDef(body);
+    std::vector<ShapeDef> shapes{def.shape};
+    shapes.insert(shapes.end(), def.extraShapes.begin(), def.extraShapes.end());
+    for (ShapeDef& s : shapes) {
+      if (s.type == ShapeType::kPolygon) s.polygon = MakePolygon(std::span<const Vec2>(s.polygon.vertices.data(), size_t(s.polygon.count)));
+    }
+    const MassData md = ComputeBodyMass(shapes);
+    return {md.mass, md.rotationalInertia, md.center};
+  }
   if (body.shape == ShapeKind::kSegment || body.shape == ShapeKind::kChainSegment) return {};  // no area: no mass
   MassData md = body.shape == ShapeKind::kCircle    ? ComputeMass(Circle{{0, 0}, body.radius}, body.density)
                 : body.shape == ShapeKind::kCapsule ? ComputeMass(ToBodyDef(body).shape.capsule, body.density)
@@ -185,7 +221,10 @@ void ValidateScene(const Scene& scene) {
     } catch (const Error& e) {
       Fail(i, e.what());
     }
-    if (b.shape == ShapeKind::kPolygon) ValidatePolygonOrder(b, i);
+    if (b.shape == ShapeKind::kPolygon) ValidatePolygonOrder(b.vertices, i);
+    for (const ShapeDesc& extra : b.extraShapes) {
+      if (extra.shape == ShapeKind::kPolygon) ValidatePolygonOrder(extra.vertices, i);
+    }
   }
   const int n = static_cast<int>(scene.bodies.size());
   for (int j = 0; j < static_cast<int>(scene.joints.size()); ++j) {

@@ -35,6 +35,18 @@ inline Effects SceneEffects() {
   return e;
 }
 
+/// One more shape of a body (BodyDesc::extraShapes): BodyDesc's shape fields, and a circle's
+/// centre (the body's own circle is centred on its origin).
+struct ShapeDesc {
+  ShapeKind shape = ShapeKind::kPolygon;
+  Real radius = Real(0.5);   ///< circles, capsules (m)
+  Vec2 center;               ///< circles: body coordinates
+  std::vector<Vec2> vertices;  ///< as BodyDesc::vertices
+  Real density = 1;
+  Real friction = Real(0.6);
+  Real restitution = 0;
+};
+
 struct BodyDesc {
   bool dynamic = true;
   /// With dynamic = false: a kinematic body, moved by its velocity (set at load and by drivers
@@ -66,7 +78,15 @@ struct BodyDesc {
   /// category is in the other's mask. Box2D 2.4.1 holds 16 bits: an adapter refuses wider ones.
   uint32_t categoryBits = 1;
   uint32_t maskBits = 0xFFFFFFFFu;
+  /// More shapes on the same body (a compound body: quadrant::BodyDef::extraShapes; Box2D's
+  /// several fixtures, Chipmunk's several shapes on one body). Mass, centre and inertia are the
+  /// exact sum of all shapes' (ComputeMassProperties). Empty for a one-shape body.
+  std::vector<ShapeDesc> extraShapes;
 };
+
+/// Every shape of a body: its own (from BodyDesc's shape fields, a circle at the origin), then
+/// BodyDesc::extraShapes. Adapters load a body's shapes from this list.
+std::vector<ShapeDesc> ShapesOf(const BodyDesc& body);
 
 enum class JointKind : uint8_t { kRevolute, kPrismatic, kDistance, kWeld, kWheel };
 

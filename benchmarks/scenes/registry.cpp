@@ -9,7 +9,7 @@ namespace quadrant::scene {
 
 std::vector<std::string> SceneNames() {
   return {"circle_stress", "polygon_stress", "circle_stress_clumped", "polygon_stress_clumped",
-          "many_pyramids", "tumbler", "joint_grid", "junkyard", "smash", "spinner", "rain",
+          "many_pyramids", "tumbler", "joint_grid", "junkyard", "smash", "spinner", "rain", "compounds", "washer",
           // The hard cases (hard_cases.cpp): fixed size except pyramid, where `count` is the
           // number of boxes and the base the largest b with b (b + 1) / 2 <= count (210 -> base
           // 20, 5050 -> base 100).
@@ -44,6 +44,8 @@ Scene MakeScene(std::string_view name, int count, uint64_t seed) {
   if (name == "smash") return MakeSmash(count);
   if (name == "spinner") return MakeSpinner(count);
   if (name == "rain") return MakeRain(count);
+  if (name == "compounds") return MakeCompounds(count);
+  if (name == "washer") return MakeWasher(count);
   if (name == "vertical_stack") return MakeVerticalStack();
   if (name == "mass_ratio_100") return MakeMassRatio(100);
   if (name == "mass_ratio_400") return MakeMassRatio(400);
@@ -73,7 +75,7 @@ Scene MakeScene(std::string_view name, int count, uint64_t seed) {
 
 bool IsDenseScene(std::string_view name) {
   return name == "pyramid" || name == "many_pyramids" || name == "tumbler" || name == "joint_grid" || name == "junkyard" ||
-         name == "smash" || name == "spinner" || name == "rain";
+         name == "smash" || name == "spinner" || name == "rain" || name == "compounds" || name == "washer";
 }
 
 std::vector<std::string> DefaultBenchScenes() {
@@ -97,6 +99,8 @@ std::vector<int> DefaultBenchCounts(std::string_view name) {
   if (name == "smash") return {2400, 9600};
   if (name == "spinner") return {1519, 6076};
   if (name == "rain") return {2200, 11000};  // ragdoll bodies at most: 1 and Box2D 3's 5 storeys
+  if (name == "compounds") return {760, 3000};
+  if (name == "washer") return {2025, 8100};
   throw Error("no default bench counts for scene '" + std::string(name) + "'");
 }
 
@@ -106,9 +110,10 @@ struct Box2d3Entry {
   int count, steps;
 };
 // benchmark/main.c's table and shared/benchmarks.c's sizes.
-constexpr Box2d3Entry kBox2d3[] = {{"joint_grid", 9993, 500}, {"junkyard", 8000, 800}, {"pyramid", 5050, 500},
+constexpr Box2d3Entry kBox2d3[] = {{"compounds", 3000, 500}, {"joint_grid", 9993, 500}, {"junkyard", 8000, 800}, {"pyramid", 5050, 500},
                                    {"many_pyramids", 22000, 200}, {"rain", 11000, 1000}, {"smash", 9600, 300},
-                                   {"spinner", 6076, 500}, {"tumbler", 2025, 750}};
+                                   {"spinner", 6076, 500}, {"tumbler", 2025, 750},
+                                   {"washer", 8100, 500}};
 const Box2d3Entry& FindBox2d3(std::string_view name) {
   for (const Box2d3Entry& e : kBox2d3) {
     if (name == e.scene) return e;

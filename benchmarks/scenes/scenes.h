@@ -65,6 +65,13 @@ Scene MakeJunkyard(int count);
 /// into a wall of touching 0.4 m boxes created asleep, 80 rows of count / 80 columns
 /// (80 <= count <= 1000000); sleep on. Box2D 3 runs 9600.
 Scene MakeSmash(int count);
+/// Box2D 3's "compounds": `count` dynamic bodies of two triangles each (20 columns; Box2D 3's
+/// 3000), walls of static boxes and a segment far below. Box2D 3 runs it 500 steps.
+Scene MakeCompounds(int count);
+/// Box2D 3's "washer": a kinematic drum of 40 polygons on one body (body 0) turning at 25 deg/s
+/// around the largest square grid of small boxes within `count` (Box2D 3's 90 x 90 = 8100). Box2D 3 runs it 500 steps with
+/// hit events on the boxes; the scene API has no hit-event setting, so none are asked for here.
+Scene MakeWasher(int count);
 
 /// Box2D 3's "spinner" (500 steps there): a loop of 360 one-sided chain segments on a circle of
 /// radius 40 m about (0, 32) facing in (bodies 0..359, static), a 40 m paddle turned about (0, 12)

@@ -245,5 +245,75 @@ TEST(Box2d3Scenes, SmashWakesTheSleepingWallInEveryEngine) {
   EXPECT_THROW(ValidateScene(awake), Error);
 }
 
+// Box2D 3's compounds: bodies of two triangles (compound bodies) fall between the walls onto the
+// ground; none passes through a wall or the ground.
+void ExpectCompounds(const std::string& engine) {
+  SCOPED_TRACE(engine);
+  const Scene s = MakeCompounds(200);  // 10 rows of 20
+  ASSERT_NO_THROW(ValidateScene(s));
+  auto adapter = MakeAdapter(engine);
+  adapter->Load(s, 1);
+  for (int i = 0; i < 240; ++i) adapter->Step();
+  std::vector<BodyState> st;
+  adapter->ReadBodies(st);
+  int outside = 0, resting = 0;
+  for (size_t i = 282; i < st.size(); ++i) {
+    const double x = st[i].position.x, y = st[i].position.y;
+    if (!(std::abs(x) < 39.5 && y > 0.4 && y < 40)) ++outside;
+    resting += y < 6 ? 1 : 0;
+  }
+  EXPECT_EQ(outside, 0);
+  EXPECT_GT(resting, 20);  // the first rows have landed
+}
+
+TEST(Box2d3Scenes, CompoundsFallBetweenTheWallsInEveryEngineThatRunsThem) {
+  const Scene big = MakeScene("compounds", 3000);  // Box2D 3's size
+  ASSERT_EQ(big.bodies.size(), 282u + 3000u);
+  EXPECT_EQ(big.bodies.back().extraShapes.size(), 1u);
+  // Two triangles of area 1 each at density 1.
+  EXPECT_NEAR(ComputeMassProperties(big.bodies.back()).mass, 2.0, 1e-6);
+  for (const char* engine : {"quadrant", "quadrant:pgs", "box2d", "chipmunk"}) ExpectCompounds(engine);
+  // Bullet's adapter does not load compound bodies (nor segments): it says so.
+  EXPECT_THROW(MakeAdapter("bullet")->Load(MakeCompounds(200), 1), Unsupported);
+  // The quadrants scheme has no compound bodies.
+  EXPECT_THROW(MakeAdapter("quadrant:pgs+quadrants")->Load(MakeCompounds(200), 2), Unsupported);
+  EXPECT_THROW(MakeCompounds(19), Error);
+}
+
+// Box2D 3's washer: a kinematic drum of 40 polygons on one body turns at 25 deg/s; the boxes
+// inside stay inside (within the fins' radius 14 of the drum's centre) and are carried round.
+void ExpectWasher(const std::string& engine) {
+  SCOPED_TRACE(engine);
+  const Scene s = MakeWasher(400);  // 20 x 20
+  ASSERT_NO_THROW(ValidateScene(s));
+  auto adapter = MakeAdapter(engine);
+  adapter->Load(s, 1);
+  const int steps = 240;
+  for (int i = 0; i < steps; ++i) adapter->Step();
+  std::vector<BodyState> st;
+  adapter->ReadBodies(st);
+  EXPECT_NEAR(double(st[0].angle), 4.0 * 25 * std::numbers::pi / 180, 1e-3);
+  int outside = 0;
+  double meanX = 0;
+  for (size_t i = 1; i < st.size(); ++i) {
+    const Vec2 d = st[i].position - st[0].position;
+    if (!(Length(d) < 16)) ++outside;
+    meanX += d.x / double(st.size() - 1);
+  }
+  EXPECT_EQ(outside, 0);
+  // Turning counter-clockwise, the drum's bottom moves towards +x: the boxes ride up on the right.
+  EXPECT_GT(meanX, 0.5);
+}
+
+TEST(Box2d3Scenes, WasherDrumTurnsTheBoxesInEveryEngineThatRunsIt) {
+  const Scene big = MakeScene("washer", 8100);  // Box2D 3's size
+  ASSERT_EQ(big.bodies.size(), 1u + 8100u);
+  EXPECT_EQ(big.bodies[0].extraShapes.size() + 1, 40u);  // the drum: 36 pieces and 4 fins
+  EXPECT_EQ(MakeScene("washer", 8200).bodies.size(), 1u + 8100u);  // rounds down to a square
+  for (const char* engine : {"quadrant", "box2d", "chipmunk"}) ExpectWasher(engine);
+  EXPECT_THROW(MakeAdapter("bullet")->Load(MakeWasher(400), 1), Unsupported);  // kinematic, compound
+  EXPECT_THROW(MakeWasher(3), Error);
+}
+
 }  // namespace
 }  // namespace quadrant::scene

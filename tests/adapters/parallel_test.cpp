@@ -22,13 +22,20 @@ std::vector<BodyId> Load(World& world, const scene::Scene& s) {
   std::vector<BodyId> ids;
   for (const scene::BodyDesc& b : s.bodies) {
     BodyDef bd;
-    bd.type = b.dynamic ? BodyType::kDynamic : BodyType::kStatic;
+    bd.type = b.dynamic ? BodyType::kDynamic : b.kinematic ? BodyType::kKinematic : BodyType::kStatic;
     bd.position = b.position;
     bd.angle = b.angle;
     bd.linearVelocity = b.velocity;
     bd.angularVelocity = b.angularVelocity;
-    bd.shape = b.shape == scene::ShapeKind::kCircle ? ShapeDef::MakeCircle(b.radius)
-                                                     : ShapeDef::FromPolygon(MakePolygon(b.vertices));
+    if (!b.extraShapes.empty() || b.shape == scene::ShapeKind::kSegment) {
+      // Compound bodies and segments (compounds, washer) as the scene API maps them.
+      const BodyDef full = scene::ToBodyDef(b);
+      bd.shape = full.shape;
+      bd.extraShapes = full.extraShapes;
+    } else {
+      bd.shape = b.shape == scene::ShapeKind::kCircle ? ShapeDef::MakeCircle(b.radius)
+                                                       : ShapeDef::FromPolygon(MakePolygon(b.vertices));
+    }
     bd.shape.density = b.density;
     bd.shape.friction = b.friction;
     bd.shape.restitution = b.restitution;
@@ -116,7 +123,7 @@ TEST_P(DeterministicScheme, SameHashForOneToFourThreads) {
 
 INSTANTIATE_TEST_SUITE_P(Scenes, DeterministicScheme,
                          ::testing::Values("circle_stress", "polygon_stress", "pyramid", "joint_grid", "junkyard",
-                                           "smash"));
+                                           "smash", "compounds", "washer"));
 
 TEST(DeterministicSchemeTest, GrainDoesNotChangeTheResult) {
   // Serial and parallel execution of a section must agree bit for bit.

@@ -422,7 +422,7 @@ TEST(DistributedBadInput, GravityScaleAndBulletRefused) {
   ExpectErrorOnEveryRank([&] { dw.Step(Real(1.0 / 60.0)); }, "Load a scene first");
 }
 
-TEST(DistributedBadInput, CapsuleAndSegmentShapesRefused) {
+TEST(DistributedBadInput, CapsuleSegmentAndCompoundShapesRefused) {
   // A rank's record carries a circle or a polygon.
   WorldDef def;
   def.solver = SolverType::kJacobi;
@@ -433,6 +433,10 @@ TEST(DistributedBadInput, CapsuleAndSegmentShapesRefused) {
   bodies[3].type = BodyType::kStatic;
   bodies[3].shape = ShapeDef::MakeSegment({Real(-0.2), 0}, {Real(0.2), 0});
   ExpectErrorOnEveryRank([&] { dw.Load(bodies); }, "DistributedWorld::Load: segment shapes are not supported (body 3)");
+  bodies[3] = SmallScene(0)[3];
+  bodies[3].extraShapes.push_back(ShapeDef::MakeCircle(Real(0.1), {Real(0.3), 0}));
+  ExpectErrorOnEveryRank([&] { dw.Load(bodies); },
+                         "DistributedWorld::Load: compound bodies (BodyDef.extraShapes) are not supported (body 3)");
   ExpectErrorOnEveryRank([&] { dw.Step(Real(1.0 / 60.0)); }, "Load a scene first");
 }
 

@@ -6,6 +6,7 @@
 
 #include <array>
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "quadrant/error.h"
@@ -37,8 +38,12 @@ enum class ShapeType : uint8_t { kCircle, kPolygon, kCapsule, kSegment, kChainSe
 /// A segment or a chain segment: no area, static and kinematic bodies only.
 constexpr bool IsSegmentType(ShapeType t) { return t == ShapeType::kSegment || t == ShapeType::kChainSegment; }
 
-/// The single shape of a body. Quadrant bodies carry exactly one shape: every scene of the
-/// suite needs no more, and it keeps the hot loops free of a shape list per body.
+/// Most shapes one body may carry (BodyDef::shape and BodyDef::extraShapes together): a contact
+/// point's feature id names the shape on each side in 6 bits (narrow_phase.h, kCompoundFeature).
+inline constexpr int kMaxBodyShapes = 64;
+
+/// One shape of a body. Most bodies carry one (BodyDef::shape), which the hot loops read with no
+/// shape list; a compound body adds more (BodyDef::extraShapes) and takes an out-of-line path.
 struct ShapeDef {
   ShapeType type = ShapeType::kCircle;
   /// A sensor senses the bodies its shape overlaps and pushes none: its pairs make no contact,
@@ -113,6 +118,15 @@ struct BodyDef {
   Real linearDamping = 0;   ///< 1/s, >= 0 (applied only when the world enables damping)
   Real angularDamping = 0;  ///< 1/s, >= 0
   ShapeDef shape;
+  /// More shapes on the same body (a compound body, as Box2D's several fixtures or shapes per
+  /// body): empty by default. With any, the body's mass is the sum of its shapes' masses, its
+  /// centre of mass their mass-weighted centre and its inertia the sum of theirs about that centre
+  /// (parallel axes): exact. Each shape keeps its own friction, restitution and density (0 is
+  /// allowed for some shapes of a dynamic body as long as the total mass is positive). At most
+  /// kMaxBodyShapes - 1; no sensors; a segment only on a static or kinematic body, as for `shape`.
+  /// Contacts are made per pair of touching shapes (several per pair of bodies). Needs
+  /// ParallelScheme::kDeterministic; not in a DistributedWorld.
+  std::vector<ShapeDef> extraShapes;
   Filter filter;            ///< collision filtering (Filter), default: collides with everything
   /// Yours: the engine stores it and never reads it (World::GetUserData). A game keeps an entity
   /// index or a pointer here (reinterpret_cast<uintptr_t>).
@@ -164,6 +178,11 @@ std::vector<BodyDef> MakeChainBodies(const ChainDef& def);
 /// ParallelScheme::kQuadrants). For tools that check a description before they have a World:
 /// the scene API's ValidateScene runs every scene body through it.
 void CheckBodyDef(const BodyDef& def);
+
+/// The mass data of validated shapes as one rigid body (a compound body's: BodyDef::extraShapes),
+/// each at its own density: the summed mass, the mass-weighted centre (body coordinates) and the
+/// inertia about it (parallel axes), summed in double; exactly what CreateBody gives the body.
+MassData ComputeBodyMass(std::span<const ShapeDef> shapes);
 
 enum class SolverType : uint8_t {
   kThesis,  ///< the 2013 thesis: mass-ratio separation + one impulse per contact, no iterations

@@ -135,7 +135,13 @@ class World {
   Real GetRotationalInertia(BodyId id) const;
   BodyType GetType(BodyId id) const;
   AABB GetAABB(BodyId id) const;
+  /// The body's first shape (BodyDef::shape, canonical: polygons re-hulled).
   const ShapeDef& GetShape(BodyId id) const;
+  /// Shape `index` of the body: 0 is BodyDef::shape, 1.. BodyDef::extraShapes in order; an index
+  /// outside [0, GetShapeCount) is refused.
+  const ShapeDef& GetShape(BodyId id, int index) const;
+  /// 1 for a body made of BodyDef::shape alone, 1 + extraShapes.size() for a compound body.
+  int GetShapeCount(BodyId id) const;
 
   // Writes (validated; throw quadrant::Error and change nothing on bad input, a stale id included).
   void SetLinearVelocity(BodyId id, Vec2 v);  ///< m/s of the centre of mass; ignored on a static body
@@ -203,7 +209,9 @@ class World {
   /// restitution in [0, 1], as CreateBody: contacts mix them anew at the next Step. Density
   /// (kg/m^2, finite, >= 0; > 0 on a dynamic body, whose mass must stay a positive finite number):
   /// recomputes a dynamic body's mass and inertia (not its centre of mass: the density is
-  /// uniform) and wakes it; a static or kinematic body keeps it for SetType.
+  /// uniform) and wakes it; a static or kinematic body keeps it for SetType. On a compound body
+  /// (BodyDef::extraShapes) each sets every shape's value, and SetDensity recomputes the centre of
+  /// mass too (the shapes' densities may have differed before); the body's origin stays.
   void SetFriction(BodyId id, Real friction);
   void SetRestitution(BodyId id, Real restitution);
   void SetDensity(BodyId id, Real density);

@@ -27,6 +27,7 @@ void ContactCache::Clear() {
   entries_.clear();
   last_.clear();
   kept_ = false;
+  repeated_ = false;
 }
 
 // Last step's contacts themselves instead of a copy of their impulses: Store read every
@@ -40,6 +41,7 @@ void ContactCache::Keep(std::vector<Contact>& contacts, bool strictlyIncreasing)
   last_.swap(contacts);
   entries_.clear();
   kept_ = true;
+  repeated_ = false;
 }
 
 ContactCache::Entry ContactCache::MakeEntry(const Contact& c) {
@@ -98,10 +100,13 @@ void ContactCache::StoreFiltered(std::span<const Contact> contacts) {
     if (Carries(c)) entries_.push_back(MakeEntry(c));
   }
   Finish();
+  repeated_ = std::adjacent_find(entries_.begin(), entries_.end(),
+                                 [](const Entry& x, const Entry& y) { return x.key == y.key; }) != entries_.end();
 }
 
 void ContactCache::Store(std::span<const Contact> contacts) {
   kept_ = false;
+  repeated_ = false;
   entries_.resize(contacts.size());
   if (!StoreEach(contacts, 0, static_cast<int>(contacts.size()))) StoreFiltered(contacts);
 }
@@ -109,6 +114,7 @@ void ContactCache::Store(std::span<const Contact> contacts) {
 void ContactCache::Store(std::span<const Contact> contacts, StageRunner& run) {
   const int count = static_cast<int>(contacts.size());
   kept_ = false;
+  repeated_ = false;
   entries_.resize(size_t(count));
   increasing_.assign(size_t(run.Workers()), 1);
   run.For(Stage::kPersistence, count, run.MinHeavyItems(), [&](int begin, int end, int worker) {
@@ -152,11 +158,12 @@ Real TangentOf(const Contact& c, int j) { return c.manifold.points[j].tangentImp
 }  // namespace
 
 int ContactCache::Restore(std::span<Contact> contacts, Cursor& cursor) const {
-  if (kept_) return RestoreFrom(last_.data(), last_.size(), contacts, cursor);
-  return RestoreFrom(entries_.data(), entries_.size(), contacts, cursor);
+  if (kept_) return RestoreFrom<Contact, false>(last_.data(), last_.size(), contacts, cursor);
+  if (repeated_) [[unlikely]] return RestoreFrom<Entry, true>(entries_.data(), entries_.size(), contacts, cursor);
+  return RestoreFrom<Entry, false>(entries_.data(), entries_.size(), contacts, cursor);
 }
 
-template <class Source>
+template <class Source, bool kRepeated>
 int ContactCache::RestoreFrom(const Source* entries, size_t size, std::span<Contact> contacts, Cursor& cursor) {
   int matched = 0;
   size_t at = cursor.at;
@@ -182,6 +189,27 @@ int ContactCache::RestoreFrom(const Source* entries, size_t size, std::span<Cont
                   entries);
     }
     if (at == size || KeyOf(entries[at]) != key) continue;
+    if constexpr (kRepeated) {
+      // Each point takes the first point of the key's entries with its feature id (a compound
+      // contact's ids name its pair of shapes; `at` stays on the key's first entry for the next
+      // contact of the same key).
+      for (int k = 0; k < c.manifold.pointCount; ++k) {
+        ManifoldPoint& p = c.manifold.points[k];
+        bool found = false;
+        for (size_t x = at; x < size && KeyOf(entries[x]) == key && !found; ++x) {
+          for (int j = 0; j < PointsOf(entries[x]); ++j) {
+            if (IdOf(entries[x], j) == p.id) {
+              p.normalImpulse = NormalOf(entries[x], j);
+              p.tangentImpulse = TangentOf(entries[x], j);
+              ++matched;
+              found = true;
+              break;
+            }
+          }
+        }
+      }
+      continue;
+    }
     const Source& e = entries[at];
     const int stored = PointsOf(e);
     ManifoldPoint* points = c.manifold.points;

@@ -48,7 +48,7 @@ class ContactCache {
   };
 
  private:
-  template <class Source>
+  template <class Source, bool kRepeated>
   static int RestoreFrom(const Source* entries, size_t size, std::span<Contact> contacts, Cursor& cursor);
   static Entry MakeEntry(const Contact& c);
   bool StoreEach(std::span<const Contact> contacts, int begin, int end);
@@ -63,6 +63,9 @@ class ContactCache {
   // Or (kept_) last step's contacts themselves, in strictly increasing key order (Keep).
   std::vector<Contact> last_;
   bool kept_ = false;
+  // entries_ holds keys more than once (a compound body's several contacts with one body): Restore
+  // then searches all entries of a key for a point's feature id, not only the first.
+  bool repeated_ = false;
 };
 
 }  // namespace quadrant

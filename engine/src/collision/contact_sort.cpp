@@ -9,7 +9,10 @@ namespace quadrant {
 
 // Contacts are solved in pair-key order, not broad-phase order, so the result does not depend
 // on which broad phase found them or on how threads split the work. Keys are unique (the
-// broad phase reports a pair once), so the order is the same whichever way it is reached:
+// broad phase reports a pair once), except a compound body's several contacts with one body,
+// which one worker emits together in shape order and every sort below keeps in that order
+// (all are stable, and a key's contacts are never in two parts); so the order is the same
+// whichever way it is reached:
 // every worker sorts its own contacts' (key, index) pairs, then each worker merges one range
 // of keys of all parts and gathers those contacts into the output, restoring last step's
 // impulses as it goes. Both stages are one parallel region (one hand-over, one barrier), and
@@ -86,9 +89,13 @@ void ContactSorter::SortPart(const std::vector<Contact>& in, int bodyCount, bool
       size_t j = i;
       for (; j > 0 && keys[j - 1].key > k.key; --j) keys[j] = keys[j - 1];
       keys[j] = k;
+      // A key moved back next to an equal one repeats too (a compound body's contacts).
+      if (j > 0 && keys[j - 1].key == k.key) part.increasing = false;
       moves += i - j;
       if (moves > budget) {
-        std::sort(keys.begin(), keys.end(), [](const SortKey& x, const SortKey& y) { return x.key < y.key; });
+        // Equal keys (a compound body's contacts with one body) stay in input order, which is
+        // the narrow phase's shape order: the order must not depend on the part's other contacts.
+        std::stable_sort(keys.begin(), keys.end(), [](const SortKey& x, const SortKey& y) { return x.key < y.key; });
         for (size_t m = 1; m < count; ++m) part.increasing = part.increasing && keys[m - 1].key < keys[m].key;
         break;
       }

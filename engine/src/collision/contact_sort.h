@@ -20,7 +20,8 @@ class ContactSorter {
   void Sort(StageRunner& run, int bodyCount, const WorkerLists<Contact>& workerContacts,
             std::vector<Contact>& contacts, const ContactCache* cache = nullptr);
   /// Whether the last Sort's output had strictly increasing keys (checked as it was written;
-  /// the broad phase reports a pair once, so it always has): ContactCache::Keep's condition.
+  /// the broad phase reports a pair once, so it has unless a compound body made several contacts
+  /// with one body): ContactCache::Keep's condition.
   bool StrictlyIncreasing() const { return increasing_; }
 
  private:

@@ -600,8 +600,24 @@ void KeepTouchingPoints(const Bodies& bodies, const WorldDef& def, std::vector<C
   out.resize(kept);
 }
 
-void CollideAllPairs(const Bodies& bodies, const WorldDef& def, Real dt, std::span<const CandidatePair> pairs,
-                     std::vector<Contact>& out, const RecycleSource* recycle) {
+}  // namespace
+
+// Compound bodies (narrow_phase_compound.cpp) never reach the pair loops: with any in the world,
+// their pairs are split off here, so the loops are the same code with or without them. Box2D
+// 2.4.1's contacts (KeepTouchingPoints) filter whatever either path produced.
+void CollidePairs(const Bodies& bodies, const WorldDef& def, Real dt, std::span<const CandidatePair> pairs,
+                  std::vector<Contact>& out, const RecycleSource* recycle) {
+  const size_t first = out.size();
+  if (bodies.compoundCount > 0) [[unlikely]] {
+    CollidePairsWithCompounds(bodies, def, dt, pairs, out, recycle);
+  } else {
+    CollideSimplePairs(bodies, def, dt, pairs, out, recycle);
+  }
+  if (!def.speculativeContacts || def.box2dPolygonClip) [[unlikely]] KeepTouchingPoints(bodies, def, out, first);
+}
+
+void CollideSimplePairs(const Bodies& bodies, const WorldDef& def, Real dt, std::span<const CandidatePair> pairs,
+                        std::vector<Contact>& out, const RecycleSource* recycle) {
   if (!def.effects.continuous && bodies.bulletCount > 0) {  // bullets without continuous collision
     pairs_default::PairLoop<CallBoxes, true>(bodies, def, dt, pairs, out, CallBoxes{}, recycle);
     return;
@@ -613,19 +629,6 @@ void CollideAllPairs(const Bodies& bodies, const WorldDef& def, Real dt, std::sp
   }
 #endif
   pairs_default::PairLoop(bodies, def, dt, pairs, out, CallBoxes{}, recycle);
-}
-
-}  // namespace
-
-void CollidePairs(const Bodies& bodies, const WorldDef& def, Real dt, std::span<const CandidatePair> pairs,
-                  std::vector<Contact>& out, const RecycleSource* recycle) {
-  if (!def.speculativeContacts || def.box2dPolygonClip) [[unlikely]] {
-    const size_t first = out.size();
-    CollideAllPairs(bodies, def, dt, pairs, out, recycle);
-    KeepTouchingPoints(bodies, def, out, first);
-    return;
-  }
-  CollideAllPairs(bodies, def, dt, pairs, out, recycle);
 }
 
 }  // namespace quadrant

@@ -21,6 +21,14 @@ inline constexpr uint32_t MakeFeatureId(uint32_t referenceEdge, uint32_t inciden
   return (referenceEdge & 0xFFu) | ((incidentVertex & 0xFFu) << 8) | (flipped ? 0x10000u : 0u);
 }
 
+/// A compound body's contact (Bodies::compound) names its pair of shapes in each point's feature
+/// id, above the feature bits: this flag, shape index of A in bits 20-25, of B in bits 26-31.
+/// Several contacts of one pair of bodies share a key; the ids tell them apart for warm starting.
+inline constexpr uint32_t kCompoundFeature = 1u << 19;
+inline constexpr uint32_t CompoundFeatureId(uint32_t id, int shapeA, int shapeB) {
+  return id | kCompoundFeature | (uint32_t(shapeA) << 20) | (uint32_t(shapeB) << 26);
+}
+
 struct ManifoldPoint {
   Vec2 point;             ///< world, halfway between the two surfaces
   Real separation = 0;    ///< negative when penetrating (m)

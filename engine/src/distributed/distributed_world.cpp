@@ -478,6 +478,8 @@ void DistributedWorld::Load(std::span<const BodyDef> bodies) {
                                                             std::to_string(i) + ")");
     Require(!IsSegmentType(bodies[i].shape.type), "DistributedWorld::Load: segment shapes are not supported (body " +
                                                       std::to_string(i) + ")");
+    Require(bodies[i].extraShapes.empty(), "DistributedWorld::Load: compound bodies (BodyDef.extraShapes) are not supported (body " +
+                                               std::to_string(i) + ")");
     AppendBody(row, bodies[i], w.def, static_cast<uint32_t>(i));
     const Record r = Impl::ToRecord(row, 0, static_cast<uint32_t>(i));
     if (r.type == BodyType::kStatic) {

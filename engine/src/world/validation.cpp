@@ -6,6 +6,7 @@
 #include <limits>
 #include <span>
 #include <string>
+#include <vector>
 
 namespace quadrant {
 
@@ -89,7 +90,39 @@ std::string DensityText(Real density) {
   return buffer;
 }
 
-ShapeDef ValidateBodyDef(const BodyDef& def) {
+// One shape's materials and geometry; `prefix` starts every message ("" for BodyDef::shape, whose
+// messages name ShapeDef alone, as before compound bodies).
+ShapeDef ValidateShape(const ShapeDef& in, const std::string& prefix) {
+  ShapeDef shape = in;
+  Require(IsFinite(shape.density) && shape.density >= 0, prefix + "ShapeDef.density must be finite and >= 0");
+  Require(IsFinite(shape.friction) && shape.friction >= 0, prefix + "ShapeDef.friction must be finite and >= 0");
+  Require(IsFinite(shape.restitution) && shape.restitution >= 0 && shape.restitution <= 1,
+          prefix + "ShapeDef.restitution must be in [0, 1]");
+  try {
+    if (shape.type == ShapeType::kCircle) {
+      ValidateCircle(shape.circle);
+    } else if (shape.type == ShapeType::kPolygon) {
+      const int count = shape.polygon.count;
+      Require(count >= 3 && count <= kMaxPolygonVertices,
+              "polygon vertex count must be in [3, 8], got " + std::to_string(count));
+      shape.polygon = MakePolygon(std::span<const Vec2>(shape.polygon.vertices.data(), size_t(count)));
+    } else if (shape.type == ShapeType::kCapsule) {
+      ValidateCapsule(shape.capsule);
+    } else if (shape.type == ShapeType::kSegment) {
+      ValidateSegment(shape.segment);
+    } else if (shape.type == ShapeType::kChainSegment) {
+      ValidateChainSegment(shape.chainSegment);
+    } else {
+      throw Error("ShapeDef.type is unknown");
+    }
+  } catch (const Error& e) {
+    if (prefix.empty()) throw;
+    throw Error(prefix + e.what());
+  }
+  return shape;
+}
+
+ShapeDef ValidateBodyDef(const BodyDef& def, std::vector<ShapeDef>* shapes) {
   Require(def.type == BodyType::kStatic || def.type == BodyType::kKinematic || def.type == BodyType::kDynamic,
           "BodyDef.type is unknown");
   Require(IsFinite(def.position) && IsFinite(def.angle), "BodyDef position or angle is not finite");
@@ -103,29 +136,32 @@ ShapeDef ValidateBodyDef(const BodyDef& def) {
   Require(IsFinite(def.angularDamping) && def.angularDamping >= 0, "BodyDef.angularDamping must be finite and >= 0");
   Require(GravityScaleOk(def.gravityScale), "BodyDef.gravityScale must be finite and in [-1e6, 1e6]");
   Require(!def.fixedRotation || def.angularVelocity == 0, "BodyDef.angularVelocity must be 0 with fixedRotation");
-  ShapeDef shape = def.shape;
-  Require(IsFinite(shape.density) && shape.density >= 0, "ShapeDef.density must be finite and >= 0");
-  Require(def.type != BodyType::kDynamic || shape.density > 0, "a dynamic body needs ShapeDef.density > 0");
-  Require(IsFinite(shape.friction) && shape.friction >= 0, "ShapeDef.friction must be finite and >= 0");
-  Require(IsFinite(shape.restitution) && shape.restitution >= 0 && shape.restitution <= 1,
-          "ShapeDef.restitution must be in [0, 1]");
-  if (shape.type == ShapeType::kCircle) {
-    ValidateCircle(shape.circle);
-  } else if (shape.type == ShapeType::kPolygon) {
-    const int count = shape.polygon.count;
-    Require(count >= 3 && count <= kMaxPolygonVertices, "polygon vertex count must be in [3, 8], got " + std::to_string(count));
-    shape.polygon = MakePolygon(std::span<const Vec2>(shape.polygon.vertices.data(), size_t(count)));
-  } else if (shape.type == ShapeType::kCapsule) {
-    ValidateCapsule(shape.capsule);
-  } else if (shape.type == ShapeType::kSegment) {
-    ValidateSegment(shape.segment);
-  } else if (shape.type == ShapeType::kChainSegment) {
-    ValidateChainSegment(shape.chainSegment);
-  } else {
-    throw Error("ShapeDef.type is unknown");
+  const bool dynamic = def.type == BodyType::kDynamic;
+  if (def.extraShapes.empty()) {
+    Require(IsFinite(def.shape.density) && def.shape.density >= 0, "ShapeDef.density must be finite and >= 0");
+    Require(!dynamic || def.shape.density > 0, "a dynamic body needs ShapeDef.density > 0");
+    const ShapeDef shape = ValidateShape(def.shape, "");
+    if (dynamic) RequireDynamicMass(shape, "");
+    if (shapes != nullptr) shapes->clear();
+    return shape;
   }
-  if (def.type == BodyType::kDynamic) RequireDynamicMass(shape, "");
-  return shape;
+  // A compound body: every shape checked, then the total mass.
+  Require(def.extraShapes.size() < size_t(kMaxBodyShapes),
+          "BodyDef.extraShapes has " + std::to_string(def.extraShapes.size()) + " shapes; a body carries at most " +
+              std::to_string(kMaxBodyShapes) + " (shape and extraShapes together)");
+  std::vector<ShapeDef> all;
+  all.reserve(def.extraShapes.size() + 1);
+  for (size_t k = 0; k <= def.extraShapes.size(); ++k) {
+    const std::string prefix = k == 0 ? std::string("BodyDef.shape: ") : "BodyDef.extraShapes[" + std::to_string(k - 1) + "]: ";
+    const ShapeDef& in = k == 0 ? def.shape : def.extraShapes[k - 1];
+    all.push_back(ValidateShape(in, prefix));
+    Require(!in.isSensor, prefix + "a compound body's shapes cannot be sensors (give the sensor a body of its own)");
+    Require(!dynamic || !IsSegmentType(in.type),
+            prefix + "a segment has no area (mass 0): only a static or kinematic body may carry it");
+  }
+  if (dynamic) RequireDynamicMass(std::span<const ShapeDef>(all), "");
+  if (shapes != nullptr) *shapes = std::move(all);
+  return shapes != nullptr ? (*shapes)[0] : ValidateShape(def.shape, "BodyDef.shape: ");
 }
 
 MassData ShapeMass(const ShapeDef& shape) {
@@ -154,6 +190,49 @@ void RequireDynamicMass(const ShapeDef& shape, const std::string& prefix) {
               DensityText(shape.density) + ")");
 }
 
+// Exact: each shape's mass and centre at its density, the inertias moved to the common centre by
+// the parallel-axis theorem, summed in double (a float sum of 40 shapes loses the last bits).
+MassData CompoundMass(std::span<const ShapeDef> shapes) {
+  double mass = 0, cx = 0, cy = 0, mx = 0, my = 0;
+  for (const ShapeDef& s : shapes) {
+    const MassData md = ShapeMass(s);
+    mass += double(md.mass);
+    mx += double(md.mass) * double(md.center.x);
+    my += double(md.mass) * double(md.center.y);
+    cx += double(md.center.x);
+    cy += double(md.center.y);
+  }
+  // No mass (a static body of segments): the shapes' mean centre, which nothing weighs.
+  const double n = double(shapes.size());
+  const double x = mass > 0 ? mx / mass : cx / n, y = mass > 0 ? my / mass : cy / n;
+  double inertia = 0;
+  for (const ShapeDef& s : shapes) {
+    const MassData md = ShapeMass(s);
+    const double dx = double(md.center.x) - x, dy = double(md.center.y) - y;
+    inertia += double(md.rotationalInertia) + double(md.mass) * (dx * dx + dy * dy);
+  }
+  MassData out;
+  out.mass = Real(mass);
+  out.center = Vec2{Real(x), Real(y)};
+  out.rotationalInertia = Real(inertia);
+  return out;
+}
+
+void RequireDynamicMass(std::span<const ShapeDef> shapes, const std::string& prefix) {
+  const MassData md = CompoundMass(shapes);
+  constexpr Real kSmallest = std::numeric_limits<Real>::min();
+  Require(IsFinite(md.mass) && md.mass >= kSmallest && IsFinite(md.rotationalInertia) &&
+              md.rotationalInertia >= kSmallest && IsFinite(Real(1) / md.mass) &&
+              IsFinite(Real(1) / md.rotationalInertia),
+          prefix + "a dynamic compound body's total mass or rotational inertia is not a positive finite number (" +
+              std::to_string(shapes.size()) + " shapes; every one of density 0?)");
+}
+
 void CheckBodyDef(const BodyDef& def) { (void)ValidateBodyDef(def); }
+
+MassData ComputeBodyMass(std::span<const ShapeDef> shapes) {
+  Require(!shapes.empty(), "ComputeBodyMass: no shapes");
+  return CompoundMass(shapes);
+}
 
 }  // namespace quadrant

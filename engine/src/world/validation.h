@@ -3,7 +3,9 @@
 #pragma once
 
 #include <cmath>
+#include <span>
 #include <string>
+#include <vector>
 
 #include "quadrant/types.h"
 
@@ -17,8 +19,17 @@ inline void Require(bool ok, const std::string& message) {
 
 void ValidateWorldDef(const WorldDef& d);
 
-/// Validates a body definition and returns its shape in canonical form (polygons re-hulled).
-ShapeDef ValidateBodyDef(const BodyDef& def);
+/// Validates a body definition and returns its shape in canonical form (polygons re-hulled). For
+/// a compound body (BodyDef::extraShapes) every shape and the total mass are checked, and
+/// `shapes`, if given, receives all of them canonical (shape first); for one shape it is cleared.
+ShapeDef ValidateBodyDef(const BodyDef& def, std::vector<ShapeDef>* shapes = nullptr);
+
+/// The exact mass data of several validated shapes as one rigid body: the summed mass, the
+/// mass-weighted centre and the inertia about it (parallel axes).
+MassData CompoundMass(std::span<const ShapeDef> shapes);
+
+/// RequireDynamicMass for a compound body: its total mass and inertia.
+void RequireDynamicMass(std::span<const ShapeDef> shapes, const std::string& prefix);
 
 /// A density as text for error messages (%g: std::to_string prints 1e-40 as 0.000000).
 std::string DensityText(Real density);

@@ -279,7 +279,7 @@ void UpdateMassData(Bodies& b, int i) {
     b.inv[i] = BodyInverseMass{};
     return;
   }
-  const MassData md = ShapeMass(b.shape[i]);
+  const MassData md = b.compound[i].empty() ? ShapeMass(b.shape[i]) : CompoundMass(b.compound[i]);
   b.mass[i] = md.mass;
   b.inertia[i] = b.fixedRotation[i] ? Real(0) : md.rotationalInertia;
   if (b.awake[i]) b.inv[i] = BodyInverseMass{Real(1) / md.mass, b.inertia[i] > 0 ? Real(1) / b.inertia[i] : Real(0)};
@@ -301,8 +301,68 @@ World::~World() = default;
 World::World(World&&) noexcept = default;
 World& World::operator=(World&&) noexcept = default;
 
+namespace {
+
+// The farthest point of shape s from `center` (body coordinates).
+Real FarthestFrom(const ShapeDef& s, Vec2 center) {
+  switch (s.type) {
+    case ShapeType::kCircle: return Length(s.circle.center - center) + s.circle.radius;
+    case ShapeType::kCapsule:
+      return std::max(Length(s.capsule.center1 - center), Length(s.capsule.center2 - center)) + s.capsule.radius;
+    case ShapeType::kSegment: return std::max(Length(s.segment.point1 - center), Length(s.segment.point2 - center));
+    case ShapeType::kChainSegment: {
+      const Segment& seg = s.chainSegment.segment;
+      return std::max(Length(seg.point1 - center), Length(seg.point2 - center));
+    }
+    case ShapeType::kPolygon: break;
+  }
+  Real r = 0;
+  for (int k = 0; k < s.polygon.count; ++k) r = std::max(r, Length(s.polygon.vertices[k] - center));
+  return r;
+}
+
+}  // namespace
+
+// A compound body's mass data, bound radius and stand-in shape (Bodies::compound): the stand-in's
+// polygon is the box around every shape in body coordinates, so the broad-phase box (its box
+// turned with the body) covers them all; its materials are the first shape's (GetShape reads
+// the real shapes).
+CompoundProperties MakeCompoundProperties(std::span<const ShapeDef> shapes) {
+  CompoundProperties out;
+  out.mass = CompoundMass(shapes);
+  AABB box = ComputeShapeAABB(shapes[0], Transform{});
+  for (const ShapeDef& s : shapes) {
+    out.boundRadius = std::max(out.boundRadius, FarthestFrom(s, out.mass.center));
+    const AABB sb = ComputeShapeAABB(s, Transform{});
+    box.lower = Min(box.lower, sb.lower);
+    box.upper = Max(box.upper, sb.upper);
+  }
+  ShapeDef standIn = shapes[0];
+  standIn.type = kCompoundShape;
+  standIn.isSensor = false;
+  Polygon& p = standIn.polygon;
+  p = Polygon{};
+  p.count = 4;
+  p.vertices[0] = box.lower;
+  p.vertices[1] = {box.upper.x, box.lower.y};
+  p.vertices[2] = box.upper;
+  p.vertices[3] = {box.lower.x, box.upper.y};
+  p.normals[0] = {0, -1};
+  p.normals[1] = {1, 0};
+  p.normals[2] = {0, 1};
+  p.normals[3] = {-1, 0};
+  p.centroid = Real(0.5) * (box.lower + box.upper);
+  out.standIn = standIn;
+  return out;
+}
+
 int AppendBody(Bodies& b, const BodyDef& def, const WorldDef& worldDef, uint32_t slot) {
-  const ShapeDef shape = ValidateBodyDef(def);  // throws before anything changes
+  std::vector<ShapeDef> compound;
+  const ShapeDef first = ValidateBodyDef(def, &compound);  // throws before anything changes
+  Require(worldDef.scheme != ParallelScheme::kQuadrants || compound.empty(),
+          "CreateBody: a compound body (BodyDef.extraShapes) needs ParallelScheme::kDeterministic");
+  const CompoundProperties props = compound.empty() ? CompoundProperties{} : MakeCompoundProperties(compound);
+  const ShapeDef& shape = compound.empty() ? first : props.standIn;
   Require(worldDef.scheme != ParallelScheme::kQuadrants || def.filter == Filter{},
           "CreateBody: a non-default collision filter needs ParallelScheme::kDeterministic");
   Require(worldDef.scheme != ParallelScheme::kQuadrants || !def.shape.isSensor,
@@ -316,7 +376,10 @@ int AppendBody(Bodies& b, const BodyDef& def, const WorldDef& worldDef, uint32_t
           "CreateBody: a segment needs ParallelScheme::kDeterministic");
   Require(def.isAwake || (def.type == BodyType::kDynamic && worldDef.effects.sleep),
           "CreateBody: BodyDef.isAwake = false needs a dynamic body and WorldDef.effects.sleep");
-  if (shape.type == ShapeType::kCircle) {
+  if (!compound.empty()) {
+    md = props.mass;
+    boundRadius = props.boundRadius;
+  } else if (shape.type == ShapeType::kCircle) {
     md = ComputeMass(shape.circle, shape.density);
     boundRadius = shape.circle.radius;
   } else if (shape.type == ShapeType::kCapsule) {
@@ -368,6 +431,9 @@ int AppendBody(Bodies& b, const BodyDef& def, const WorldDef& worldDef, uint32_t
   b.fixedRotation[i] = def.fixedRotation ? 1 : 0;
   b.bullet[i] = def.isBullet ? 1 : 0;
   b.bulletCount += def.isBullet ? 1 : 0;
+  b.compoundCount += compound.empty() ? 0 : 1;
+  for (const ShapeDef& s : compound) b.compoundBoxes[i].push_back(ComputeShapeAABB(s, Transform{}));
+  b.compound[i] = std::move(compound);
   b.aabb[i] = BroadPhaseBox(b, i, worldDef, 0);
   return i;
 }
@@ -424,6 +490,7 @@ void World::DestroyBody(BodyId id) {
   w.customFilters -= b.filter[i] == Filter{} ? 0 : 1;
   w.gravityScaled -= b.gravityScale[i] == 1 ? 0 : 1;
   b.bulletCount -= b.bullet[i];
+  b.compoundCount -= b.compound[i].empty() ? 0 : 1;
   if (id.index < w.pendingOf.size() && w.pendingOf[id.index] >= 0) {
     w.pendingForces[size_t(w.pendingOf[id.index])].live = false;
     w.pendingOf[id.index] = -1;
@@ -530,7 +597,12 @@ void World::Impl::FindSensorOverlaps() {
   run->Serial(Stage::kPersistence, [&] {
     sensorFound.clear();
     for (const CandidatePair& p : sensorPairs) {
-      if (!ShapesOverlap(bodies.shape[p.a], bodies.xf[p.a], bodies.shape[p.b], bodies.xf[p.b])) continue;
+      // A visitor may be a compound body (a sensor never is): any of its shapes counts.
+      bool overlap = false;
+      for (const ShapeDef& sa : BodyShapes(bodies, p.a)) {
+        for (const ShapeDef& sb : BodyShapes(bodies, p.b)) overlap = overlap || ShapesOverlap(sa, bodies.xf[p.a], sb, bodies.xf[p.b]);
+      }
+      if (!overlap) continue;
       const bool aSenses = bodies.shape[p.a].isSensor;
       sensorFound.push_back({IdOf(aSenses ? p.a : p.b), IdOf(aSenses ? p.b : p.a)});
     }
@@ -907,11 +979,24 @@ Real World::GetRotationalInertia(BodyId id) const { return impl_->bodies.inertia
 BodyType World::GetType(BodyId id) const { return impl_->bodies.type[impl_->Dense(id)]; }
 AABB World::GetAABB(BodyId id) const {
   const int i = impl_->Dense(id);
-  const ShapeDef& s = impl_->bodies.shape[i];
   const Transform& xf = impl_->bodies.xf[i];
-  return ComputeShapeAABB(s, xf);
+  const std::span<const ShapeDef> shapes = BodyShapes(impl_->bodies, i);
+  AABB box = ComputeShapeAABB(shapes[0], xf);
+  for (size_t k = 1; k < shapes.size(); ++k) {
+    const AABB sb = ComputeShapeAABB(shapes[k], xf);
+    box.lower = Min(box.lower, sb.lower);
+    box.upper = Max(box.upper, sb.upper);
+  }
+  return box;
 }
-const ShapeDef& World::GetShape(BodyId id) const { return impl_->bodies.shape[impl_->Dense(id)]; }
+const ShapeDef& World::GetShape(BodyId id) const { return BodyShapes(impl_->bodies, impl_->Dense(id))[0]; }
+const ShapeDef& World::GetShape(BodyId id, int index) const {
+  const std::span<const ShapeDef> shapes = BodyShapes(impl_->bodies, impl_->Dense(id));
+  Require(index >= 0 && size_t(index) < shapes.size(),
+          "GetShape: shape index " + std::to_string(index) + " is outside [0, " + std::to_string(shapes.size()) + ")");
+  return shapes[size_t(index)];
+}
+int World::GetShapeCount(BodyId id) const { return static_cast<int>(BodyShapes(impl_->bodies, impl_->Dense(id)).size()); }
 
 void World::SetLinearVelocity(BodyId id, Vec2 v) {
   const int i = impl_->Dense(id);
@@ -1087,7 +1172,12 @@ void World::SetType(BodyId id, BodyType type) {
           "SetType: the type is unknown");
   Bodies& b = w.bodies;
   if (b.type[i] == type) return;
-  if (type == BodyType::kDynamic) {
+  if (type == BodyType::kDynamic && !b.compound[i].empty()) {
+    for (const ShapeDef& s : b.compound[i]) {
+      Require(!IsSegmentType(s.type), "SetType: a segment has no area (mass 0): only a static or kinematic body may carry it");
+    }
+    RequireDynamicMass(std::span<const ShapeDef>(b.compound[i]), "SetType: ");
+  } else if (type == BodyType::kDynamic) {
     Require(b.shape[i].density > 0, "SetType: a dynamic body needs ShapeDef.density > 0 (SetDensity first)");
     RequireDynamicMass(b.shape[i], "SetType: ");
   }
@@ -1109,6 +1199,7 @@ void World::SetFriction(BodyId id, Real friction) {
   const int i = w.Dense(id);
   Require(IsFinite(friction) && friction >= 0, "SetFriction: friction must be finite and >= 0");
   w.bodies.shape[i].friction = friction;
+  for (ShapeDef& s : w.bodies.compound[i]) s.friction = friction;
 }
 
 void World::SetRestitution(BodyId id, Real restitution) {
@@ -1116,6 +1207,7 @@ void World::SetRestitution(BodyId id, Real restitution) {
   const int i = w.Dense(id);
   Require(IsFinite(restitution) && restitution >= 0 && restitution <= 1, "SetRestitution: restitution must be in [0, 1]");
   w.bodies.shape[i].restitution = restitution;
+  for (ShapeDef& s : w.bodies.compound[i]) s.restitution = restitution;
 }
 
 void World::SetDensity(BodyId id, Real density) {
@@ -1123,6 +1215,23 @@ void World::SetDensity(BodyId id, Real density) {
   const int i = w.Dense(id);
   Bodies& b = w.bodies;
   Require(IsFinite(density) && density >= 0, "SetDensity: density must be finite and >= 0");
+  if (!b.compound[i].empty()) {  // every shape's, and the centre of mass with it
+    std::vector<ShapeDef> shapes = b.compound[i];
+    for (ShapeDef& s : shapes) s.density = density;
+    if (b.type[i] == BodyType::kDynamic) {
+      Require(density > 0, "SetDensity: a dynamic body needs density > 0");
+      RequireDynamicMass(std::span<const ShapeDef>(shapes), "SetDensity: ");
+    }
+    if (w.def.effects.sleep) w.islands.WakeIslandOf(b, i);
+    const CompoundProperties props = MakeCompoundProperties(shapes);
+    b.compound[i] = std::move(shapes);
+    b.shape[i].density = density;
+    b.localCenter[i] = props.mass.center;
+    b.center[i] = TransformPoint(b.xf[i], props.mass.center);
+    b.boundRadius[i] = props.boundRadius;
+    UpdateMassData(b, i);
+    return;
+  }
   ShapeDef shape = b.shape[i];
   shape.density = density;
   if (b.type[i] == BodyType::kDynamic) {
@@ -1174,6 +1283,32 @@ void World::SetFilter(BodyId id, Filter filter) {
   w.bodies.filter[i] = filter;
 }
 
+namespace {
+
+// Whether test(shape) holds for any of body i's shapes (queries on compound bodies).
+template <class Test>
+bool AnyShape(const Bodies& b, int i, Test&& test) {
+  for (const ShapeDef& s : BodyShapes(b, i)) {
+    if (test(s)) return true;
+  }
+  return false;
+}
+
+// The closest hit of cast(shape, hit) over body i's shapes (the first shape's on a tie).
+template <class Cast>
+bool ClosestOverShapes(const Bodies& b, int i, RayHit& hit, Cast&& cast) {
+  bool found = false;
+  for (const ShapeDef& s : BodyShapes(b, i)) {
+    RayHit h = hit;
+    if (!cast(s, h)) continue;
+    if (!found || h.fraction < hit.fraction) hit = h;
+    found = true;
+  }
+  return found;
+}
+
+}  // namespace
+
 void World::QueryAABB(const AABB& box, std::vector<BodyId>& out, uint32_t categoryMask) const {
   Require(IsFinite(box.lower) && IsFinite(box.upper), "QueryAABB: the box is not finite");
   Require(box.lower.x <= box.upper.x && box.lower.y <= box.upper.y,
@@ -1185,7 +1320,7 @@ void World::QueryAABB(const AABB& box, std::vector<BodyId>& out, uint32_t catego
   std::sort(w.queryFound.begin(), w.queryFound.end());  // GetBodyIds order
   out.clear();
   for (int i : w.queryFound) {
-    if ((w.bodies.filter[i].categoryBits & categoryMask) != 0 && ShapeOverlapsBox(w.bodies.shape[i], w.bodies.xf[i], box)) {
+    if ((w.bodies.filter[i].categoryBits & categoryMask) != 0 && AnyShape(w.bodies, i, [&](const ShapeDef& s) { return ShapeOverlapsBox(s, w.bodies.xf[i], box); })) {
       out.push_back(w.IdOf(i));
     }
   }
@@ -1215,7 +1350,7 @@ void World::RayCastAll(Vec2 origin, Vec2 translation, std::vector<RayHit>& out, 
   for (int i : w.queryFound) {
     RayHit hit;
     if ((w.bodies.filter[i].categoryBits & categoryMask) == 0) continue;
-    if (!RayCastShape(w.bodies.shape[i], w.bodies.xf[i], origin, end, hit)) continue;
+    if (!ClosestOverShapes(w.bodies, i, hit, [&](const ShapeDef& s, RayHit& h) { return RayCastShape(s, w.bodies.xf[i], origin, end, h); })) continue;
     hit.body = w.IdOf(i);
     out.push_back(hit);
   }
@@ -1235,7 +1370,7 @@ std::optional<RayHit> World::RayCastClosest(Vec2 origin, Vec2 translation, uint3
   for (int i : w.queryFound) {
     RayHit hit;
     if ((w.bodies.filter[i].categoryBits & categoryMask) == 0) continue;
-    if (!RayCastShape(w.bodies.shape[i], w.bodies.xf[i], origin, end, hit)) continue;
+    if (!ClosestOverShapes(w.bodies, i, hit, [&](const ShapeDef& s, RayHit& h) { return RayCastShape(s, w.bodies.xf[i], origin, end, h); })) continue;
     if (best && (hit.fraction > best->fraction || (hit.fraction == best->fraction && i > bestIndex))) continue;
     hit.body = w.IdOf(i);
     best = hit;
@@ -1253,7 +1388,7 @@ void World::QueryPoint(Vec2 point, std::vector<BodyId>& out, uint32_t categoryMa
   std::sort(w.queryFound.begin(), w.queryFound.end());  // GetBodyIds order
   out.clear();
   for (int i : w.queryFound) {
-    if ((w.bodies.filter[i].categoryBits & categoryMask) != 0 && ShapeContainsPoint(w.bodies.shape[i], w.bodies.xf[i], point)) {
+    if ((w.bodies.filter[i].categoryBits & categoryMask) != 0 && AnyShape(w.bodies, i, [&](const ShapeDef& s) { return ShapeContainsPoint(s, w.bodies.xf[i], point); })) {
       out.push_back(w.IdOf(i));
     }
   }
@@ -1290,7 +1425,9 @@ std::optional<RayHit> World::CastCircle(Vec2 origin, Real radius, Vec2 translati
   const Vec2 r{radius, radius};
   const AABB box{Min(origin, end) - r, Max(origin, end) + r};
   return CastClosest(w, box, categoryMask, [&](int i, RayHit& hit) {
-    return CastCircleShape(w.bodies.shape[i], w.bodies.xf[i], origin, end, radius, hit);
+    return ClosestOverShapes(w.bodies, i, hit, [&](const ShapeDef& s, RayHit& h) {
+      return CastCircleShape(s, w.bodies.xf[i], origin, end, radius, h);
+    });
   });
 }
 
@@ -1315,7 +1452,9 @@ std::optional<RayHit> World::CastPolygon(std::span<const Vec2> vertices, Vec2 tr
   }
   Impl& w = *impl_;
   return CastClosest(w, box, categoryMask, [&](int i, RayHit& hit) {
-    return CastPolygonShape(w.bodies.shape[i], w.bodies.xf[i], moving, translation, hit);
+    return ClosestOverShapes(w.bodies, i, hit, [&](const ShapeDef& s, RayHit& h) {
+      return CastPolygonShape(s, w.bodies.xf[i], moving, translation, h);
+    });
   });
 }
 
@@ -1344,31 +1483,32 @@ void World::Draw(DebugDraw& draw, uint32_t flags) const {
   const int n = b.Count();
   if (flags & kDrawShapes) {
     for (int i = 0; i < n; ++i) {
-      const ShapeDef& s = b.shape[i];
-      const Color color = s.isSensor                        ? kSensorColor
-                          : b.type[i] == BodyType::kStatic    ? kStaticColor
-                          : b.type[i] == BodyType::kKinematic ? kKinematicColor
-                          : b.awake[i]                        ? kDynamicColor
-                                                              : kSleepingColor;
-      const Transform& xf = b.xf[i];
-      if (s.type == ShapeType::kCircle) {
-        draw.DrawCircle(TransformPoint(xf, s.circle.center), s.circle.radius, quadrant::GetAngle(xf.q), color);
-      } else if (s.type == ShapeType::kCapsule) {
-        draw.DrawCapsule(TransformPoint(xf, s.capsule.center1), TransformPoint(xf, s.capsule.center2), s.capsule.radius, color);
-      } else if (IsSegmentType(s.type)) {
-        const Segment& seg = s.type == ShapeType::kSegment ? s.segment : s.chainSegment.segment;
-        draw.DrawSegment(TransformPoint(xf, seg.point1), TransformPoint(xf, seg.point2), color);
-      } else {
-        Vec2 v[kMaxPolygonVertices];
-        for (int k = 0; k < s.polygon.count; ++k) v[k] = TransformPoint(xf, s.polygon.vertices[k]);
-        draw.DrawPolygon(std::span<const Vec2>(v, size_t(s.polygon.count)), color);
+      for (const ShapeDef& s : BodyShapes(b, i)) {
+        const Color color = s.isSensor                        ? kSensorColor
+                            : b.type[i] == BodyType::kStatic    ? kStaticColor
+                            : b.type[i] == BodyType::kKinematic ? kKinematicColor
+                            : b.awake[i]                        ? kDynamicColor
+                                                                : kSleepingColor;
+        const Transform& xf = b.xf[i];
+        if (s.type == ShapeType::kCircle) {
+          draw.DrawCircle(TransformPoint(xf, s.circle.center), s.circle.radius, quadrant::GetAngle(xf.q), color);
+        } else if (s.type == ShapeType::kCapsule) {
+          draw.DrawCapsule(TransformPoint(xf, s.capsule.center1), TransformPoint(xf, s.capsule.center2), s.capsule.radius, color);
+        } else if (IsSegmentType(s.type)) {
+          const Segment& seg = s.type == ShapeType::kSegment ? s.segment : s.chainSegment.segment;
+          draw.DrawSegment(TransformPoint(xf, seg.point1), TransformPoint(xf, seg.point2), color);
+        } else {
+          Vec2 v[kMaxPolygonVertices];
+          for (int k = 0; k < s.polygon.count; ++k) v[k] = TransformPoint(xf, s.polygon.vertices[k]);
+          draw.DrawPolygon(std::span<const Vec2>(v, size_t(s.polygon.count)), color);
+        }
       }
     }
   }
   if (flags & kDrawAABBs) {
     for (int i = 0; i < n; ++i) {
-      const ShapeDef& s = b.shape[i];
-      draw.DrawAABB(ComputeShapeAABB(s, b.xf[i]), kAABBColor);
+      // A compound body's box: the one around all its shapes (GetAABB).
+      draw.DrawAABB(b.compound[i].empty() ? ComputeShapeAABB(b.shape[i], b.xf[i]) : GetAABB(w.IdOf(i)), kAABBColor);
     }
   }
   if (flags & kDrawContacts) {

@@ -61,6 +61,14 @@ struct Bodies {
   std::vector<uint8_t> fixedRotation;
   std::vector<uint8_t> bullet;
   int bulletCount = 0;  ///< bodies with bullet 1 (not an array: kept by AppendBody and the World)
+  // Compound bodies (BodyDef::extraShapes; the design is in narrow_phase_compound.cpp): all of the
+  // body's shapes, canonical, first shape first; empty for a one-shape body. Such a body's `shape`
+  // is a stand-in of type kCompoundShape whose polygon is the box around all its shapes in body
+  // coordinates (the broad-phase box) and whose materials are the first shape's. No hot loop reads
+  // this array: the stand-in's type sends the body down the rare-shape paths.
+  std::vector<std::vector<ShapeDef>> compound;
+  std::vector<std::vector<AABB>> compoundBoxes;  ///< each of `compound`'s shapes' box, body coordinates
+  int compoundCount = 0;  ///< bodies with shapes in `compound`
 
   int Count() const { return static_cast<int>(type.size()); }
 
@@ -71,9 +79,21 @@ struct Bodies {
     fn(type), fn(xf), fn(center), fn(localCenter), fn(vel), fn(inv), fn(mass), fn(inertia);
     fn(linearDamping), fn(angularDamping), fn(shape), fn(boundRadius), fn(aabb), fn(dynamic);
     fn(slot), fn(awake), fn(sleepTime), fn(islandOf), fn(filter), fn(userData), fn(gravityScale);
-    fn(fixedRotation), fn(bullet);
+    fn(fixedRotation), fn(bullet), fn(compound), fn(compoundBoxes);
   }
 };
+
+/// The type of a compound body's stand-in shape (Bodies::compound). Not a ShapeType a user may
+/// give (validation refuses it): bit 3, so the pair loop's test of (type A | type B) for the rare
+/// shapes (> kPolygon) takes it there, and a test of bit 3 tells it from capsules and segments.
+inline constexpr ShapeType kCompoundShape = ShapeType(8);
+inline constexpr bool IsCompoundType(ShapeType t) { return (uint8_t(t) & uint8_t(kCompoundShape)) != 0; }
+
+/// Body i's shapes: its one `shape`, or a compound body's list.
+inline std::span<const ShapeDef> BodyShapes(const Bodies& bodies, int i) {
+  if (IsCompoundType(bodies.shape[size_t(i)].type)) [[unlikely]] return bodies.compound[size_t(i)];
+  return {&bodies.shape[size_t(i)], 1};
+}
 
 /// A touching or speculative contact between two bodies (dense indices, a < b).
 struct Contact {
@@ -98,8 +118,19 @@ struct CandidatePair;
 /// place a body row is made: World::CreateBody and the distributed world both use it.
 int AppendBody(Bodies& bodies, const BodyDef& def, const WorldDef& worldDef, uint32_t slot);
 
+/// What a compound body's shapes make (world.cpp): the exact mass data, the farthest shape point
+/// from the centre of mass, and the stand-in `shape` (Bodies::compound).
+struct CompoundProperties {
+  MassData mass;
+  Real boundRadius = 0;
+  ShapeDef standIn;
+};
+CompoundProperties MakeCompoundProperties(std::span<const ShapeDef> shapes);
+
 // The shape's box, out of the hot loops (queries, drawing, GetAABB).
+// A compound body's stand-in (kCompoundShape) gives the box around its body-frame bounding box.
 inline AABB ComputeShapeAABB(const ShapeDef& s, const Transform& xf) {
+  if (IsCompoundType(s.type)) return ComputeAABB(s.polygon, xf);
   switch (s.type) {
     case ShapeType::kCircle: return ComputeAABB(s.circle, xf);
     case ShapeType::kCapsule: return ComputeAABB(s.capsule, xf);
@@ -184,6 +215,16 @@ struct RecycleSource {
 
 void CollidePairs(const Bodies& bodies, const WorldDef& def, Real dt, std::span<const CandidatePair> pairs,
                   std::vector<Contact>& out, const RecycleSource* recycle = nullptr);
+
+/// CollidePairs for pairs of one-shape bodies only (the pair loops, narrow_pair_loop.inc).
+void CollideSimplePairs(const Bodies& bodies, const WorldDef& def, Real dt, std::span<const CandidatePair> pairs,
+                        std::vector<Contact>& out, const RecycleSource* recycle);
+
+/// CollidePairs in a world with compound bodies (Bodies::compound; narrow_phase_compound.cpp): runs
+/// of pairs without a compound body go to CollideSimplePairs; a pair with one gets a contact for
+/// each pair of shapes whose manifold keeps a point, in a fixed shape order.
+void CollidePairsWithCompounds(const Bodies& bodies, const WorldDef& def, Real dt, std::span<const CandidatePair> pairs,
+                               std::vector<Contact>& out, const RecycleSource* recycle);
 
 /// What a solver needs for one (sub-)step.
 struct StepContext {
