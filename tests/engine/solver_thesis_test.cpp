@@ -148,5 +148,52 @@ TEST(ThesisSolverTest, AccumulatedImpulseSharesATwoPointLandingOverThePasses) {
   EXPECT_GT(std::abs(one.w), 1.0);
 }
 
+// Shock propagation (solver_thesis.cpp): the lower body of a contact counts as immovable, but not
+// where it moves toward the upper one and the upper one is not the heavier, since it would then
+// throw the upper one with no reaction (issue #26). A ball moving up at 2 m/s into an equal ball at
+// rest on top of it, gravity on: as an immovable body the lower ball threw the upper one at its own
+// speed and the pair's kinetic energy doubled (and its momentum); as a collision of two bodies they
+// share the momentum (1 m/s each, half the energy). A heavier upper body keeps the shock, and with
+// it that flaw (the 1000:1 slab needs it): ten times heavier on top, it leaves at the lower ball's
+// speed.
+struct Throw {
+  double keBefore, keAfter, momentumBefore, momentumAfter;  ///< vertical momentum
+};
+
+Throw ThrowUp(Real upperDensity) {
+  WorldDef def;
+  def.solver = SolverType::kThesis;
+  World world(def);
+  const BodyId lower = AddCircle(world, {0, 0}, Real(0.5), {0, 2});
+  const BodyId upper = AddCircle(world, {0, Real(1 - 0.001)}, Real(0.5), {}, upperDensity);
+  auto ke = [&] {
+    double sum = 0;
+    for (BodyId id : {lower, upper}) {
+      const Vec2 v = world.GetLinearVelocity(id);
+      sum += 0.5 * double(world.GetMass(id)) * (double(v.x) * v.x + double(v.y) * v.y);
+    }
+    return sum;
+  };
+  auto momentum = [&] {
+    return double(world.GetMass(lower)) * world.GetLinearVelocity(lower).y +
+           double(world.GetMass(upper)) * world.GetLinearVelocity(upper).y;
+  };
+  Throw t{ke(), 0, momentum(), 0};
+  world.Step(kDt);
+  t.keAfter = ke();
+  t.momentumAfter = momentum();
+  return t;
+}
+
+TEST(ThesisSolverTest, ShockPropagationDoesNotThrowTheUpperBody) {
+  const double gravityImpulse = 10 * kDt;  // per kg, what the step's gravity takes from the momentum
+  const Throw equal = ThrowUp(1);
+  const double mass = kPi * 0.25;
+  EXPECT_LT(equal.keAfter, 0.6 * equal.keBefore);
+  EXPECT_NEAR(equal.momentumAfter, equal.momentumBefore - 2 * mass * gravityImpulse, 1e-4);
+  const Throw heavy = ThrowUp(10);
+  EXPECT_GT(heavy.keAfter, 5 * heavy.keBefore);  // the documented limit: still thrown
+}
+
 }  // namespace
 }  // namespace quadrant

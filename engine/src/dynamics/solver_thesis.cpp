@@ -227,14 +227,24 @@ class ThesisSolver final : public Solver {
     // Shock propagation (Guendelman, Bridson and Fedkiw 2003): under gravity the pass runs from
     // the lowest contact up, and between two movable bodies the lower one counts as immovable,
     // since the contacts below it have already placed and stopped it. One pass then carries a
-    // pile's weight to the ground instead of letting it sink through itself.
+    // pile's weight to the ground instead of letting it sink through itself. Not where the lower
+    // body moves toward the upper one and the upper one is not the heavier: immovable, the lower
+    // body would hand its motion to the upper one with no reaction on itself, energy from nothing
+    // (issue #26: 6-8 kJ a second in a closed box of 2000 equal circles, which never came to
+    // rest); such a contact is an ordinary collision of the two bodies. A heavier upper body keeps
+    // the shock: as a collision it would drive the light body under it into what is below (the
+    // 1000 kg box on a 1 kg slab sank 0.2 m into it).
     int upper = -1, lower = -1;
     if (up != Vec2{0, 0} && mA > 0 && mB > 0) {
       const bool aUpper = Dot(up, bodies.center[a]) > Dot(up, bodies.center[b]);
-      upper = aUpper ? a : b;
-      lower = aUpper ? b : a;
-      (aUpper ? mB : mA) = 0;
-      (aUpper ? iB : iA) = 0;
+      const int hi = aUpper ? a : b, lo = aUpper ? b : a;
+      const bool lowerApproaches = Dot(bodies.vel[lo].v, aUpper ? -m.normal : m.normal) > 0;
+      if (!lowerApproaches || bodies.inv[hi].invMass < bodies.inv[lo].invMass) {
+        upper = aUpper ? a : b;
+        lower = aUpper ? b : a;
+        (aUpper ? mB : mA) = 0;
+        (aUpper ? iB : iA) = 0;
+      }
     }
     const Real mSum = mA + mB;
     if (mSum == 0) return;
