@@ -27,8 +27,9 @@
 // - restitution as RestitutionPolicy::kBox2d's bias (pairwise collisions, pgs's default, are
 //   sequential too), given also to speculative points that close within the step.
 //
-// Cost (one process, base-10 pyramid, 300 steps, apex drift): 0.089 m at 8 iterations, 0.030 at
-// 16, 0.013 at 32, 0.006 at 64; pgs 0.013 m at 8. The World runs the phases back to back
+// Cost (one process, base-10 pyramid, 300 steps, apex drift): 0.191 m at 8 iterations, 0.032 at
+// 16, 0.013 at 32, 0.006 at 64 (with the bias in the real rows 0.089 m at 8, the same from 16 on);
+// pgs 0.013 m at 8. The World runs the phases back to back
 // (solver_jacobi.cpp), the distributed world exchanges boundary bodies between them: same bits.
 #pragma once
 
@@ -202,13 +203,6 @@ class JacobiSolve {
     return vb.v - va.v + Cross(vb.w, p.rB) - Cross(va.w, p.rA);
   }
 
-  // The real row's offset as in NormalRowOffset: the bounce, or the gap a speculative point may
-  // close; a touching point only stops approaching (its penetration is the split impulse's).
-  Real Offset(const Point& p) const {
-    if (p.restitutionBias > 0) return -p.restitutionBias;
-    return p.separation > 0 ? p.separation * invDt_ : Real(0);
-  }
-
   // Sequential impulses on the row's own copies of its two bodies (split masses), from the
   // velocities at the start of the iteration; records the row's impulse in r.P / angA / angB.
   void SolveRow(Row& r, BodyVelocity va, BodyVelocity vb, bool friction) const {
@@ -238,7 +232,10 @@ class JacobiSolve {
     for (int k = 0; k < r.pointCount; ++k) {
       Point& p = r.points[k];
       const Real vn = Dot(RelativeVelocity(va, vb, p), n);
-      const Real newImpulse = std::max(p.normalImpulse - p.normalMass * (vn + Offset(p)), Real(0));
+      // The bounce, or the gap a speculative point may close; a touching point only stops
+      // approaching (its penetration is the split impulse's).
+      const Real offset = NormalRowOffset(p.separation, p.restitutionBias, invDt_);
+      const Real newImpulse = std::max(p.normalImpulse - p.normalMass * (vn + offset), Real(0));
       const Real lambda = newImpulse - p.normalImpulse;
       p.normalImpulse = newImpulse;
       apply(p, lambda * n);
