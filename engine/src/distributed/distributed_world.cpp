@@ -56,9 +56,11 @@ struct CacheEntry {
 };
 static_assert(std::is_trivially_copyable_v<CacheEntry>);
 
-// The velocity exchange of the solve: a boundary body's velocity and its contact count.
+// The velocity exchange of the solve: a boundary body's velocity, the pseudo velocity of its
+// split impulses (JacobiSolve::Pseudo) and its contact count.
 struct VelocityRecord {
   BodyVelocity vel;
+  BodyVelocity pseudo;
   int32_t count;
 };
 static_assert(std::is_trivially_copyable_v<VelocityRecord>);
@@ -751,15 +753,16 @@ void DistributedWorld::Impl::FindContacts(Real dt) {
   }
 }
 
-// A solve round: the velocities (and after warm starting, the contact counts) of every owned body
+// A solve round: the velocities and pseudo velocities (and after warm starting, the contact counts) of every owned body
 // that is a shadow elsewhere replace that shadow's partial ones there.
 void DistributedWorld::Impl::ExchangeVelocities(bool counts, int tag) {
   ClearOut();
   std::vector<int32_t>& count = solve.Counts();
+  std::vector<BodyVelocity>& pseudo = solve.Pseudo();
   for (size_t k = 0; k < neighbours.size(); ++k) {
     for (int o : sentShadows[k]) {
       const int i = ownedLocal[size_t(o)];
-      Put(out[k], VelocityRecord{local.vel[size_t(i)], count[size_t(i)]});
+      Put(out[k], VelocityRecord{local.vel[size_t(i)], pseudo[size_t(i)], count[size_t(i)]});
     }
   }
   Round(tag);
@@ -771,6 +774,7 @@ void DistributedWorld::Impl::ExchangeVelocities(bool counts, int tag) {
     for (int i : receivedShadows[k]) {
       const VelocityRecord v = Take<VelocityRecord>(in[k], at);
       local.vel[size_t(i)] = v.vel;
+      pseudo[size_t(i)] = v.pseudo;
       if (counts) count[size_t(i)] = v.count;
     }
   }
