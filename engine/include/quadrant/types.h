@@ -299,11 +299,8 @@ struct WorldDef {
   /// were only this many times lighter (inverse mass and inertia scaled alike): a heavy body then
   /// rests on a light one (a 1000 kg box on a 1 kg slab holds at 4 sub-steps with 10) at the price
   /// of momentum in those contacts (a light body striking a heavy one pushes it harder than it
-  /// should; bounces, solved apart, are not affected). Only where the lighter body stands on a
-  /// static or kinematic one, directly or through touching bodies within the limit of each other
-  /// (a pile on the ground): between free bodies momentum stays exact. 10 by default: it holds
-  /// issue #13's heavy boxes on supports and on a slab, and Solver2D's heavy boxes on pyramids, at
-  /// the default budget, which nothing else measured does.
+  /// should; bounces, solved apart, are not affected). 10 by default: it holds issue #13's heavy
+  /// boxes on supports and on a slab at the default budget, which nothing else measured does.
   Real softMassRatioLimit = 10;
   /// soft_step (deterministic scheme, warm starting on): 0 (off) or how far (m) two bodies may move
   /// relative to each other since their two-point manifold was computed before it is computed
