@@ -382,7 +382,6 @@ template void SoftStepSolver::BuildRows<true, false>(StepContext&, const Softnes
 template void SoftStepSolver::BuildRows<false, true>(StepContext&, const Softness&, const Softness&, Real);
 template void SoftStepSolver::BuildRows<false, false>(StepContext&, const Softness&, const Softness&, Real);
 
-// This step's stamp for supported_ (MarkRow).
 void SoftStepSolver::PropagateSupport(const StepContext& ctx, Real massLimit) {
   const Bodies& bodies = *ctx.bodies;
   const Contact* contacts = ctx.contacts.data();
@@ -408,6 +407,7 @@ void SoftStepSolver::PropagateSupport(const StepContext& ctx, Real massLimit) {
   }
 }
 
+// This step's stamp for supported_ (MarkRow).
 void SoftStepSolver::NextStamp(int bodyCount, bool supported) {
   if (!supported) return;
   supported_.resize(bodyCount, 0);
