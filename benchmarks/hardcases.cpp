@@ -6,7 +6,7 @@
 //
 // The cases, their scenes and their criteria live in benchmarks/scenes (hard_cases.cpp,
 // hard_case_checks.cpp), shared with tests/adapters/hard_cases_test.cpp; every case but the soak
-// runs 60 s of simulated time. Exit status: 0 when every Quadrant case passes (all 18 are
+// runs 60 s of simulated time. Exit status: 0 when every Quadrant case passes (all 32 are
 // required of the default engine), 1 when one fails (peers never change it), 2 on bad arguments.
 // A line per case and engine goes to stderr as each finishes (a case takes seconds; the soak
 // prints its progress every 10 s).

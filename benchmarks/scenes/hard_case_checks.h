@@ -46,8 +46,10 @@ struct HardCaseOptions {
 
 /// vertical_stack, pyramid, mass_ratio_100, mass_ratio_400, arch, card_house, friction_ramp,
 /// restitution_drop, overlap_recovery, confined, far_from_origin, newtons_cradle, soak, issue
-/// #13's tall_stack, heavy_on_supports, heavy_on_slab (default budget), and issue #26's
-/// tall_stack_50. Every case but the soak runs 60 s of simulated time (3600 steps) and checks its
+/// #13's tall_stack, heavy_on_supports, heavy_on_slab (default budget), issue #26's tall_stack_50
+/// and closed_box, issue #27's joint cases (heavy_chain, ragdoll_pile, prismatic_stop, weld_beam),
+/// and Solver2D's contact scenes (single_box, warm_start_energy, high_mass_ratio_1 to _3, rush,
+/// double_domino, circle_stack, far_stack, far_recovery). Every case but the soak runs 60 s of simulated time (3600 steps) and checks its
 /// criterion at every sample of that window.
 std::vector<std::string> HardCaseNames();
 

@@ -7,10 +7,12 @@
 // the same mixed value.
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <numbers>
 #include <string>
 #include <vector>
 
+#include "adapter.h"
 #include "quadrant/error.h"
 #include "scenes.h"
 
@@ -610,6 +612,194 @@ Scene MakeHangingGrid(Mixing mixing) {
   }
   s.joints = std::move(grid.joints);
   s.bounds = Bounds({-31, -61}, {61, 2});
+  return s;
+}
+
+// ---- Solver2D's contact scenes (issue #26 item 2) --------------------------------------------
+//
+// erincatto/solver2d's samples/collection/sample_contact.cpp and sample_far.cpp, rebuilt with the
+// same sizes and layouts. Grounds are 1 m thick static boxes (top face at y = 0) where Solver2D
+// has a segment, so that Bullet, which has no segment in its 2D mode, runs them too; only
+// high_mass_ratio_2 keeps Solver2D's segment, since a segment ground is what tells it from
+// high_mass_ratio_3.
+
+Scene MakeSingleBox(Mixing mixing) {
+  Scene s = BaseScene("single_box");
+  const Real f = Coef(mixing, Real(0.5));
+  s.bodies.push_back(Ground({0, 0}, 66, f));
+  // A 2 m box (4 kg) whose bottom is 3 m above the ground: it lands at 7.75 m/s.
+  s.bodies.push_back(Box({0, 4}, 1, 1, true, f));
+  s.bounds = Bounds({-66, -1}, {66, 6});
+  return s;
+}
+
+Scene MakeWarmStartEnergy(Mixing mixing) {
+  Scene s = BaseScene("warm_start_energy");
+  const Real f = Coef(mixing, Real(0.6));
+  s.bodies.push_back(Ground({0, 0}, 10, f));
+  // Three touching balls (r = 0.5 m) in a column, the top one 100 times as dense (78.5 kg on two
+  // balls of 0.785 kg).
+  for (int k = 0; k < 3; ++k) {
+    BodyDesc b = Ball({0, Real(0.5) + Real(k)}, Real(0.5), f, 0);
+    if (k == 2) b.density = 100;
+    s.bodies.push_back(b);
+  }
+  // Solver2D destroys the heavy ball at step 120; the adapters cannot destroy a body, so from
+  // step 120 on the driver lifts it straight up at 20 m/s (0.33 m per step: it leaves the column
+  // within a step and is 1.2 km up at 60 s). Either way the light balls lose their load at once
+  // while their contacts still hold the impulses it needed: a solver that warm-starts them
+  // without a check launches the balls.
+  s.driver = [](int step, Adapter& adapter) {
+    if (step >= kWarmStartLiftStep) adapter.SetVelocity(3, {0, 20}, 0);
+  };
+  s.bounds = Bounds({-10, -1}, {10, 4});
+  return s;
+}
+
+Scene MakeHighMassRatio(int variant, Mixing mixing) {
+  RequireRange(variant, 1, 3, "high mass ratio variant");
+  if (variant == 1) {
+    Scene s = BaseScene("high_mass_ratio_1");
+    const Real f = Coef(mixing, Real(0.5));
+    s.bodies.push_back(Ground({0, 0}, 66, f));
+    // Three base-10 pyramids of touching 2 m boxes (4 kg), 2 m apart; on each apex, dropped from
+    // 2 m above its resting place, a 2 m box of density 100, 200 and 300 (400, 800, 1200 kg).
+    for (int j = 0; j < 3; ++j) {
+      const double offset = -20 + 22.0 * j;
+      for (int row = 0; row < 10; ++row) {
+        const int n = 10 - row;
+        const bool apex = n == 1;
+        const double y = 1 + 2.0 * row + (apex ? 2 : 0);
+        for (int i = 0; i < n; ++i) {
+          const double x = offset + 2.0 * (i - 0.5 * n);
+          s.bodies.push_back(Box({Real(x), Real(y)}, 1, 1, true, f, apex ? Real(100 * (j + 1)) : Real(1)));
+        }
+      }
+    }
+    s.bounds = Bounds({-66, -1}, {66, 24});
+    return s;
+  }
+  Scene s = BaseScene(variant == 2 ? "high_mass_ratio_2" : "high_mass_ratio_3");
+  const Real f = Coef(mixing, Real(0.6));
+  if (variant == 2) {
+    // Solver2D's segment ground, 40 m long.
+    BodyDesc ground = MakeSegmentBody({0, 0}, {-20, 0}, {20, 0});
+    ground.friction = f;
+    s.bodies.push_back(ground);
+  } else {
+    // Solver2D's thick ground: an 80 m x 4 m box, its top face at y = 0.
+    s.bodies.push_back(Box({0, -2}, 40, 2, false, f, 0));
+  }
+  // Two 1 m boxes (1 kg) at x = -9 and 9, and a 20 m box (400 kg) whose bottom is 15 m above
+  // them: it lands on both at 17.3 m/s, 400:1.
+  s.bodies.push_back(Box({-9, Real(0.5)}, Real(0.5), Real(0.5), true, f));
+  s.bodies.push_back(Box({9, Real(0.5)}, Real(0.5), Real(0.5), true, f));
+  s.bodies.push_back(Box({0, 26}, 10, 10, true, f));
+  s.bounds = Bounds({-40, -4}, {40, 36});
+  return s;
+}
+
+Scene MakeRush(Mixing mixing) {
+  Scene s = BaseScene("rush");
+  s.gravity = {0, 0};
+  s.effects.gravity = false;  // Solver2D: gravity scale 0; a central pull instead (the driver)
+  const Real f = Coef(mixing, Real(0.2));
+  // A static ball (r = 0.5 m) at the origin and 400 balls (r = 0.5 m, density 100: 78.5 kg) on a
+  // spiral around it: the first 5 m out, each next one 0.05 m farther and 0.2 rad further round.
+  BodyDesc core = Ball({0, 0}, Real(0.5), f, 0);
+  core.dynamic = false;
+  core.density = 0;
+  s.bodies.push_back(core);
+  double distance = 5, angle = 0;
+  for (int i = 0; i < kRushCount; ++i) {
+    BodyDesc b = Ball({Real(distance * std::cos(angle)), Real(distance * std::sin(angle))}, Real(0.5), f, 0);
+    b.density = 100;
+    s.bodies.push_back(b);
+    angle += 1.0 / 5.0;
+    distance += 0.05;
+  }
+  // Every step a 1000 N pull toward the origin on each ball (as Solver2D's ApplyForceToCenter),
+  // given through the velocity, v += dt F / m: what a force does over one step.
+  const double mass = 100 * std::numbers::pi * 0.25;
+  const double dv = 1000.0 / mass * double(s.timeStep);
+  auto states = std::make_shared<std::vector<BodyState>>();
+  s.driver = [states, dv](int, Adapter& adapter) {
+    adapter.ReadBodies(*states);
+    for (size_t i = 1; i < states->size(); ++i) {
+      const BodyState& b = (*states)[i];
+      const double d = std::hypot(double(b.position.x), double(b.position.y));
+      if (d < 0.1) continue;
+      const Vec2 v{Real(b.velocity.x - dv * b.position.x / d), Real(b.velocity.y - dv * b.position.y / d)};
+      adapter.SetVelocity(int(i), v, b.angularVelocity);
+    }
+  };
+  s.bounds = Bounds({-26, -26}, {26, 26});
+  return s;
+}
+
+Scene MakeDoubleDomino(Mixing mixing) {
+  Scene s = BaseScene("double_domino");
+  const Real f = Coef(mixing, Real(0.6));
+  s.bodies.push_back(Ground({0, 0}, 100, f));
+  // 15 dominoes of 0.25 m x 1 m (0.25 kg) standing 1 m apart from x = -7.5; the first gets
+  // Solver2D's push, an impulse of 0.2 N s to the right at its top (y = 1 m), as a velocity:
+  // v = J / m = 0.8 m/s and w = -(0.5 m)(0.2 N s) / I with I = m (0.25^2 + 1^2) / 12.
+  for (int i = 0; i < kDominoCount; ++i) {
+    BodyDesc b = Box({Real(-7.5 + i), Real(0.5)}, Real(0.125), Real(0.5), true, f);
+    if (i == 0) {
+      const double m = 0.25, inertia = m * (0.25 * 0.25 + 1.0) / 12;
+      b.velocity = {Real(0.2 / m), 0};
+      b.angularVelocity = Real(-0.5 * 0.2 / inertia);
+    }
+    s.bodies.push_back(b);
+  }
+  s.bounds = Bounds({-100, -1}, {100, 2});
+  return s;
+}
+
+Scene MakeCircleStack(Mixing mixing) {
+  Scene s = BaseScene("circle_stack");
+  const Real f = Coef(mixing, Real(0.6));
+  s.bodies.push_back(Ground({0, 0}, 40, f));
+  // Ten balls of radius 1 m in a column at x = 0, centres at y = 4, 7, ..., 31: each falls 1 m
+  // onto the one below (the first 3 m onto the ground), bottom to top.
+  for (int i = 0; i < kCircleStackCount; ++i) s.bodies.push_back(Ball({0, Real(4 + 3 * i)}, 1, f, 0));
+  s.bounds = Bounds({-40, -1}, {40, 33});
+  return s;
+}
+
+Scene MakeFarStack(Vec2 origin, Mixing mixing) {
+  if (!IsFinite(origin)) throw Error("far stack origin is not finite");
+  Scene s = BaseScene("far_stack");
+  const Real f = Coef(mixing, Real(0.6));
+  auto at = [&](double x, double y) { return Vec2{Real(double(origin.x) + x), Real(double(origin.y) + y)}; };
+  // Solver2D's far stack (at (4e4, -2.5e4) there): a 20 m x 2 m ground box (top at y = 0), a ball
+  // (r = 0.1 m) and a 0.2 m x 0.25 m box 2.5 cm up, a 4 m x 0.1 m plank resting on the box 5 cm
+  // above the ball, and two squares (0.5 m, 1 m) dropped 0.275 m and 0.05 m onto it.
+  s.bodies.push_back(Box(at(0, -1), 10, 1, false, f, 0));
+  s.bodies.push_back(Ball(at(1.875, 0.125), Real(0.1), f, 0));
+  s.bodies.push_back(Box(at(-1.875, 0.15), Real(0.1), Real(0.125), true, f));
+  s.bodies.push_back(Box(at(0, 0.325), 2, Real(0.05), true, f));
+  s.bodies.push_back(Box(at(-0.5, 0.9), Real(0.25), Real(0.25), true, f));
+  s.bodies.push_back(Box(at(-0.55, 1.7), Real(0.5), Real(0.5), true, f));
+  s.bounds = Bounds(at(-10, -2), at(10, 3));
+  return s;
+}
+
+Scene MakeFarRecovery(Vec2 origin, Mixing mixing) {
+  if (!IsFinite(origin)) throw Error("far recovery origin is not finite");
+  Scene s = BaseScene("far_recovery");
+  const Real f = Coef(mixing, Real(0.6));
+  s.bodies.push_back(Ground(origin, 40, f));
+  // Solver2D's far recovery (at (8e4, -7e4) there): a base-4 pyramid of 1 m boxes at 0.75 m
+  // pitch in both directions (each overlaps its neighbours by 25 %), at the default budget.
+  Scene pile = BaseScene("");
+  AddPyramidBoxes(pile, 4, {0, 0}, Real(0.75), Real(0.75), f);
+  for (BodyDesc b : pile.bodies) {
+    b.position = {Real(double(origin.x) + double(b.position.x)), Real(double(origin.y) + double(b.position.y))};
+    s.bodies.push_back(b);
+  }
+  s.bounds = Bounds({origin.x - 40, origin.y - 1}, {origin.x + 40, origin.y + 5});
   return s;
 }
 

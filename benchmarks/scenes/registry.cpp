@@ -16,7 +16,10 @@ std::vector<std::string> SceneNames() {
           "vertical_stack", "pyramid", "mass_ratio_100", "mass_ratio_400", "arch", "card_house",
           "friction_ramp", "restitution_drop", "overlap_recovery", "confined", "far_from_origin",
           "newtons_cradle", "tall_stack", "tall_stack_50", "heavy_on_supports", "heavy_on_slab", "closed_box", "heavy_chain", "ragdoll_pile", "prismatic_stop", "weld_beam",
-          "wheel_terrain", "hanging_grid"};
+          "wheel_terrain", "hanging_grid",
+          // Solver2D's contact scenes (issue #26 item 2).
+          "single_box", "warm_start_energy", "high_mass_ratio_1", "high_mass_ratio_2", "high_mass_ratio_3", "rush",
+          "double_domino", "circle_stack", "far_stack", "far_recovery"};
 }
 
 Scene MakeScene(std::string_view name, int count, uint64_t seed) {
@@ -68,6 +71,16 @@ Scene MakeScene(std::string_view name, int count, uint64_t seed) {
   if (name == "weld_beam") return MakeWeldBeam();
   if (name == "wheel_terrain") return MakeWheelTerrain();
   if (name == "hanging_grid") return MakeHangingGrid();
+  if (name == "single_box") return MakeSingleBox();
+  if (name == "warm_start_energy") return MakeWarmStartEnergy();
+  if (name == "high_mass_ratio_1") return MakeHighMassRatio(1);
+  if (name == "high_mass_ratio_2") return MakeHighMassRatio(2);
+  if (name == "high_mass_ratio_3") return MakeHighMassRatio(3);
+  if (name == "rush") return MakeRush();
+  if (name == "double_domino") return MakeDoubleDomino();
+  if (name == "circle_stack") return MakeCircleStack();
+  if (name == "far_stack") return MakeFarStack(kFarStackOrigin);
+  if (name == "far_recovery") return MakeFarRecovery(kFarRecoveryOrigin);
   std::string known;
   for (const std::string& n : SceneNames()) known += (known.empty() ? "" : ", ") + n;
   throw Error("unknown scene '" + std::string(name) + "' (known: " + known + ")");

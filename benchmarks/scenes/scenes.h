@@ -215,6 +215,45 @@ Scene MakeFarFromOrigin(Mixing mixing = Mixing::kBox2d);
 /// restitution 1, threshold 0; body 0 moves at +1 m/s into the others, which are at rest.
 Scene MakeNewtonsCradle(Mixing mixing = Mixing::kBox2d);
 
+// Solver2D's contact scenes (erincatto/solver2d, samples/collection; issue #26 item 2), with
+// Solver2D's sizes. Grounds are 1 m thick static boxes, top face at y = 0, except where noted.
+inline constexpr int kWarmStartLiftStep = 120;  ///< the step from which the heavy ball is lifted away
+inline constexpr int kRushCount = 400;
+inline constexpr int kDominoCount = 15;
+inline constexpr int kCircleStackCount = 10;
+/// Ground (friction 0.5), then a 2 m box (4 kg) whose bottom is 3 m above it.
+Scene MakeSingleBox(Mixing mixing = Mixing::kBox2d);
+/// Ground, then three touching balls (r = 0.5 m) in a column bottom to top, densities 1, 1 and
+/// 100; a driver lifts the heavy one (body 3) away at 20 m/s from step kWarmStartLiftStep on
+/// (Solver2D destroys it there).
+Scene MakeWarmStartEnergy(Mixing mixing = Mixing::kBox2d);
+/// Solver2D's high mass ratio 1 to 3. 1: ground (friction 0.5), then three base-10 pyramids of
+/// touching 2 m boxes (4 kg), left to right, each row by row from the bottom, each apex a box of
+/// density 100 (j + 1) dropped from 2 m above its place (the apex is the last body of each
+/// pyramid). 2 and 3: ground (2: a 40 m segment, 3: an 80 m x 4 m box), two 1 m boxes (1 kg) at
+/// x = -9 and 9, then a 20 m box (400 kg) whose bottom is 15 m above them. Friction 0.6.
+/// Throws quadrant::Error for other variants.
+Scene MakeHighMassRatio(int variant, Mixing mixing = Mixing::kBox2d);
+/// Zero gravity: a static ball (r = 0.5 m) at the origin, then kRushCount balls (r = 0.5 m,
+/// 78.5 kg, friction 0.2) on a spiral from 5 m out; a driver pulls each toward the origin with
+/// 1000 N every step.
+Scene MakeRush(Mixing mixing = Mixing::kBox2d);
+/// Ground, then kDominoCount dominoes of 0.25 m x 1 m standing 1 m apart from x = -7.5, left to
+/// right; the first starts with the velocity of a 0.2 N s push to the right at its top.
+Scene MakeDoubleDomino(Mixing mixing = Mixing::kBox2d);
+/// Ground, then kCircleStackCount balls of radius 1 m at x = 0, y = 4, 7, ..., bottom to top.
+Scene MakeCircleStack(Mixing mixing = Mixing::kBox2d);
+/// Solver2D's far stack about `origin` (Solver2D: (4e4, -2.5e4)): a 20 m x 2 m ground box, a
+/// ball (r = 0.1 m), a 0.2 m x 0.25 m box, a 4 m x 0.1 m plank on them, a 0.5 m and a 1 m square
+/// dropped onto it, in that order.
+Scene MakeFarStack(Vec2 origin, Mixing mixing = Mixing::kBox2d);
+/// Solver2D's far recovery about `origin` (Solver2D: (8e4, -7e4)): ground (top at origin.y), then
+/// a base-4 pyramid of 1 m boxes at 0.75 m pitch (25 % overlap), row by row from the bottom.
+Scene MakeFarRecovery(Vec2 origin, Mixing mixing = Mixing::kBox2d);
+/// Where Solver2D puts its far stack and far recovery.
+inline constexpr Vec2 kFarStackOrigin{40000, -25000};
+inline constexpr Vec2 kFarRecoveryOrigin{80000, -70000};
+
 /// A small deterministic random source (splitmix64), so a seed gives the same scene with any
 /// standard library.
 class Random {

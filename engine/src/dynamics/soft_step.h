@@ -120,6 +120,12 @@ class SoftStepSolver final : public Solver {
   LaneEnds FillLaneEnds(SoftRowGroup& g, int lane, int c, const Contact& contact, const Softness& soft,
                     const Softness& staticSoft, Real massLimit);
   void NextStamp(int bodyCount, bool supported);
+  // Extends supported_ through the pile (WorldDef::softMassRatioLimit): a dynamic body that
+  // touches a supported one whose mass is within the limit of its own is supported too, so a
+  // heavy body on a pile that stands on the ground is held as on a body that touches it. Run
+  // only after a step that had a contact over the limit (overLimit_): nothing else reads it.
+  void PropagateSupport(const StepContext& ctx, Real massLimit);
+  void MarkOverLimit() { std::atomic_ref<uint8_t>(overLimit_).store(1, std::memory_order_relaxed); }
 
   // The colouring's gather calls this for a contact with dynamic ends a and b (-1 for an end that
   // is not dynamic): inRows_ = 1 for every dynamic body in a row (LoadStates), and with kSupported
@@ -285,6 +291,9 @@ class SoftStepSolver final : public Solver {
   std::vector<int> active_;          // the bodies with inRows_ set, ascending
   std::vector<uint32_t> supported_;  // MarkRow: stamp_ for a supported body this step
   uint32_t stamp_ = 0;
+  // Set by BuildRows (relaxed atomic stores, all of 1) when a row joins two dynamic bodies whose
+  // masses differ by more than softMassRatioLimit: the next step runs PropagateSupport.
+  uint8_t overLimit_ = 0;
   Real collisionShare_ = 1;  // a sub-step's share of the step's collision impulses (Run says why)
   std::vector<SolverBody> states_;
   std::vector<SoftRowGroup> groups_;

@@ -102,6 +102,7 @@ template <bool kRotation>
   LaneEnds ends = LaneEnds::kPlain;
   if (massLimit > 0 && invMassA > 0 && invMassB > 0) {
     if (invMassA > massLimit * invMassB) {
+      MarkOverLimit();
       if (supported_[a] == stamp_) {
         const Real f = massLimit * invMassB / invMassA;
         mA *= f;
@@ -111,6 +112,7 @@ template <bool kRotation>
         ends = LaneEnds::kCold;
       }
     } else if (invMassB > massLimit * invMassA) {
+      MarkOverLimit();
       if (supported_[b] == stamp_) {
         const Real f = massLimit * invMassA / invMassB;
         mB *= f;
@@ -316,6 +318,7 @@ void SoftStepSolver::BuildRows(StepContext& ctx, const Softness& soft, const Sof
           bool limited = false, cold = false;
           if (massLimit > 0 && cc.invMassA > 0 && cc.invMassB > 0) {
             if (cc.invMassA > massLimit * cc.invMassB) {
+              MarkOverLimit();
               if (supported_[cc.a] == stamp_) {
                 const Real f = massLimit * cc.invMassB / cc.invMassA;
                 g.invMassA[lane] *= f;
@@ -325,6 +328,7 @@ void SoftStepSolver::BuildRows(StepContext& ctx, const Softness& soft, const Sof
                 cold = true;
               }
             } else if (cc.invMassB > massLimit * cc.invMassA) {
+              MarkOverLimit();
               if (supported_[cc.b] == stamp_) {
                 const Real f = massLimit * cc.invMassA / cc.invMassB;
                 g.invMassB[lane] *= f;
@@ -377,6 +381,31 @@ template void SoftStepSolver::BuildRows<true, true>(StepContext&, const Softness
 template void SoftStepSolver::BuildRows<true, false>(StepContext&, const Softness&, const Softness&, Real);
 template void SoftStepSolver::BuildRows<false, true>(StepContext&, const Softness&, const Softness&, Real);
 template void SoftStepSolver::BuildRows<false, false>(StepContext&, const Softness&, const Softness&, Real);
+
+void SoftStepSolver::PropagateSupport(const StepContext& ctx, Real massLimit) {
+  const Bodies& bodies = *ctx.bodies;
+  const Contact* contacts = ctx.contacts.data();
+  const int m = static_cast<int>(ctx.contacts.size());
+  // Support flows across contacts between two dynamic bodies within the limit of each other only,
+  // so a light body that touches a heavy one is not supported through it (a light ball striking a
+  // heavy box on the ground keeps its own mass). Passes over the contacts in key order until one
+  // changes nothing: the set reached does not depend on the order, so the result is the same for
+  // any thread count; contacts come in body order, so a pile built bottom up is mostly reached in
+  // the first pass. No body arrays are walked: a sparse scene costs a pass or two over its few
+  // contacts (polygon_stress 1000 runs this whenever a sliver meets a large polygon).
+  for (bool changed = true; changed;) {
+    changed = false;
+    for (int c = 0; c < m; ++c) {
+      const int a = contacts[c].a, b = contacts[c].b;
+      const bool sa = supported_[size_t(a)] == stamp_, sb = supported_[size_t(b)] == stamp_;
+      if (sa == sb) continue;
+      const Real ia = bodies.inv[a].invMass, ib = bodies.inv[b].invMass;
+      if (ia <= 0 || ib <= 0 || ia > massLimit * ib || ib > massLimit * ia) continue;
+      supported_[size_t(sa ? b : a)] = stamp_;
+      changed = true;
+    }
+  }
+}
 
 // This step's stamp for supported_ (MarkRow).
 void SoftStepSolver::NextStamp(int bodyCount, bool supported) {

@@ -72,6 +72,10 @@ void SoftStepSolver::Run(StepContext& ctx) {
   NextStamp(bodies.Count(), supported);
   if (supported) {
     graph_.Color(run, ctx, /*clearLater=*/true, [this](int a, int b) { MarkRow<true>(a, b); });
+    // Only where last step had a contact over the limit (issue #26: Solver2D's heavy boxes on
+    // pyramids, whose top boxes touch no static body, toppled them unheld).
+    if (overLimit_) run.Serial(Stage::kSolve, [&] { PropagateSupport(ctx, def.softMassRatioLimit); });
+    overLimit_ = 0;
   } else {
     graph_.Color(run, ctx, /*clearLater=*/true, [this](int a, int b) { MarkRow<false>(a, b); });
   }
