@@ -288,7 +288,7 @@ TEST(BadInputScene, UnknownNamesAreErrors) {
   ExpectMessage([] { MakeAdapter("havok"); }, "unknown engine 'havok'", "engine name");
   ExpectMessage([] { MakeAdapter(""); }, "unknown engine ''", "empty engine name");
   ExpectMessage([] { MakeAdapter("quadrant:fastest"); }, "unknown quadrant variant 'fastest'", "quadrant variant");
-  ExpectMessage([] { MakeScene("spinner", 100); }, "unknown scene 'spinner'", "scene name");
+  ExpectMessage([] { MakeScene("spinnr", 100); }, "unknown scene 'spinnr'", "scene name");
   ExpectMessage([] { MakeScene("tumbler", 3000); }, "tumbler: count must be in [1, 2116]", "tumbler count");
   ExpectMessage([] { MakeScene("circle_stress", 0); }, "body count must be > 0", "scene count 0");
   ExpectMessage([] { MakeScene("polygon_stress", -5); }, "body count must be > 0", "scene count -5");

@@ -251,7 +251,7 @@ first_hour() {
       hardcases) want="--soak-steps --peers --cases"; ((lines < 60)) || fail "hardcases --help: $lines lines" ;;
       validate) want="--random --seed --seeds --runs --cases"; ((lines < 30)) || fail "validate --help: $lines lines" ;;
       compare) want="--min-repetitions --allow-load --all --threshold"; ((lines < 40)) || fail "compare --help: $lines lines" ;;
-      bench) want="--engines --repetitions --busy"; ((lines < 124)) || fail "bench --help: $lines lines" ;;
+      bench) want="--engines --repetitions --busy"; ((lines < 150)) || fail "bench --help: $lines lines" ;;
       *) want=""; ((lines < 20)) || fail "$cmd --help: $lines lines" ;;
     esac
     for option in $want; do grep -qF -- "$option" "$WORK/stdout" || fail "$cmd --help does not list $option"; done
