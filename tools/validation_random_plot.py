@@ -116,7 +116,8 @@ def main():
         ax.axhline(0.9, color="grey", linewidth=0.5)
         ax.set_xscale("log")
         ax.set_xlim(FLOOR * 0.8, 10)
-        ax.set_xlabel(title + " (fraction of impact speed)")
+        # Two lines: on one, the two panels' labels ran into each other.
+        ax.set_xlabel(title + "\n(fraction of impact speed)")
         ax.set_ylabel("fraction of hits at or below")
         # The runs' colours are the top panel's legend; only runs not in it are named here (a
         # legend of all 21 covered the curves).
