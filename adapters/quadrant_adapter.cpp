@@ -42,13 +42,8 @@ class QuadrantAdapter final : public Adapter {
     Refuse(def, scene.bodies, scene.joints);
     auto world = std::make_unique<World>(def);
     std::vector<BodyId> ids;
-    ids.reserve(scene.bodies.size());
-    for (size_t i = 0; i < scene.bodies.size(); ++i) {
-      BodyDef bd = ToBodyDef(scene.bodies[i]);
-      bd.userData = i;  // the scene index, for Contacts()
-      ids.push_back(world->CreateBody(bd));
-    }
-    CreateJoints(*world, ids, scene.bodies, scene.joints);
+    // userData: the scene index, for Contacts()
+    CreateBodiesAndJoints(*world, scene.bodies, scene.joints, 0, ids);
     world_ = std::move(world);
     ids_ = std::move(ids);
     groups_.clear();
@@ -69,14 +64,9 @@ class QuadrantAdapter final : public Adapter {
     // CreateBody and the joints' Create* validate before adding anything, and ValidateGroup ran
     // the engine's own rules: a throw here would be a bug, and the bodies made so far go again.
     std::vector<BodyId> ids;
-    ids.reserve(desc.bodies.size());
     try {
-      for (size_t i = 0; i < desc.bodies.size(); ++i) {
-        BodyDef bd = ToBodyDef(desc.bodies[i]);
-        bd.userData = (uint64_t(group) + 1) << 32 | i;  // group + 1 and the index in it, for Contacts()
-        ids.push_back(world_->CreateBody(bd));
-      }
-      CreateJoints(*world_, ids, desc.bodies, desc.joints);
+      // userData: group + 1 and the index in it, for Contacts()
+      CreateBodiesAndJoints(*world_, desc.bodies, desc.joints, (uint64_t(group) + 1) << 32, ids);
     } catch (...) {
       for (BodyId id : ids) world_->DestroyBody(id);
       throw;
@@ -202,6 +192,18 @@ class QuadrantAdapter final : public Adapter {
   }
 
   // The joints among `bodies` (made as `ids`; joint indices index both).
+  // The bodies (userData = userDataBase | index) into `ids`, in order, then the joints between them.
+  static void CreateBodiesAndJoints(World& world, const std::vector<BodyDesc>& bodies, const std::vector<JointDesc>& joints,
+                                    uint64_t userDataBase, std::vector<BodyId>& ids) {
+    ids.reserve(bodies.size());
+    for (size_t i = 0; i < bodies.size(); ++i) {
+      BodyDef bd = ToBodyDef(bodies[i]);
+      bd.userData = userDataBase | i;
+      ids.push_back(world.CreateBody(bd));
+    }
+    CreateJoints(world, ids, bodies, joints);
+  }
+
   static void CreateJoints(World& world, const std::vector<BodyId>& ids, const std::vector<BodyDesc>& bodies,
                            const std::vector<JointDesc>& joints) {
     World* const w = &world;
