@@ -70,11 +70,13 @@ class ConstraintGraph {
     Finish(run, bodies.Count(), m, clearLater);
   }
 
-  // Bodies [begin, end)'s colour masks back to zero (Color's clearLater).
+  // Bodies [begin, end)'s colour masks back to zero (Color's clearLater). Bodies made since the
+  // last colouring have no mask yet (Finish adds theirs as zeros): the part of the range below
+  // them is cleared all the same, or a mask left set would colour the next step otherwise, and
+  // differently by how the range was split into chunks.
   void ClearColors(int begin, int end) {
-    if (begin < end && static_cast<size_t>(end) <= bodyColors_.size()) {
-      std::fill(bodyColors_.begin() + begin, bodyColors_.begin() + end, uint64_t(0));
-    }
+    end = std::min(end, static_cast<int>(bodyColors_.size()));
+    if (begin < end) std::fill(bodyColors_.begin() + begin, bodyColors_.begin() + end, uint64_t(0));
   }
 
   // The number of constraints coloured, and the contact of the k-th in colour order.
