@@ -933,6 +933,12 @@ class ThreadPool final : public TaskSystem {
         jobSleepers_.fetch_sub(1, std::memory_order_relaxed);
         Spread(index);
       }
+      // The word first, then the stop flag: the destructor sets the flag before its bump, so a
+      // word that holds the bump comes with the flag set. Read the other way round, a worker
+      // between the two reads took the destructor's bump as its `seen`, went back to sleep on it
+      // and was never woken: the destructor's join hung (seen under load, once in a few thousand
+      // pools: a World destroyed while its worker was just back from a job).
+      const uint32_t now = jobWord_.load(std::memory_order_acquire);
       if (stop_.load(std::memory_order_acquire)) {
         if (stats_) {
           ReadSchedStat(workerSched_[index]);
@@ -940,7 +946,7 @@ class ThreadPool final : public TaskSystem {
         }
         return;
       }
-      seen = jobWord_.load(std::memory_order_acquire);
+      seen = now;
       Claim(TagOf(claim_.load(std::memory_order_acquire)), index, fromBack);
     }
   }
