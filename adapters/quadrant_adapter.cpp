@@ -191,7 +191,6 @@ class QuadrantAdapter final : public Adapter {
     }
   }
 
-  // The joints among `bodies` (made as `ids`; joint indices index both).
   // The bodies (userData = userDataBase | index) into `ids`, in order, then the joints between them.
   static void CreateBodiesAndJoints(World& world, const std::vector<BodyDesc>& bodies, const std::vector<JointDesc>& joints,
                                     uint64_t userDataBase, std::vector<BodyId>& ids) {
@@ -204,6 +203,7 @@ class QuadrantAdapter final : public Adapter {
     CreateJoints(world, ids, bodies, joints);
   }
 
+  // The joints among `bodies` (made as `ids`; joint indices index both).
   static void CreateJoints(World& world, const std::vector<BodyId>& ids, const std::vector<BodyDesc>& bodies,
                            const std::vector<JointDesc>& joints) {
     World* const w = &world;

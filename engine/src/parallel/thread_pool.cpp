@@ -936,8 +936,8 @@ class ThreadPool final : public TaskSystem {
       // The word first, then the stop flag: the destructor sets the flag before its bump, so a
       // word that holds the bump comes with the flag set. Read the other way round, a worker
       // between the two reads took the destructor's bump as its `seen`, went back to sleep on it
-      // and was never woken: the destructor's join hung (seen under load, once in a few thousand
-      // pools: a World destroyed while its worker was just back from a job).
+      // and was never woken: the destructor's join hung (seen under load: a World destroyed while
+      // its worker was just back from a job; docs/notes/thread_pool.md).
       const uint32_t now = jobWord_.load(std::memory_order_acquire);
       if (stop_.load(std::memory_order_acquire)) {
         if (stats_) {
