@@ -182,9 +182,10 @@ TEST(JointChainTest, ChainSolveIsBitIdenticalAcrossThreadCounts) {
   EXPECT_EQ(four, one);
 }
 
-// A closed ring of links (a loop) and a body with three chains on it are left to the joint-by-joint
-// solve; the world still runs and every joint keeps its two anchors together.
-TEST(JointChainTest, LoopsAndBranchesFallBackToTheRowSolve) {
+// A closed ring of links (a loop, cut open into one chain) and a body with three chains on it (two
+// of them paired across the hub, the third alone): the world runs and every joint keeps its two
+// anchors together.
+TEST(JointChainTest, LoopsAndBranchesStayJoined) {
   WorldDef def;
   def.gravity = {0, 0};
   World w(def);

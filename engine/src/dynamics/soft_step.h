@@ -324,28 +324,46 @@ class SoftStepSolver final : public Solver {
   // Chains (WorldDef::jointChainSolve): chain c's rows, in order, are chainRows_[chainStart_[c]
   // .. chainStart_[c + 1]); chainShared_[k] is the body the k-th row shares with the next.
   struct ChainSlot {
-    Vec2 rA, rB;
-    Real rhs[3], x[3];  // two entries for a revolute chain, three for a weld chain
-    Real inv[9];        // the eliminated diagonal block's inverse
-    Real c[9];          // the coupling block with the next row
+    int row, a, b;           // the joint row and its bodies
+    bool dynA, dynB;         // whether the row moves that body
+    Real mA, iA, mB, iB;     // 0 for an end that does not move
+    Vec2 frameA, frameB;     // the anchors at the step's start (SoftJointRow)
+    Vec2 deltaCenter;
+    Real deltaAngle;
+    Vec2 rA, rB;             // the anchors in this pass
+    Real rhs[3], x[3];       // two entries for a revolute chain, three for a weld chain
+    Real inv[9];             // the eliminated diagonal block's inverse
+    Real c[9];               // the coupling block with the next row
   };
+  void LoadChains(StageRunner& run);
   template <int N>
   void SolveChainOf(int chain, bool useBias);
   std::vector<int> chainRows_, chainStart_, chainShared_;
   std::vector<ChainSlot> chainSlots_;
-  std::vector<int> chainDegree_;             // per body: revolute rows on it (FindChains)
-  std::vector<std::pair<int, int>> chainEnds_;  // per body: up to two of those rows
-  std::vector<uint8_t> chainEligible_, chainSeen_;
+  // Per chain colour (chains of one colour share no dynamic body): its first chain, and one past
+  // the last colour's last.
+  static constexpr int kChainColors = 64;
+  std::vector<int> chainColorStart_;
+  // FindChains' scratch: each body's chain rows, the rows that continue each other, the paths.
+  std::vector<int> chainAdjStart_, chainAdj_, chainPartner_, chainBodyMark_;
+  std::vector<int> chainPathRows_, chainPathShared_, chainPathStart_, chainPathColor_;
+  std::vector<uint64_t> chainBodyColors_;
+  std::vector<uint8_t> chainSeen_;
   int ChainCount() const { return static_cast<int>(chainStart_.size()) - 1; }
-  // SolveChain over every chain, one stage (chains share no dynamic body), queued in the region.
+  // SolveChain over every chain, a stage per chain colour, queued in the region.
   void ChainPass(bool useBias) {
     if (ChainCount() <= 0) return;
-    regionPass_.push_back(static_cast<int>(regionFns_.size()));
+    const int pass = static_cast<int>(regionFns_.size());
     regionFns_.emplace_back([this, useBias](int b, int e) {
       for (int c = b; c < e; ++c) SolveChain(c, useBias);
     });
-    regionPlan_.push_back({ChainCount(), 1});
-    regionFirst_.push_back(0);
+    for (int c = 0; c < kChainColors; ++c) {
+      const int first = chainColorStart_[size_t(c)], count = chainColorStart_[size_t(c) + 1] - first;
+      if (count == 0) continue;
+      regionPlan_.push_back({count, 1});
+      regionFirst_.push_back(first);
+      regionPass_.push_back(pass);
+    }
   }
   Real jointInvH_ = 0;  // kept only with restitution (Run: lean)
 };

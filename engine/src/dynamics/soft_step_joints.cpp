@@ -55,6 +55,7 @@ void SoftStepSolver::PrepareJoints(const StepContext& ctx, Real h) {
   jointRows_.clear();
   if (joints_.empty()) {  // a world without joints pays these lines a step
     jointsVersion_ = ~uint64_t(0);
+    chainStart_.assign(1, 0);  // no chains left from a step that had joints
     return;
   }
   const Bodies& bodies = *ctx.bodies;
@@ -184,61 +185,29 @@ void SoftStepSolver::PrepareJoints(const StepContext& ctx, Real h) {
   });
   if (reuse) {
     for (int q : chainRows_) jointRows_[size_t(q)].inChain = true;  // last step's chains
-    return;
+  } else {
+    chainStart_.assign(1, 0);
+    chainRows_.clear();
+    chainShared_.clear();
+    if (def.jointChainSolve) FindChains(bodies.Count());
   }
-  chainStart_.assign(1, 0);
-  chainRows_.clear();
-  chainShared_.clear();
-  if (def.jointChainSolve) FindChains(bodies.Count());
+  LoadChains(run);
 }
 
-// The chains among the revolute rows: paths of rows linked by shared dynamic bodies, each body on
-// at most two of them. Rows on a body with three or more revolute rows, and loops, stay with the
-// row-by-row solve; so do chains of one row (the same result). Walked in row order from each
-// path's first end: the same chains, in the same order, for any thread count.
+// The chains among the revolute rows (and the rigid welds'): paths of rows of one kind linked by
+// shared dynamic bodies, solved as one system each (SolveChain). At a body with two such rows the
+// two continue each other; at a body with more (a net, a ragdoll's torso) rows are paired most
+// opposite first (their other bodies more than 120 degrees apart), so that a net is cut into its
+// rows and columns and each is solved exactly, line by line: a 30 x 30 net hung from its top
+// stretches its top joints 0.0557 m joint by joint at the default budget (hanging_grid). A path
+// never holds a dynamic body twice (a loop is cut open); paths that share a body get different
+// colours, and each colour is one stage. Rows left alone stay with the row-by-row solve. Serial,
+// in row order: the same chains, in the same order, for any thread count.
 void SoftStepSolver::FindChains(int bodyCount) {
-  const size_t rows = jointRows_.size();
-  const int n = static_cast<int>(rows);
-  chainDegree_.assign(size_t(bodyCount), 0);
-  chainEnds_.resize(size_t(bodyCount));
-  // Chain rows: revolute joints (their point rows) and rigid welds (point and angle).
-  auto revolute = [&](int k) {
+  const int n = static_cast<int>(jointRows_.size());
+  auto chainRow = [&](int k) {
     const SoftJointRow& r = jointRows_[size_t(k)];
     return r.type == JointType::kRevolute || (r.type == JointType::kWeld && r.hertz == 0 && r.angularHertz == 0);
-  };
-  auto each = [&](int k, auto&& fn) {  // fn(body) for the row's dynamic bodies
-    const SoftJointRow& r = jointRows_[size_t(k)];
-    if (r.dynA) fn(r.a);
-    if (r.dynB) fn(r.b);
-  };
-  for (int k = 0; k < n; ++k) {
-    if (!revolute(k)) continue;
-    each(k, [&](int body) { ++chainDegree_[size_t(body)]; });
-  }
-  std::vector<uint8_t>& eligible = chainEligible_;
-  eligible.assign(rows, 0);
-  for (int k = 0; k < n; ++k) {
-    if (!revolute(k)) continue;
-    bool ok = true;
-    each(k, [&](int body) { ok = ok && chainDegree_[size_t(body)] <= 2; });
-    eligible[size_t(k)] = ok;
-  }
-  // Each body's eligible rows (at most two).
-  for (int k = 0; k < n; ++k) {
-    if (!eligible[size_t(k)]) continue;
-    each(k, [&](int body) { chainEnds_[size_t(body)] = {-1, -1}; });
-  }
-  for (int k = 0; k < n; ++k) {
-    if (!eligible[size_t(k)]) continue;
-    each(k, [&](int body) {
-      auto& e = chainEnds_[size_t(body)];
-      (e.first < 0 ? e.first : e.second) = k;
-    });
-  }
-  // The row across `body` from row k, or -1.
-  auto across = [&](int k, int body) {
-    const auto& e = chainEnds_[size_t(body)];
-    return e.first == k ? e.second : e.first;
   };
   auto dyn = [&](int k, int body) {
     const SoftJointRow& r = jointRows_[size_t(k)];
@@ -248,52 +217,159 @@ void SoftStepSolver::FindChains(int bodyCount) {
     const SoftJointRow& r = jointRows_[size_t(k)];
     return body == r.a ? r.b : r.a;
   };
-  std::vector<uint8_t>& seen = chainSeen_;
-  seen.assign(rows, 0);
-  for (int k0 = 0; k0 < n; ++k0) {
-    if (!eligible[size_t(k0)] || seen[size_t(k0)]) continue;
-    // Walk to one end through bodyA's side; back at k0 is a loop.
-    int cur = k0, via = jointRows_[size_t(k0)].a;
-    bool loop = false;
-    while (dyn(cur, via)) {
-      const int next = across(cur, via);
-      if (next < 0) break;
-      if (next == k0) {
-        loop = true;
-        break;
-      }
-      via = other(next, via);
-      cur = next;
+  // Each dynamic body's chain rows (in row order), as compressed lists.
+  std::vector<int>& start = chainAdjStart_;
+  std::vector<int>& adj = chainAdj_;
+  start.assign(size_t(bodyCount) + 1, 0);
+  for (int k = 0; k < n; ++k) {
+    if (!chainRow(k)) continue;
+    const SoftJointRow& r = jointRows_[size_t(k)];
+    if (r.dynA) ++start[size_t(r.a) + 1];
+    if (r.dynB) ++start[size_t(r.b) + 1];
+  }
+  for (int b = 0; b < bodyCount; ++b) start[size_t(b) + 1] += start[size_t(b)];
+  adj.resize(size_t(start[size_t(bodyCount)]));
+  {
+    std::vector<int> fill(start.begin(), start.end() - 1);
+    for (int k = 0; k < n; ++k) {
+      if (!chainRow(k)) continue;
+      const SoftJointRow& r = jointRows_[size_t(k)];
+      if (r.dynA) adj[size_t(fill[size_t(r.a)]++)] = k;
+      if (r.dynB) adj[size_t(fill[size_t(r.b)]++)] = k;
     }
-    // From that end, the whole path; `via` is now the end's outer body.
-    const int first = static_cast<int>(chainRows_.size());
-    int k = cur;
-    int inner = other(k, via);  // the body towards the rest of the path
-    while (true) {
-      seen[size_t(k)] = 1;
-      chainRows_.push_back(k);
-      if (!dyn(k, inner)) break;
-      const int next = across(k, inner);
-      if (next < 0 || seen[size_t(next)]) break;
-      chainShared_.push_back(inner);
-      inner = other(next, inner);
-      k = next;
-    }
-    const int length = static_cast<int>(chainRows_.size()) - first;
-    // One kind of row per chain (its blocks are 2 x 2 for revolute joints, 3 x 3 for welds); a
-    // mixed path is left to the row-by-row solve (split, its parts would share a body).
-    bool mixed = false;
-    for (int i = first; i < static_cast<int>(chainRows_.size()); ++i) {
-      mixed = mixed || jointRows_[size_t(chainRows_[size_t(i)])].type != jointRows_[size_t(chainRows_[size_t(first)])].type;
-    }
-    if (loop || length < 2 || mixed) {
-      chainRows_.resize(size_t(first));
-      chainShared_.resize(size_t(first));  // one entry per row of the chains kept
+  }
+  // partner[2k + side]: the row that continues row k across its end `side` (0: a, 1: b), or -1.
+  std::vector<int>& partner = chainPartner_;
+  partner.assign(size_t(2 * n), -1);
+  auto side = [&](int k, int body) { return body == jointRows_[size_t(k)].a ? 0 : 1; };
+  auto link = [&](int k1, int k2, int body) {
+    partner[size_t(2 * k1 + side(k1, body))] = k2;
+    partner[size_t(2 * k2 + side(k2, body))] = k1;
+  };
+  struct Pairing {
+    Real dot;
+    int i, j;
+  };
+  std::vector<Pairing> pairings;
+  for (int body = 0; body < bodyCount; ++body) {
+    const int b0 = start[size_t(body)], d = start[size_t(body) + 1] - b0;
+    if (d < 2) continue;
+    const int* rows = adj.data() + b0;
+    if (d == 2) {
+      if (jointRows_[size_t(rows[0])].type == jointRows_[size_t(rows[1])].type) link(rows[0], rows[1], body);
       continue;
     }
-    chainShared_.push_back(-1);  // the last row shares nothing onwards
-    chainStart_.push_back(static_cast<int>(chainRows_.size()));
-    for (int i = first; i < static_cast<int>(chainRows_.size()); ++i) jointRows_[size_t(chainRows_[size_t(i)])].inChain = true;
+    // The direction from this body to each row's other body.
+    auto dir = [&](int k) {
+      const SoftJointRow& r = jointRows_[size_t(k)];
+      const Vec2 v = body == r.a ? r.deltaCenter : -r.deltaCenter;
+      const Real len = Length(v);
+      return len > 0 ? (Real(1) / len) * v : Vec2{};
+    };
+    pairings.clear();
+    for (int i = 0; i < d; ++i) {
+      for (int j = i + 1; j < d; ++j) {
+        if (jointRows_[size_t(rows[i])].type != jointRows_[size_t(rows[j])].type) continue;
+        const Real dot = Dot(dir(rows[i]), dir(rows[j]));
+        if (dot < Real(-0.5)) pairings.push_back({dot, i, j});
+      }
+    }
+    std::sort(pairings.begin(), pairings.end(), [](const Pairing& x, const Pairing& y) {
+      return x.dot != y.dot ? x.dot < y.dot : (x.i != y.i ? x.i < y.i : x.j < y.j);
+    });
+    for (const Pairing& p : pairings) {
+      const int ki = rows[p.i], kj = rows[p.j];
+      if (partner[size_t(2 * ki + side(ki, body))] < 0 && partner[size_t(2 * kj + side(kj, body))] < 0) link(ki, kj, body);
+    }
+  }
+  auto across = [&](int k, int body) { return dyn(k, body) ? partner[size_t(2 * k + side(k, body))] : -1; };
+  // The paths, found in row order; then coloured.
+  std::vector<int>& mark = chainBodyMark_;  // per body: the last path that holds it
+  mark.assign(size_t(bodyCount), -1);
+  std::vector<uint8_t>& seen = chainSeen_;
+  seen.assign(size_t(n), 0);
+  std::vector<int>& rows = chainPathRows_;
+  std::vector<int>& shared = chainPathShared_;
+  std::vector<int>& pathStart = chainPathStart_;
+  rows.clear();
+  shared.clear();
+  pathStart.assign(1, 0);
+  for (int k0 = 0; k0 < n; ++k0) {
+    while (chainRow(k0) && !seen[size_t(k0)]) {
+      // Back to an end through bodyA's side (round a loop at most once).
+      int cur = k0, via = jointRows_[size_t(k0)].a;
+      for (int guard = 0; guard < n; ++guard) {
+        const int prev = across(cur, via);
+        if (prev < 0 || prev == k0 || seen[size_t(prev)]) break;
+        via = other(prev, via);
+        cur = prev;
+      }
+      // From there, forwards, while the next row brings no body the path already holds.
+      const int id = static_cast<int>(pathStart.size()) - 1;
+      const int first = static_cast<int>(rows.size());
+      if (dyn(cur, via)) mark[size_t(via)] = id;
+      int k = cur, inner = other(k, via);
+      while (true) {
+        seen[size_t(k)] = 1;
+        rows.push_back(k);
+        if (dyn(k, inner)) mark[size_t(inner)] = id;
+        const int next = across(k, inner);
+        if (next < 0 || seen[size_t(next)]) break;
+        const int far = other(next, inner);
+        if (dyn(next, far) && mark[size_t(far)] == id) break;
+        shared.push_back(inner);
+        inner = far;
+        k = next;
+      }
+      shared.push_back(-1);
+      if (static_cast<int>(rows.size()) - first < 2) {  // one row: the row-by-row solve's
+        rows.resize(size_t(first));
+        shared.resize(size_t(first));
+      } else {
+        pathStart.push_back(static_cast<int>(rows.size()));
+      }
+    }
+  }
+  // Colours: no two paths of one colour share a dynamic body (greedy, in path order). A path that
+  // finds no free colour is left to the row-by-row solve.
+  const int paths = static_cast<int>(pathStart.size()) - 1;
+  std::vector<uint64_t>& used = chainBodyColors_;
+  used.assign(size_t(bodyCount), 0);
+  std::vector<int>& colorOf = chainPathColor_;
+  colorOf.assign(size_t(paths), -1);
+  auto eachBody = [&](int p, auto&& fn) {
+    for (int q = pathStart[size_t(p)]; q < pathStart[size_t(p) + 1]; ++q) {
+      const SoftJointRow& r = jointRows_[size_t(rows[size_t(q)])];
+      if (r.dynA) fn(r.a);
+      if (r.dynB) fn(r.b);
+    }
+  };
+  chainColorStart_.assign(kChainColors + 1, 0);
+  for (int p = 0; p < paths; ++p) {
+    uint64_t taken = 0;
+    eachBody(p, [&](int body) { taken |= used[size_t(body)]; });
+    if (taken == ~uint64_t(0)) continue;
+    const int color = std::countr_one(taken);
+    colorOf[size_t(p)] = color;
+    eachBody(p, [&](int body) { used[size_t(body)] |= uint64_t(1) << color; });
+    ++chainColorStart_[size_t(color) + 1];
+  }
+  for (int c = 0; c < kChainColors; ++c) chainColorStart_[size_t(c) + 1] += chainColorStart_[size_t(c)];
+  // The kept paths, colour by colour, as the chains.
+  chainStart_.assign(1, 0);
+  chainRows_.clear();
+  chainShared_.clear();
+  for (int c = 0; c < kChainColors; ++c) {
+    if (chainColorStart_[size_t(c) + 1] == chainColorStart_[size_t(c)]) continue;
+    for (int p = 0; p < paths; ++p) {
+      if (colorOf[size_t(p)] != c) continue;
+      for (int q = pathStart[size_t(p)]; q < pathStart[size_t(p) + 1]; ++q) {
+        chainRows_.push_back(rows[size_t(q)]);
+        chainShared_.push_back(shared[size_t(q)]);
+        jointRows_[size_t(rows[size_t(q)])].inChain = true;
+      }
+      chainStart_.push_back(static_cast<int>(chainRows_.size()));
+    }
   }
   chainSlots_.resize(chainRows_.size());
 }
@@ -338,13 +414,34 @@ void Coupling(Vec2 r1, Vec2 r2, Real m, Real i, Real out[N * N]) {
 
 }  // namespace
 
+// The chains' rows' data, once a step, into their slots (a pass then reads the slots alone).
+void SoftStepSolver::LoadChains(StageRunner& run) {
+  if (ChainCount() <= 0) return;
+  run.For(Stage::kSolve, ChainCount(), std::max(1, run.MinHeavyItems() / 64), [&](int begin, int end, int) {
+    for (int q = chainStart_[size_t(begin)]; q < chainStart_[size_t(end)]; ++q) {
+      const SoftJointRow& r = jointRows_[size_t(chainRows_[size_t(q)])];
+      ChainSlot& slot = chainSlots_[size_t(q)];
+      slot.row = chainRows_[size_t(q)];
+      slot.a = r.a, slot.b = r.b;
+      slot.dynA = r.dynA, slot.dynB = r.dynB;
+      slot.mA = r.dynA ? r.mA : 0, slot.iA = r.dynA ? r.iA : 0;
+      slot.mB = r.dynB ? r.mB : 0, slot.iB = r.dynB ? r.iB : 0;
+      slot.frameA = r.frameA, slot.frameB = r.frameB;
+      slot.deltaCenter = r.deltaCenter;
+      slot.deltaAngle = r.deltaAngle;
+    }
+  });
+}
+
 // One chain's rows solved together: the block-tridiagonal system J W J^T x = -(J v + bias) of its
 // rows (N x N blocks: a revolute joint's point, 2; a weld's point and angle, 3; row k and k + 1
-// coupled through the body they share) by block elimination along the chain (the Thomas
-// algorithm), O(rows). Then each row's impulse, scaled by the softness as the row-by-row solve
-// scales it, is accumulated and applied.
+// coupled through the body they share), at the bodies' present anchors and velocities, by block
+// elimination along the chain (the Thomas algorithm), O(rows): one forward sweep builds each
+// row's block and right-hand side and eliminates the row before; the backward sweep finds each
+// row's impulse, softened as the row-by-row solve softens it, and applies it. The matrix is built
+// afresh in every pass: with last pass's (or the step's) anchors a 1000:1 chain blows up.
 void SoftStepSolver::SolveChain(int chain, bool useBias) {
-  if (jointRows_[size_t(chainRows_[size_t(chainStart_[size_t(chain)])])].type == JointType::kWeld) {
+  if (jointRows_[size_t(chainSlots_[size_t(chainStart_[size_t(chain)])].row)].type == JointType::kWeld) {
     SolveChainOf<3>(chain, useBias);
   } else {
     SolveChainOf<2>(chain, useBias);
@@ -356,77 +453,67 @@ void SoftStepSolver::SolveChainOf(int chain, bool useBias) {
   SolverBody* s = states_.data();
   const Softness rigid = jointSoft_;
   const int begin = chainStart_[size_t(chain)], end = chainStart_[size_t(chain) + 1];
-  // The rows' anchors and right-hand sides.
+  // Row q's arm on `body`, its sign (+1 if it is the row's bodyB), the body's inverse mass and
+  // inertia.
+  auto onBody = [](const ChainSlot& slot, int body, Vec2& arm, Real& sign, Real& m, Real& i) {
+    if (body == slot.b) {
+      arm = slot.rB, sign = 1, m = slot.mB, i = slot.iB;
+    } else {
+      arm = slot.rA, sign = -1, m = slot.mA, i = slot.iA;
+    }
+  };
+  Real t[N], diag[N * N], blockB[N * N], l[N * N];
   for (int q = begin; q < end; ++q) {
-    const SoftJointRow& r = jointRows_[size_t(chainRows_[size_t(q)])];
     ChainSlot& slot = chainSlots_[size_t(q)];
-    const SolverBody& A = s[r.a];
-    const SolverBody& B = s[r.b];
-    slot.rA = Rotate(A.dq, r.frameA);
-    slot.rB = Rotate(B.dq, r.frameB);
+    const SolverBody& A = s[slot.a];
+    const SolverBody& B = s[slot.b];
+    slot.rA = Rotate(A.dq, slot.frameA);
+    slot.rB = Rotate(B.dq, slot.frameB);
     const Vec2 rA = slot.rA, rB = slot.rB;
     const Vec2 cdot = (B.v + Cross(B.w, rB)) - (A.v + Cross(A.w, rA));
-    const Vec2 bias = useBias ? rigid.biasRate * ((B.dp - A.dp) + (rB - rA) + r.deltaCenter) : Vec2{};
+    const Vec2 bias = useBias ? rigid.biasRate * ((B.dp - A.dp) + (rB - rA) + slot.deltaCenter) : Vec2{};
     slot.rhs[0] = -(cdot.x + bias.x);
     slot.rhs[1] = -(cdot.y + bias.y);
     if constexpr (N == 3) {
-      const Real angleBias = useBias ? rigid.biasRate * Wrap(r.deltaAngle + RelativeAngle(A.dq, B.dq)) : Real(0);
+      const Real angleBias = useBias ? rigid.biasRate * Wrap(slot.deltaAngle + RelativeAngle(A.dq, B.dq)) : Real(0);
       slot.rhs[2] = -((B.w - A.w) + angleBias);
     }
-  }
-  // Row q's arm on body `body`, its sign (+1 if it is the row's bodyB), the body's inverse mass
-  // and inertia.
-  auto onBody = [&](int q, int body, Vec2& arm, Real& sign, Real& m, Real& i) {
-    const SoftJointRow& r = jointRows_[size_t(chainRows_[size_t(q)])];
-    const ChainSlot& slot = chainSlots_[size_t(q)];
-    if (body == r.b) {
-      arm = slot.rB, sign = 1, m = r.mB, i = r.iB;
-    } else {
-      arm = slot.rA, sign = -1, m = r.mA, i = r.iA;
-    }
-  };
-  for (int q = begin; q < end - 1; ++q) {
-    const int body = chainShared_[size_t(q)];
-    Vec2 r1, r2;
-    Real s1, s2, m, i;
-    onBody(q, body, r1, s1, m, i);
-    onBody(q + 1, body, r2, s2, m, i);
-    Real* c = chainSlots_[size_t(q)].c;
-    Coupling<N>(r1, r2, m, i, c);
-    for (int k = 0; k < N * N; ++k) c[k] *= s1 * s2;
-  }
-  // Forward elimination: D_q = K_q - C_{q-1}^T D_{q-1}^-1 C_{q-1}, y_q = rhs_q - C_{q-1}^T D_{q-1}^-1 y_{q-1}.
-  Real diag[N * N], l[N * N], t[N];
-  for (int q = begin; q < end; ++q) {
-    const SoftJointRow& r = jointRows_[size_t(chainRows_[size_t(q)])];
-    ChainSlot& slot = chainSlots_[size_t(q)];
-    Real blockB[N * N];
-    Coupling<N>(slot.rA, slot.rA, r.mA, r.iA, diag);
-    Coupling<N>(slot.rB, slot.rB, r.mB, r.iB, blockB);
+    Coupling<N>(rA, rA, slot.mA, slot.iA, diag);
+    Coupling<N>(rB, rB, slot.mB, slot.iB, blockB);
     for (int k = 0; k < N * N; ++k) diag[k] += blockB[k];
     if (q > begin) {
-      const ChainSlot& prev = chainSlots_[size_t(q) - 1];
-      // L = C^T D^-1 (C: the coupling of row q - 1 with row q).
-      for (int i = 0; i < N; ++i) {
+      // C: row q - 1's coupling with row q through their shared body; D_q = K_q - L C and
+      // y_q = rhs_q - L y_{q-1}, with L = C^T D_{q-1}^-1.
+      ChainSlot& prev = chainSlots_[size_t(q) - 1];
+      const int body = chainShared_[size_t(q) - 1];
+      Vec2 r1, r2;
+      Real s1, s2, m, i;
+      onBody(prev, body, r1, s1, m, i);
+      onBody(slot, body, r2, s2, m, i);
+      Real* c = prev.c;
+      Coupling<N>(r1, r2, m, i, c);
+      for (int k = 0; k < N * N; ++k) c[k] *= s1 * s2;
+      for (int i2 = 0; i2 < N; ++i2) {
         for (int j = 0; j < N; ++j) {
           Real sum = 0;
-          for (int k = 0; k < N; ++k) sum += prev.c[k * N + i] * prev.inv[k * N + j];
-          l[i * N + j] = sum;
+          for (int k = 0; k < N; ++k) sum += c[k * N + i2] * prev.inv[k * N + j];
+          l[i2 * N + j] = sum;
         }
       }
-      for (int i = 0; i < N; ++i) {
+      for (int i2 = 0; i2 < N; ++i2) {
         for (int j = 0; j < N; ++j) {
           Real sum = 0;
-          for (int k = 0; k < N; ++k) sum += l[i * N + k] * prev.c[k * N + j];
-          diag[i * N + j] -= sum;
+          for (int k = 0; k < N; ++k) sum += l[i2 * N + k] * c[k * N + j];
+          diag[i2 * N + j] -= sum;
         }
       }
       MulVec<N>(l, prev.rhs, t);
-      for (int i = 0; i < N; ++i) slot.rhs[i] -= t[i];
+      for (int k = 0; k < N; ++k) slot.rhs[k] -= t[k];
     }
     Invert<N>(diag, slot.inv);
   }
-  // Back substitution: x_q = D_q^-1 (y_q - C_q x_{q+1}).
+  // Back substitution: x_q = D_q^-1 (y_q - C_q x_{q+1}); each impulse applied as it is found (the
+  // right-hand sides were all taken above).
   for (int q = end - 1; q >= begin; --q) {
     ChainSlot& slot = chainSlots_[size_t(q)];
     Real y[N];
@@ -436,11 +523,7 @@ void SoftStepSolver::SolveChainOf(int chain, bool useBias) {
       for (int i = 0; i < N; ++i) y[i] -= t[i];
     }
     MulVec<N>(slot.inv, y, slot.x);
-  }
-  // The impulses, softened as the row-by-row solve softens them, accumulated and applied.
-  for (int q = begin; q < end; ++q) {
-    SoftJointRow& r = jointRows_[size_t(chainRows_[size_t(q)])];
-    const ChainSlot& slot = chainSlots_[size_t(q)];
+    SoftJointRow& r = jointRows_[size_t(slot.row)];
     const Vec2 x{slot.x[0], slot.x[1]};
     const Vec2 P = useBias ? rigid.massScale * x - rigid.impulseScale * r.linearImpulse : x;
     r.linearImpulse = r.linearImpulse + P;
@@ -449,15 +532,15 @@ void SoftStepSolver::SolveChainOf(int chain, bool useBias) {
       L = useBias ? rigid.massScale * slot.x[2] - rigid.impulseScale * r.angularImpulse : slot.x[2];
       r.angularImpulse += L;
     }
-    SolverBody& A = s[r.a];
-    SolverBody& B = s[r.b];
-    if (r.dynA) {
-      A.v = A.v - r.mA * P;
-      A.w -= r.iA * (Cross(slot.rA, P) + L);
+    SolverBody& A = s[slot.a];
+    SolverBody& B = s[slot.b];
+    if (slot.dynA) {
+      A.v = A.v - slot.mA * P;
+      A.w -= slot.iA * (Cross(slot.rA, P) + L);
     }
-    if (r.dynB) {
-      B.v = B.v + r.mB * P;
-      B.w += r.iB * (Cross(slot.rB, P) + L);
+    if (slot.dynB) {
+      B.v = B.v + slot.mB * P;
+      B.w += slot.iB * (Cross(slot.rB, P) + L);
     }
   }
 }
@@ -609,7 +692,7 @@ void SoftStepSolver::SolveJoints(int begin, int end, bool useBias) {
     };
     switch (r.type) {
       case JointType::kRevolute: {
-        if (!r.inChain) point(rigid, useBias);
+        if (!r.inChain || !useBias) point(rigid, useBias);
         if (j.enableSpring && j.hertz > 0 && r.axialMass > 0) {
           const Real C = angle();
           const Real impulse = -r.spring.massScale * r.axialMass * (e.wB - e.wA + r.spring.biasRate * C) -
@@ -637,7 +720,7 @@ void SoftStepSolver::SolveJoints(int begin, int end, bool useBias) {
         break;
       }
       case JointType::kWeld: {
-        if (r.inChain) break;  // its chain's solve has its point and angle
+        if (r.inChain && useBias) break;  // its chain's solve has its point and angle
         if (r.axialMass > 0) {
           const bool spring = j.angularHertz > 0;
           const Softness& soft = spring ? r.angularSpring : rigid;

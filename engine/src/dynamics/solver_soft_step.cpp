@@ -213,7 +213,6 @@ void SoftStepSolver::SubStep(StepContext& ctx, const StepPlan& step, int sub, co
   // The rotation guard is per world step (ctx.dt): per sub-step it allowed n times the turn.
   IntegrateStatePositions(run, *ctx.bodies, def, step.h, ctx.dt);
   JointPass([this](int b, int e) { SolveJoints(b, e, false); });
-  ChainPass(false);
   const bool last = sub == step.n - 1;
   RelaxPasses<kRotation, kFriction>(run, def, simd, relaxFirstPrm, relaxPrm, step.lean && last);
   EndRegion(run);
