@@ -122,7 +122,7 @@ TEST_P(DeterministicScheme, SameHashForOneToFourThreads) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Scenes, DeterministicScheme,
-                         ::testing::Values("circle_stress", "polygon_stress", "pyramid", "joint_grid", "junkyard",
+                         ::testing::Values("circle_stress", "polygon_stress", "pyramid", "many_pyramids", "tumbler", "joint_grid", "junkyard",
                                            "smash", "compounds", "washer"));
 
 TEST(DeterministicSchemeTest, GrainDoesNotChangeTheResult) {
