@@ -322,7 +322,7 @@ TEST(Box2d3Scenes, WasherDrumTurnsTheBoxesInEveryEngineThatRunsIt) {
   EXPECT_EQ(big.bodies[0].extraShapes.size() + 1, 40u);  // the drum: 36 pieces and 4 fins
   EXPECT_EQ(MakeScene("washer", 8200).bodies.size(), 1u + 8100u);  // rounds down to a square
   for (const char* engine : {"quadrant", "box2d", "chipmunk"}) ExpectWasher(engine);
-  EXPECT_THROW(MakeAdapter("bullet")->Load(MakeWasher(400), 1), Unsupported);  // kinematic, compound
+  EXPECT_THROW(MakeAdapter("bullet")->Load(MakeWasher(400), 1), Unsupported);  // the kinematic drum
   EXPECT_THROW(MakeWasher(3), Error);
 }
 
