@@ -474,8 +474,8 @@ class BulletAdapter final : public Adapter {
 
   static void AddBody(const Scene& scene, const BodyDesc& desc, BulletWorld& w) {
     const Effects& fx = scene.effects;
-    // Static polygons are built around their own origin: they never rotate, and their density
-    // may be 0.
+    // Static bodies are built around their own origin: they never rotate, and their density may
+    // be 0.
     MassProperties mp;
     if (desc.dynamic) mp = ComputeMassProperties(desc);
     const Vec2 lc = desc.dynamic ? mp.localCenter : Vec2{};
