@@ -2,8 +2,11 @@
 // (0,0,1)) with the 2D convex collision algorithms registered, as Bullet's Planar2D example does.
 //
 // Everything is translated once in Load; Step is one stepSimulation call. Bullet keeps a body at
-// its centre of mass, so polygons whose centroid is off the scene's body origin are built around
-// the centroid and converted back to the origin on read-back.
+// its centre of mass, so shapes are built around the scene's centre of mass and positions are
+// converted back to the body origin on read-back. A compound body (or a capsule off its body's x
+// axis) is a btCompoundShape of per-shape children. Joints are btGeneric6DofSpring2Constraints
+// between frames at the anchor, their z rotation and x translation (the axis) limited, driven or
+// sprung as the joint says; distance joints are refused (no 6-dof frame holds a radius).
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -12,6 +15,7 @@
 #include <numbers>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <btBulletDynamicsCommon.h>
@@ -20,6 +24,7 @@
 #include <BulletCollision/CollisionShapes/btConvex2dShape.h>
 #include <BulletCollision/NarrowPhaseCollision/btGjkEpaPenetrationDepthSolver.h>
 #include <BulletCollision/NarrowPhaseCollision/btVoronoiSimplexSolver.h>
+#include <BulletDynamics/ConstraintSolver/btGeneric6DofSpring2Constraint.h>
 #include <LinearMath/btPoolAllocator.h>
 
 #include "adapter.h"
@@ -108,7 +113,20 @@ struct BulletWorld {
   std::vector<std::unique_ptr<btCollisionShape>> shapes;
   bool filtered = false;  // some body has a non-default collision filter (AddBody)
   std::vector<std::unique_ptr<btRigidBody>> bodies;
+  /// The scene's joints, then each group's, in the order the groups were added.
+  std::vector<std::unique_ptr<btTypedConstraint>> constraints;
   std::unique_ptr<btDiscreteDynamicsWorld> world;
+
+  BulletWorld() = default;
+  BulletWorld(const BulletWorld&) = delete;
+  BulletWorld& operator=(const BulletWorld&) = delete;
+  // Constraints leave the world (which drops their references from the bodies) before anything
+  // is freed; the members then go in the order above.
+  ~BulletWorld() {
+    if (world) {
+      for (auto& c : constraints) world->removeConstraint(c.get());
+    }
+  }
 
   std::vector<Vec2> localCenters;  ///< body origin to centre of mass, body frame, per body
   std::vector<bool> dynamic;
@@ -139,6 +157,10 @@ class BulletAdapter final : public Adapter {
         "vertices moved inward by the 0.04 m hull margin so edges lie on the scene's edges "
         "(corners rounded by 0.04 m; smaller margin on polygons too small for it); "
         "mass and inertia from the scene's exact mass properties; "
+        "compound bodies (and capsules off the body's x axis): btCompoundShape of the shapes "
+        "about the scene's centre of mass, one friction and restitution per body; "
+        "joints: btGeneric6DofSpring2Constraint (revolute, prismatic, weld, wheel; limits, "
+        "motors, Box2D-style springs on the reduced mass or inertia, ERP 0.2), no distance joint; "
         "friction and restitution are multiplied (f1*f2, e1*e2); "
         "restitution threshold = scene's; iterations = scene's velocity iterations, "
         "no position iterations: Bullet's defaults (split impulse for penetration deeper than "
@@ -163,6 +185,7 @@ class BulletAdapter final : public Adapter {
     }
     BuildWorld(scene, *next);
     for (size_t i = 0; i < scene.bodies.size(); ++i) AddBody(scene, scene.bodies[i], *next);
+    for (const JointDesc& j : scene.joints) AddJoint(j, 0, *next);
     world_ = std::move(next);
     settings_ = scene;
     settings_.bodies.clear();
@@ -170,6 +193,7 @@ class BulletAdapter final : public Adapter {
     settings_.groupSamples.clear();
     settings_.driver = nullptr;
     sceneBodies_ = scene.bodies.size();
+    sceneJoints_ = scene.joints.size();
     groups_.clear();
   }
 
@@ -184,21 +208,30 @@ class BulletAdapter final : public Adapter {
     }
   }
 
-  // A group's bodies go at the end of the body vectors, which stay in the adapter's order; its
-  // shapes stay with the world until the next Load.
+  // A group's bodies and joints go at the end of the body and constraint vectors, which stay in
+  // the adapter's order; its shapes stay with the world until the next Load.
   void DoAddGroup(int group, const BodyGroup& desc) override {
-    for (const BodyDesc& b : desc.bodies) AddBody(settings_, b, *world_);
-    groups_.emplace(group, desc.bodies.size());
+    BulletWorld& w = *world_;
+    const size_t firstBody = w.bodies.size();
+    for (const BodyDesc& b : desc.bodies) AddBody(settings_, b, w);
+    for (const JointDesc& j : desc.joints) AddJoint(j, firstBody, w);
+    groups_.emplace(group, GroupSize{desc.bodies.size(), desc.joints.size()});
   }
 
+  // The group's constraints leave the world before its bodies (a body must not outlive in the
+  // world a constraint that refers to it, nor be freed while one does).
   void DoRemoveGroup(int group) override {
-    size_t first = sceneBodies_;
+    size_t first = sceneBodies_, firstJoint = sceneJoints_;
     for (const auto& [id, size] : groups_) {
       if (id == group) break;
-      first += size;
+      first += size.bodies;
+      firstJoint += size.joints;
     }
-    const size_t count = groups_.at(group);
+    const size_t count = groups_.at(group).bodies, joints = groups_.at(group).joints;
     BulletWorld& w = *world_;
+    for (size_t i = firstJoint; i < firstJoint + joints; ++i) w.world->removeConstraint(w.constraints[i].get());
+    w.constraints.erase(w.constraints.begin() + std::ptrdiff_t(firstJoint),
+                        w.constraints.begin() + std::ptrdiff_t(firstJoint + joints));
     for (size_t i = first; i < first + count; ++i) w.world->removeRigidBody(w.bodies[i].get());
     w.bodies.erase(w.bodies.begin() + std::ptrdiff_t(first), w.bodies.begin() + std::ptrdiff_t(first + count));
     w.localCenters.erase(w.localCenters.begin() + std::ptrdiff_t(first), w.localCenters.begin() + std::ptrdiff_t(first + count));
@@ -213,27 +246,27 @@ class BulletAdapter final : public Adapter {
     // step, not by a velocity; the scene API drives kinematic bodies by velocity (SetVelocity).
     for (const BodyDesc& b : bodies) {
       if (b.kinematic) throw Unsupported("bullet: kinematic bodies move by transform in Bullet, not by velocity");
-      // btCapsuleShapeX lies along the body's x axis, centred on its origin; anything else would
-      // need a compound shape, which the plane constraint (btConvex2dShape) cannot wrap.
-      if (b.shape == ShapeKind::kCapsule &&
-          (b.vertices.size() != 2 || b.vertices[0].y != 0 || b.vertices[1].y != 0 || b.vertices[0].x != -b.vertices[1].x)) {
-        throw Unsupported("bullet: a capsule must lie along its body's x axis, centred on the origin (btCapsuleShapeX)");
-      }
       // Bullet's 2D mode wraps convex shapes of some thickness (btConvex2dShape); a line has none,
       // and a thin box would be another shape, caught on its corners.
       if (b.shape == ShapeKind::kSegment || b.shape == ShapeKind::kChainSegment) {
         throw Unsupported("bullet: no segment or chain shape in Bullet's 2D mode (a thin box would be another shape)");
       }
-      // Several shapes on one body would be a btCompoundShape of btConvex2dShape children, its
-      // principal axes moved to the scene's centre of mass: not written (nor checked against the
-      // other engines) yet, so refused rather than loaded as something else.
-      if (!b.extraShapes.empty()) {
-        throw Unsupported("bullet: the adapter does not load compound bodies yet (a btCompoundShape of "
-                          "btConvex2dShape children is not mapped)");
+      // Bullet's friction and restitution belong to the body, not to each child shape.
+      for (const ShapeDesc& extra : b.extraShapes) {
+        if (extra.shape == ShapeKind::kSegment || extra.shape == ShapeKind::kChainSegment) {
+          throw Unsupported("bullet: no segment or chain shape in Bullet's 2D mode (a thin box would be another shape)");
+        }
+        if (extra.friction != b.friction || extra.restitution != b.restitution) {
+          throw Unsupported("bullet: a compound body's shapes must share friction and restitution (Bullet's are per body)");
+        }
       }
     }
-    if (!joints.empty()) {
-      throw Unsupported("bullet: the adapter does not load joints (Bullet's constraints are not mapped to the plane yet)");
+    for (const JointDesc& j : joints) {
+      // A rod keeps anchor B on a circle about anchor A; a 6-dof frame fixed in bodyA limits
+      // translations along its own axes, not a radius, and btPoint2PointConstraint holds length 0.
+      if (j.kind == JointKind::kDistance) {
+        throw Unsupported("bullet: no distance joint (Bullet's constraints hold no length between two anchors)");
+      }
     }
   }
 
@@ -292,6 +325,13 @@ class BulletAdapter final : public Adapter {
     b.setLinearVelocity(btVector3(velocity.x, velocity.y, 0));
     b.setAngularVelocity(btVector3(0, 0, world_->rotation ? angularVelocity : Real(0)));
     b.activate(true);
+  }
+
+  /// A body's mass and z inertia about its centre of mass as Bullet holds them; for tests.
+  std::pair<double, double> MassOf(int body) const {
+    const btRigidBody& b = *world_->bodies.at(size_t(body));
+    if (b.getInvMass() == 0) return {0.0, 0.0};
+    return {1.0 / double(b.getInvMass()), 1.0 / double(b.getInvInertiaDiagLocal().z())};
   }
 
   /// Largest departure from the plane over all bodies (z position and velocity, x and y of
@@ -353,22 +393,35 @@ class BulletAdapter final : public Adapter {
     w.dynamic.reserve(scene.bodies.size());
   }
 
-  // Returns the shape (owned by w.shapes) and its inner radius about the centre of mass.
-  static btCollisionShape* MakeShape(const BodyDesc& desc, Vec2 localCenter, BulletWorld& w,
-                                     Real& innerRadius) {
+  // One scene shape as a Bullet shape (owned by w.shapes) placed by `where` in the body's
+  // centre-of-mass frame (`localCenter`: body origin to centre of mass). innerRadius: the
+  // largest circle about the shape's own centre that it contains.
+  static btCollisionShape* MakeShape(const ShapeDesc& desc, Vec2 localCenter, BulletWorld& w,
+                                     btTransform& where, Real& innerRadius) {
+    where.setIdentity();
     if (desc.shape == ShapeKind::kCircle) {
       innerRadius = desc.radius;
+      where.setOrigin(btVector3(desc.center.x - localCenter.x, desc.center.y - localCenter.y, 0));
       w.shapes.push_back(std::make_unique<btSphereShape>(desc.radius));
       return w.shapes.back().get();
     }
-    if (desc.shape == ShapeKind::kCapsule) {  // along x, centred (DoLoad checked)
+    if (desc.shape == ShapeKind::kCapsule) {  // btCapsuleShapeX turned onto the centres' line
       innerRadius = desc.radius;
-      w.shapes.push_back(std::make_unique<btCapsuleShapeX>(desc.radius, 2 * std::abs(desc.vertices[1].x)));
+      const Vec2 c1 = desc.vertices[0], c2 = desc.vertices[1], mid = Real(0.5) * (c1 + c2);
+      const Vec2 d = c2 - c1;
+      where.setOrigin(btVector3(mid.x - localCenter.x, mid.y - localCenter.y, 0));
+      where.setRotation(btQuaternion(btVector3(0, 0, 1), btScalar(std::atan2(d.y, d.x))));
+      w.shapes.push_back(std::make_unique<btCapsuleShapeX>(desc.radius, Length(d)));
       return w.shapes.back().get();
     }
     std::vector<Vec2> centred(desc.vertices.size());
     for (size_t i = 0; i < centred.size(); ++i) centred[i] = desc.vertices[i] - localCenter;
-    innerRadius = InnerRadius(centred);
+    Vec2 mean{};
+    for (Vec2 v : desc.vertices) mean = mean + v;
+    mean = (Real(1) / Real(desc.vertices.size())) * mean;
+    std::vector<Vec2> aroundMean(desc.vertices.size());
+    for (size_t i = 0; i < centred.size(); ++i) aroundMean[i] = desc.vertices[i] - mean;
+    innerRadius = InnerRadius(aroundMean);
 
     // Bullet adds the margin outside the hull: shrink the hull by it so the rounded result has
     // the scene's edges. Halve the margin for polygons too small to shrink by the full one.
@@ -392,15 +445,42 @@ class BulletAdapter final : public Adapter {
     return w.shapes.back().get();
   }
 
+  // The body's collision shape: its one shape, or a btCompoundShape of all of them (also for a
+  // lone capsule off the body's x axis, which needs a child transform). innerRadius: the
+  // smallest of the shapes' (the swept sphere of continuous collision).
+  static btCollisionShape* MakeBodyShape(const BodyDesc& desc, Vec2 localCenter, BulletWorld& w,
+                                         Real& innerRadius) {
+    const std::vector<ShapeDesc> shapes = ShapesOf(desc);
+    std::vector<std::pair<btCollisionShape*, btTransform>> parts;
+    innerRadius = std::numeric_limits<Real>::max();
+    for (const ShapeDesc& sd : shapes) {
+      btTransform where;
+      Real r = 0;
+      btCollisionShape* shape = MakeShape(sd, localCenter, w, where, r);
+      parts.emplace_back(shape, where);
+      innerRadius = std::min(innerRadius, r);
+    }
+    const btTransform& only = parts[0].second;
+    if (parts.size() == 1 && only.getBasis() == btMatrix3x3::getIdentity() &&
+        only.getOrigin().fuzzyZero()) {
+      return parts[0].first;
+    }
+    auto compound = std::make_unique<btCompoundShape>(/*enableDynamicAabbTree=*/parts.size() > 8,
+                                                      int(parts.size()));
+    for (const auto& [shape, where] : parts) compound->addChildShape(where, shape);
+    w.shapes.push_back(std::move(compound));
+    return w.shapes.back().get();
+  }
+
   static void AddBody(const Scene& scene, const BodyDesc& desc, BulletWorld& w) {
     const Effects& fx = scene.effects;
-    // Static polygons are built around their own origin: they never rotate, and their density
-    // may be 0.
+    // Static bodies are built around their own origin: they never rotate, and their density may
+    // be 0.
     MassProperties mp;
     if (desc.dynamic) mp = ComputeMassProperties(desc);
-    const Vec2 lc = desc.dynamic && desc.shape == ShapeKind::kPolygon ? mp.localCenter : Vec2{};
+    const Vec2 lc = desc.dynamic ? mp.localCenter : Vec2{};
     Real innerRadius = 0;
-    btCollisionShape* shape = MakeShape(desc, lc, w, innerRadius);
+    btCollisionShape* shape = MakeBodyShape(desc, lc, w, innerRadius);
 
     const btScalar mass = desc.dynamic ? btScalar(mp.mass) : btScalar(0);
     // Bullet's own inertia is 2/5 m r^2 for a sphere and a bounding-box guess for a hull; the
@@ -448,10 +528,124 @@ class BulletAdapter final : public Adapter {
     w.dynamic.push_back(desc.dynamic);
   }
 
+  // Box2D's soft-constraint stiffness and damping for a spring of `hertz` and `ratio` on the
+  // pair's reduced mass (or inertia): k = m w^2, c = 2 m ratio w, as b2LinearStiffness.
+  static void Spring(double reduced, Real hertz, Real ratio, btScalar& k, btScalar& c) {
+    const double omega = 2 * std::numbers::pi * double(hertz);
+    k = btScalar(reduced * omega * omega);
+    c = btScalar(2 * reduced * double(ratio) * omega);
+  }
+  static double Reduced(double a, double b) {
+    if (a > 0 && b > 0) return a * b / (a + b);
+    return a > 0 ? a : b;
+  }
+
+  // One scene joint (body indices offset by `firstBody`) as a btGeneric6DofSpring2Constraint:
+  // frame A on bodyA and frame B on bodyB at the anchor, both with x along the joint's axis (the
+  // world x for revolute and weld) and frame B turned back by the reference angle, so that the
+  // constraint's z angle is the scene's joint angle and its x translation the travel along the
+  // axis. Locked: lower = upper = 0; free: lower > upper (Bullet's convention). Bullet's angle
+  // and velocities are bodyA's relative to bodyB (its getAngle(2) is -0.3 for bodyB turned by
+  // +0.3): angle limits and motor speeds go in negated and swapped.
+  static void AddJoint(const JointDesc& d, size_t firstBody, BulletWorld& w) {
+    btRigidBody& a = *w.bodies[firstBody + size_t(d.bodyA)];
+    btRigidBody& b = *w.bodies[firstBody + size_t(d.bodyB)];
+    const bool slides = d.kind == JointKind::kPrismatic || d.kind == JointKind::kWheel;
+    const Vec2 axis = slides ? Normalize(d.axis) : Vec2{1, 0};
+    const double phi = std::atan2(double(axis.y), double(axis.x));
+    auto angleOf = [](const btRigidBody& body) {
+      const btQuaternion q = body.getCenterOfMassTransform().getRotation();
+      return 2.0 * std::atan2(double(q.z()), double(q.w()));
+    };
+    const double angleA = angleOf(a), angleB = angleOf(b);
+    const btVector3 anchor(d.anchor.x, d.anchor.y, 0);
+    btTransform frameA(btQuaternion(btVector3(0, 0, 1), btScalar(phi - angleA)),
+                       a.getCenterOfMassTransform().inverse() * anchor);
+    btTransform frameB(btQuaternion(btVector3(0, 0, 1), btScalar(phi - angleB - double(d.referenceAngle))),
+                       b.getCenterOfMassTransform().inverse() * anchor);
+    auto c = std::make_unique<btGeneric6DofSpring2Constraint>(a, b, frameA, frameB, RO_XYZ);
+    btGeneric6DofSpring2Constraint& j = *c;
+    for (int i = 0; i < 6; ++i) j.setLimit(i, 0, 0);  // all locked, then freed below
+    const double massA = a.getInvMass() > 0 ? 1.0 / double(a.getInvMass()) : 0.0;
+    const double massB = b.getInvMass() > 0 ? 1.0 / double(b.getInvMass()) : 0.0;
+    const double inertiaA = a.getInvMass() > 0 ? 1.0 / double(a.getInvInertiaDiagLocal().z()) : 0.0;
+    const double inertiaB = b.getInvMass() > 0 ? 1.0 / double(b.getInvInertiaDiagLocal().z()) : 0.0;
+    btScalar k = 0, damping = 0;
+    // Springs get the scene's stiffness and damping as given (limitIfNeeded = false): Bullet's
+    // own cap would soften a 5 Hz ragdoll spring at 60 Hz.
+    auto spring = [&](int dof, double reduced, Real hertz, Real ratio) {
+      if (hertz <= 0) return;
+      Spring(reduced, hertz, ratio, k, damping);
+      j.enableSpring(dof, true);
+      j.setStiffness(dof, k, false);
+      j.setDamping(dof, damping, false);
+      j.setEquilibriumPoint(dof, 0);
+    };
+    constexpr int kSlide = 0, kTurn = 5;
+    switch (d.kind) {
+      case JointKind::kRevolute:
+        if (d.enableLimit) {
+          j.setLimit(kTurn, -d.upperAngle, -d.lowerAngle);
+        } else {
+          j.setLimit(kTurn, 1, -1);
+        }
+        if (d.enableMotor) {
+          j.enableMotor(kTurn, true);
+          j.setTargetVelocity(kTurn, -d.motorSpeed);
+          j.setMaxMotorForce(kTurn, d.maxMotorTorque);
+        }
+        if (d.enableSpring) spring(kTurn, Reduced(inertiaA, inertiaB), d.hertz, d.dampingRatio);
+        break;
+      case JointKind::kPrismatic:
+      case JointKind::kWheel:
+        if (d.enableLimit) {
+          j.setLimit(kSlide, d.lowerTranslation, d.upperTranslation);
+        } else {
+          j.setLimit(kSlide, 1, -1);
+        }
+        if (d.kind == JointKind::kPrismatic) {
+          if (d.enableMotor) {
+            j.enableMotor(kSlide, true);
+            j.setTargetVelocity(kSlide, -d.motorSpeed);
+            j.setMaxMotorForce(kSlide, d.maxMotorForce);
+          }
+        } else {
+          j.setLimit(kTurn, 1, -1);  // the wheel turns freely, or by its motor
+          if (d.enableMotor) {
+            j.enableMotor(kTurn, true);
+            j.setTargetVelocity(kTurn, -d.motorSpeed);
+            j.setMaxMotorForce(kTurn, d.maxMotorTorque);
+          }
+          if (d.enableSpring) spring(kSlide, Reduced(massA, massB), d.hertz, d.dampingRatio);
+        }
+        break;
+      case JointKind::kWeld:
+        if (d.hertz > 0) {
+          for (int dof : {0, 1}) {
+            j.setLimit(dof, 1, -1);
+            spring(dof, Reduced(massA, massB), d.hertz, d.dampingRatio);
+          }
+        }
+        if (d.angularHertz > 0) {
+          j.setLimit(kTurn, 1, -1);
+          spring(kTurn, Reduced(inertiaA, inertiaB), d.angularHertz, d.angularDampingRatio);
+        }
+        break;
+      case JointKind::kDistance:  // refused by Refuse
+        throw std::logic_error("bullet: distance joint reached AddJoint");
+    }
+    w.world->addConstraint(c.get(), /*disableCollisionsBetweenLinkedBodies=*/!d.collideConnected);
+    w.constraints.push_back(std::move(c));
+  }
+
   std::unique_ptr<BulletWorld> world_;
   Scene settings_;                 // the loaded scene's settings, for the groups' bodies
   size_t sceneBodies_ = 0;
-  std::map<int, size_t> groups_;   // live groups by id: their body counts
+  size_t sceneJoints_ = 0;
+  struct GroupSize {
+    size_t bodies = 0, joints = 0;
+  };
+  std::map<int, GroupSize> groups_;  // live groups by id: their body and joint counts
 };
 
 }  // namespace
@@ -464,6 +658,15 @@ double BulletOutOfPlane(const Adapter& adapter) {
   const auto* bullet = dynamic_cast<const BulletAdapter*>(&adapter);
   if (!bullet) throw Error("BulletOutOfPlane: not a Bullet adapter");
   return bullet->OutOfPlane();
+}
+
+/// Test hook, as BulletOutOfPlane: body `body`'s mass (kg) and z inertia about its centre of
+/// mass (kg m^2) as given to Bullet; (0, 0) for a static body.
+std::pair<double, double> BulletMassOf(const Adapter& adapter, int body) {
+  const auto* bullet = dynamic_cast<const BulletAdapter*>(&adapter);
+  if (!bullet) throw Error("BulletMassOf: not a Bullet adapter");
+  if (body < 0 || body >= bullet->BodyCount()) throw Error("BulletMassOf: body index out of range");
+  return bullet->MassOf(body);
 }
 
 }  // namespace quadrant::scene
