@@ -19,6 +19,7 @@
 #include <type_traits>
 
 #include "collision/broad_phase.h"
+#include "collision/contact_sort.h"
 #include "dynamics/jacobi_solve.h"
 #include "quadrant/bit_hash.h"
 #include "quadrant/task_system.h"
@@ -172,7 +173,16 @@ struct DistributedWorld::Impl {
   std::vector<std::vector<int>> receivedShadows;  // per neighbour: local indices, in order
   std::vector<std::vector<char>> out, in;
   std::vector<CandidatePair> pairs, ownPairs;
+  WorkerLists<Contact> workerContacts;
+  ContactSorter sorter;
   std::vector<Contact> contacts;
+  std::vector<AABB> ownedBoxes;              // owned index -> this step's broad-phase box
+  std::vector<int> leavingIndex;             // Migrate: owned indices that leave
+  std::vector<std::vector<uint32_t>> leavingIds;  // Migrate: per neighbour, the ids that go there
+  // `local` holds last step's bodies in the order this step needs: no body left or arrived, no
+  // tile changed owner, nothing loaded since. BuildLocal then only refreshes the shadows' rows
+  // (if the same shadows came) and every box.
+  bool layoutValid = false;
 
   int TileX(Real x) const {
     const double t = std::floor((double(x) - double(dist.bounds.lower.x)) / double(tileW));
@@ -233,6 +243,10 @@ struct DistributedWorld::Impl {
   static void AppendRecord(Bodies& b, const Record& r) {
     const int i = b.Count();
     b.ForEachArray([](auto& v) { v.emplace_back(); });
+    SetRow(b, i, r);
+  }
+
+  static void SetRow(Bodies& b, int i, const Record& r) {
     b.type[i] = r.type;
     b.xf[i] = r.xf;
     b.center[i] = r.center;
@@ -365,6 +379,7 @@ void DistributedWorld::Impl::FindNeighbours() {
   sentShadows.assign(nb, {});
   receivedShadows.assign(nb, {});
   stats.neighbours = static_cast<int>(nb);
+  layoutValid = false;  // the neighbours' message slots start again
 }
 
 // Load balance: the tiles' costs of the last step (bodies owned plus their contacts: counts, not
@@ -495,6 +510,7 @@ void DistributedWorld::Load(std::span<const BodyDef> bodies) {
   w.statics.swap(statics);
   w.owned.swap(owned);
   w.cache.clear();
+  w.layoutValid = false;
   w.expectedCount = count;
   w.expectedChecksum = checksum;
   w.loaded = true;
@@ -525,8 +541,10 @@ void DistributedWorld::Step(Real dt) {
   // The halo: the farthest any moving body's box reaches from its centre this step, over all
   // ranks (a max is exact in any order), and whether any body left its neighbourhood of tiles.
   double local[2] = {0, 0};
-  for (const Record& r : w.owned) {
-    const AABB box = w.BoxOf(r, dt);
+  w.ownedBoxes.resize(w.owned.size());
+  for (size_t o = 0; o < w.owned.size(); ++o) {
+    const Record& r = w.owned[o];
+    const AABB box = w.ownedBoxes[o] = w.BoxOf(r, dt);
     const double reach = std::max({double(r.center.x - box.lower.x), double(box.upper.x - r.center.x),
                                    double(r.center.y - box.lower.y), double(box.upper.y - r.center.y)});
     local[0] = std::max(local[0], reach);
@@ -544,6 +562,11 @@ void DistributedWorld::Step(Real dt) {
   lap(w.stats.haloMs);
 
   w.Migrate(dt);
+  if (w.ownedBoxes.size() != w.owned.size() || !w.layoutValid) {
+    // Bodies left or arrived: this step's boxes for the new list.
+    w.ownedBoxes.resize(w.owned.size());
+    for (size_t o = 0; o < w.owned.size(); ++o) w.ownedBoxes[o] = w.BoxOf(w.owned[o], dt);
+  }
   w.stepStartCenters.clear();
   for (const Record& r : w.owned) w.stepStartCenters.push_back(r.center);
   lap(w.stats.migrateMs);
@@ -593,43 +616,59 @@ void DistributedWorld::Step(Real dt) {
 }
 
 // Round 1: bodies whose centre is now in another rank's tile go there, with the warm-start
-// entries of their contacts (the new owner computes those contacts next).
+// entries of their contacts (the new owner computes those contacts next). Most steps move no body
+// on most ranks: then `owned` is left as it is (no copy, no sort) and the local arrays of the last
+// step stay valid (BuildLocal). Arrivals are merged in by id, the order a full sort would give.
 void DistributedWorld::Impl::Migrate(Real) {
   ClearOut();
-  std::vector<std::vector<uint32_t>> leaving(neighbours.size());
-  std::vector<Record> staying;
-  staying.reserve(owned.size());
-  for (const Record& r : owned) {
-    const int owner = OwnerOf(r.center);
-    if (owner == rank) {
-      staying.push_back(r);
-      continue;
-    }
-    const int k = neighbourSlot[size_t(owner)];  // checked collectively in Step
-    leaving[size_t(k)].push_back(r.id);
+  leavingIndex.clear();
+  for (size_t o = 0; o < owned.size(); ++o) {
+    if (OwnerOf(owned[o].center) != rank) leavingIndex.push_back(static_cast<int>(o));
+  }
+  leavingIds.resize(neighbours.size());
+  for (auto& ids : leavingIds) ids.clear();
+  for (int o : leavingIndex) {
+    const Record& r = owned[size_t(o)];
+    const int k = neighbourSlot[size_t(OwnerOf(r.center))];  // checked collectively in Step
+    leavingIds[size_t(k)].push_back(r.id);
     Put(out[size_t(k)], r);
   }
   for (size_t k = 0; k < neighbours.size(); ++k) {
     // Entries touching a leaving body, after a separator count of bodies (records first).
-    std::vector<char> entries;
-    uint32_t n = 0;
-    const auto& ids = leaving[k];
-    for (const CacheEntry& e : cache) {
-      const uint32_t a = uint32_t(e.key >> 32), b = uint32_t(e.key);
-      if (std::binary_search(ids.begin(), ids.end(), a) || std::binary_search(ids.begin(), ids.end(), b)) {
-        Put(entries, e);
-        ++n;
-      }
-    }
+    const auto& ids = leavingIds[k];
     std::vector<char> message;
     Put(message, uint32_t(ids.size()));
     message.insert(message.end(), out[k].begin(), out[k].end());
-    Put(message, n);
-    message.insert(message.end(), entries.begin(), entries.end());
+    const size_t countAt = message.size();
+    Put(message, uint32_t(0));
+    uint32_t n = 0;
+    if (!ids.empty()) {
+      for (const CacheEntry& e : cache) {
+        const uint32_t a = uint32_t(e.key >> 32), b = uint32_t(e.key);
+        if (std::binary_search(ids.begin(), ids.end(), a) || std::binary_search(ids.begin(), ids.end(), b)) {
+          Put(message, e);
+          ++n;
+        }
+      }
+    }
+    std::memcpy(message.data() + countAt, &n, sizeof n);
     out[k].swap(message);
   }
   Round(1);
-  owned.swap(staying);
+  if (!leavingIndex.empty()) {
+    // Stable compaction: the staying bodies keep their id order.
+    size_t keep = 0, next = 0;
+    for (size_t o = 0; o < owned.size(); ++o) {
+      if (next < leavingIndex.size() && size_t(leavingIndex[next]) == o) {
+        ++next;
+        continue;
+      }
+      if (keep != o) owned[keep] = owned[o];
+      ++keep;
+    }
+    owned.resize(keep);
+  }
+  const size_t ownedBefore = owned.size(), cacheBefore = cache.size();
   for (size_t k = 0; k < neighbours.size(); ++k) {
     size_t at = 0;
     const uint32_t bodies = Take<uint32_t>(in[k], at);
@@ -638,24 +677,35 @@ void DistributedWorld::Impl::Migrate(Real) {
     const uint32_t entries = Take<uint32_t>(in[k], at);
     for (uint32_t j = 0; j < entries; ++j) cache.push_back(Take<CacheEntry>(in[k], at));
   }
-  std::sort(owned.begin(), owned.end(), [](const Record& a, const Record& b) { return a.id < b.id; });
-  // The same contact may arrive from two ranks (both bodies moved); the entries are equal (both
-  // ranks computed it with the same arithmetic), so one is kept.
-  std::stable_sort(cache.begin(), cache.end(), [](const CacheEntry& a, const CacheEntry& b) { return a.key < b.key; });
-  cache.erase(std::unique(cache.begin(), cache.end(), [](const CacheEntry& a, const CacheEntry& b) { return a.key == b.key; }),
-              cache.end());
+  if (owned.size() > ownedBefore) {
+    const auto byId = [](const Record& a, const Record& b) { return a.id < b.id; };
+    std::sort(owned.begin() + std::ptrdiff_t(ownedBefore), owned.end(), byId);
+    std::inplace_merge(owned.begin(), owned.begin() + std::ptrdiff_t(ownedBefore), owned.end(), byId);
+  }
+  if (cache.size() > cacheBefore) {
+    // The same contact may arrive from two ranks (both bodies moved); the entries are equal (both
+    // ranks computed it with the same arithmetic), so one is kept: the first, as a stable sort of
+    // the whole list keeps it (the list is in key order, each key once, before the arrivals).
+    const auto byKey = [](const CacheEntry& a, const CacheEntry& b) { return a.key < b.key; };
+    std::stable_sort(cache.begin() + std::ptrdiff_t(cacheBefore), cache.end(), byKey);
+    std::inplace_merge(cache.begin(), cache.begin() + std::ptrdiff_t(cacheBefore), cache.end(), byKey);
+    cache.erase(std::unique(cache.begin(), cache.end(), [](const CacheEntry& a, const CacheEntry& b) { return a.key == b.key; }),
+                cache.end());
+  }
+  if (!leavingIndex.empty() || owned.size() > ownedBefore) layoutValid = false;
 }
 
 // Round 2: every owned body goes as a shadow to each other rank owning a tile that its box,
 // widened by the global reach, overlaps. An owned body of that rank has its centre in such a tile
 // and its box within `reach` of it, so every pair with one of its bodies is found there.
-void DistributedWorld::Impl::SendShadows(Real reach, Real dt) {
+void DistributedWorld::Impl::SendShadows(Real reach, Real) {
   ClearOut();
   for (auto& s : sentShadows) s.clear();
   std::vector<int> targets;
-  for (size_t o = 0; o < owned.size(); ++o) {
+  // One rank, or no neighbour: nobody to send to.
+  for (size_t o = 0; !neighbours.empty() && o < owned.size(); ++o) {
     const Record& r = owned[o];
-    const AABB box = BoxOf(r, dt);
+    const AABB box = ownedBoxes[o];
     const int x0 = TileX(box.lower.x - reach), x1 = TileX(box.upper.x + reach);
     const int y0 = TileY(box.lower.y - reach), y1 = TileY(box.upper.y + reach);
     targets.clear();
@@ -678,8 +728,36 @@ void DistributedWorld::Impl::SendShadows(Real reach, Real dt) {
 }
 
 // The rank's bodies in id order (statics, owned, shadows merged): every pair then has the same
-// orientation (a < b) and every contact list the same order as in one process.
+// orientation (a < b) and every contact list the same order as in one process. When the layout
+// is still valid and the same shadows came in the same order, last step's arrays are kept: the
+// owned rows already hold the bodies' state (Step writes it back), statics do not move, so only
+// the shadows' rows and the moving bodies' boxes are written (on one rank, with 16004 circles,
+// rebuilding cost about 1 ms a step).
 void DistributedWorld::Impl::BuildLocal(Real dt) {
+  bool same = layoutValid;
+  for (size_t k = 0; same && k < neighbours.size(); ++k) {
+    same = in[k].size() == receivedShadows[k].size() * sizeof(Record);
+    for (size_t j = 0, at = 0; same && j < receivedShadows[k].size(); ++j, at += sizeof(Record)) {
+      uint32_t id;
+      std::memcpy(&id, in[k].data() + at + offsetof(Record, id), sizeof id);
+      same = id == local.slot[size_t(receivedShadows[k][j])];
+    }
+  }
+  if (same) {
+    size_t count = 0;
+    for (size_t k = 0; k < neighbours.size(); ++k) {
+      size_t at = 0;
+      for (int i : receivedShadows[k]) {
+        const Record r = Take<Record>(in[k], at);
+        SetRow(local, i, r);
+        local.aabb[size_t(i)] = BoxOf(r, dt);
+      }
+      count += receivedShadows[k].size();
+    }
+    for (size_t o = 0; o < owned.size(); ++o) local.aabb[size_t(ownedLocal[o])] = ownedBoxes[o];
+    stats.shadowBodies = static_cast<int>(count);
+    return;
+  }
   sources.clear();
   shadows.clear();
   for (size_t i = 0; i < statics.size(); ++i) sources.push_back({statics[i].id, 0, int(i), -1});
@@ -704,7 +782,7 @@ void DistributedWorld::Impl::BuildLocal(Real dt) {
     const Record& r = s.kind == 0 ? statics[size_t(s.index)] : s.kind == 1 ? owned[size_t(s.index)] : shadows[size_t(s.index)];
     AppendRecord(local, r);
     // As the World: a static body's box is made once at creation (dt 0), a moving one's each step.
-    local.aabb[i] = BroadPhaseBox(local, static_cast<int>(i), def, r.type == BodyType::kStatic ? Real(0) : dt);
+    local.aabb[i] = s.kind == 1 ? ownedBoxes[size_t(s.index)] : BroadPhaseBox(local, static_cast<int>(i), def, r.type == BodyType::kStatic ? Real(0) : dt);
     if (s.kind == 1) {
       localOwned[i] = 1;
       ownedLocal[size_t(s.index)] = static_cast<int>(i);
@@ -716,6 +794,7 @@ void DistributedWorld::Impl::BuildLocal(Real dt) {
     if (sources[i].kind == 2) receivedShadows[size_t(sources[i].neighbour)].push_back(static_cast<int>(i));
   }
   stats.shadowBodies = static_cast<int>(shadows.size());
+  layoutValid = true;
 }
 
 // The contacts of the rank's own bodies: broad phase over everything it holds, pairs without an
@@ -731,15 +810,24 @@ void DistributedWorld::Impl::FindContacts(Real dt) {
     if (!ShouldCollide(f[size_t(p.a)], f[size_t(p.b)])) continue;
     ownPairs.push_back(p);
   }
-  contacts.clear();
-  CollidePairs(local, def, dt, ownPairs, contacts);
-  std::sort(contacts.begin(), contacts.end(), [](const Contact& x, const Contact& y) { return x.Key() < y.Key(); });
+  // The World's narrow phase and contact sort (per-worker lists merged in key order): the
+  // same contacts in the same order for any thread count.
+  workerContacts.Reset(run->Workers());
+  run->For(Stage::kNarrowPhase, static_cast<int>(ownPairs.size()), run->MinHeavyItems(), [&](int begin, int end, int worker) {
+    CollidePairs(local, def, dt, std::span<const CandidatePair>(ownPairs).subspan(size_t(begin), size_t(end - begin)),
+                 workerContacts[worker]);
+  });
+  sorter.Sort(*run, local.Count(), workerContacts, contacts, nullptr);
   if (!def.effects.warmStarting) return;
-  // ContactCache::Restore's rule: the entry of the same pair, points matched by feature id.
+  // ContactCache::Restore's rule: the entry of the same pair, points matched by feature id. The
+  // local arrays are in id order, so the contacts' key order is the cache's id-pair order: one
+  // walk through both.
+  auto it = cache.begin();
   for (Contact& c : contacts) {
     const uint64_t key = PairKey(local.slot[size_t(c.a)], local.slot[size_t(c.b)]);
-    auto it = std::lower_bound(cache.begin(), cache.end(), key, [](const CacheEntry& e, uint64_t k) { return e.key < k; });
-    if (it == cache.end() || it->key != key) continue;
+    while (it != cache.end() && it->key < key) ++it;
+    if (it == cache.end()) break;
+    if (it->key != key) continue;
     for (int k = 0; k < c.manifold.pointCount; ++k) {
       ManifoldPoint& p = c.manifold.points[k];
       for (int j = 0; j < it->pointCount; ++j) {
@@ -1002,6 +1090,7 @@ void DistributedWorld::ReadCheckpoint(const std::string& path) {
   w.statics.swap(statics);
   w.owned.swap(owned);
   w.cache.swap(cache);
+  w.layoutValid = false;
   w.expectedCount = count;
   w.expectedChecksum = checksum;
   w.loaded = true;
