@@ -141,7 +141,7 @@ struct DistributedWorld::Impl {
   std::vector<int> tileOrder;  // tile indices in Morton order (the order ranks get them in)
   std::vector<int64_t> tileCost;  // this rank's work per tile in the last step (load balance)
   int64_t stepCount = 0;
-  std::vector<Vec2> stepStartCenters;  // owned bodies' centres when the step began (tile costs)
+  std::vector<int> ownedTile;  // owned index -> the tile its centre was in when the step began
   std::vector<int> neighbours;  // ascending ranks
   std::vector<int> neighbourSlot;  // rank -> index in neighbours, -1 if not a neighbour
 
@@ -183,6 +183,22 @@ struct DistributedWorld::Impl {
   // tile changed owner, nothing loaded since. BuildLocal then only refreshes the shadows' rows
   // (if the same shadows came) and every box.
   bool layoutValid = false;
+  // The owned records' state (xf, centre, velocity) is older than their rows in `local`: Step
+  // leaves it there (copying 16004 circles back into 268-byte records cost about 0.1 ms a step and
+  // reading them again as much); SyncOwned brings the records up to date where they are read whole.
+  bool ownedStale = false;
+
+  void SyncOwnedRecord(size_t o) {
+    const size_t i = size_t(ownedLocal[o]);
+    owned[o].xf = local.xf[i];
+    owned[o].center = local.center[i];
+    owned[o].vel = local.vel[i];
+  }
+  void SyncOwned() {
+    if (!ownedStale) return;
+    for (size_t o = 0; o < owned.size(); ++o) SyncOwnedRecord(o);
+    ownedStale = false;
+  }
 
   int TileX(Real x) const {
     const double t = std::floor((double(x) - double(dist.bounds.lower.x)) / double(tileW));
@@ -400,6 +416,7 @@ void DistributedWorld::Impl::Rebalance(bool force) {
   const double imbalance = total > 0 ? *std::max_element(perRank.begin(), perRank.end()) / (total / size) : 1.0;
   if (!force && !(imbalance > double(dist.rebalanceThreshold))) return;
   if (total <= 0) return;
+  SyncOwned();
   DealTiles(cost);
   ++stats.rebalances;
 
@@ -511,6 +528,7 @@ void DistributedWorld::Load(std::span<const BodyDef> bodies) {
   w.owned.swap(owned);
   w.cache.clear();
   w.layoutValid = false;
+  w.ownedStale = false;
   w.expectedCount = count;
   w.expectedChecksum = checksum;
   w.loaded = true;
@@ -540,15 +558,29 @@ void DistributedWorld::Step(Real dt) {
 
   // The halo: the farthest any moving body's box reaches from its centre this step, over all
   // ranks (a max is exact in any order), and whether any body left its neighbourhood of tiles.
+  // Each owned body's box and tile are kept for the rest of the step; read from the local arrays
+  // where they hold the newest state (ownedStale), else from the records.
   double local[2] = {0, 0};
   w.ownedBoxes.resize(w.owned.size());
+  w.ownedTile.resize(w.owned.size());
   for (size_t o = 0; o < w.owned.size(); ++o) {
-    const Record& r = w.owned[o];
-    const AABB box = w.ownedBoxes[o] = w.BoxOf(r, dt);
-    const double reach = std::max({double(r.center.x - box.lower.x), double(box.upper.x - r.center.x),
-                                   double(r.center.y - box.lower.y), double(box.upper.y - r.center.y)});
+    Vec2 c;
+    AABB box;
+    if (w.ownedStale) {
+      const int i = w.ownedLocal[o];
+      c = w.local.center[size_t(i)];
+      box = BroadPhaseBox(w.local, i, w.def, dt);
+    } else {
+      c = w.owned[o].center;
+      box = w.BoxOf(w.owned[o], dt);
+    }
+    w.ownedBoxes[o] = box;
+    const double reach = std::max({double(c.x - box.lower.x), double(box.upper.x - c.x), double(c.y - box.lower.y),
+                                   double(box.upper.y - c.y)});
     local[0] = std::max(local[0], reach);
-    const int owner = w.OwnerOf(r.center);
+    const int t = w.TileX(c.x) + w.TileY(c.y) * w.dist.tilesX;
+    w.ownedTile[o] = t;
+    const int owner = w.tileOwner[size_t(t)];
     if (owner != w.rank && w.neighbourSlot[size_t(owner)] < 0) local[1] = 1;
   }
   double global[2] = {0, 0};
@@ -563,12 +595,15 @@ void DistributedWorld::Step(Real dt) {
 
   w.Migrate(dt);
   if (w.ownedBoxes.size() != w.owned.size() || !w.layoutValid) {
-    // Bodies left or arrived: this step's boxes for the new list.
+    // Bodies left or arrived (the records are in sync then): this step's boxes for the new list.
     w.ownedBoxes.resize(w.owned.size());
-    for (size_t o = 0; o < w.owned.size(); ++o) w.ownedBoxes[o] = w.BoxOf(w.owned[o], dt);
+    w.ownedTile.resize(w.owned.size());
+    for (size_t o = 0; o < w.owned.size(); ++o) {
+      const Record& r = w.owned[o];
+      w.ownedBoxes[o] = w.BoxOf(r, dt);
+      w.ownedTile[o] = w.TileX(r.center.x) + w.TileY(r.center.y) * w.dist.tilesX;
+    }
   }
-  w.stepStartCenters.clear();
-  for (const Record& r : w.owned) w.stepStartCenters.push_back(r.center);
   lap(w.stats.migrateMs);
   w.SendShadows(Real(global[0]), dt);
   lap(w.stats.shadowsMs);
@@ -594,12 +629,7 @@ void DistributedWorld::Step(Real dt) {
   w.solve.Finish(w.local, w.def, dt, w.contacts, *w.run);
   lap(w.stats.solveMs);
   w.StoreCache();
-  for (size_t o = 0; o < w.owned.size(); ++o) {
-    const int i = w.ownedLocal[o];
-    w.owned[o].xf = w.local.xf[i];
-    w.owned[o].center = w.local.center[i];
-    w.owned[o].vel = w.local.vel[i];
-  }
+  w.ownedStale = true;  // the owned bodies' new state is in `local`
   w.stats.ownedBodies = static_cast<int>(w.owned.size());
   w.stats.contacts = static_cast<int>(w.contacts.size());
   // Work per tile of this step, for load balancing: each owned body and each of its contacts,
@@ -607,9 +637,7 @@ void DistributedWorld::Step(Real dt) {
   std::fill(w.tileCost.begin(), w.tileCost.end(), 0);
   const std::vector<int32_t>& counts = w.solve.Counts();
   for (size_t o = 0; o < w.owned.size(); ++o) {
-    const int i = w.ownedLocal[o];
-    const Vec2 c0 = w.stepStartCenters[o];
-    w.tileCost[size_t(w.TileX(c0.x) + w.TileY(c0.y) * w.dist.tilesX)] += 1 + counts[size_t(i)];
+    w.tileCost[size_t(w.ownedTile[o])] += 1 + counts[size_t(w.ownedLocal[o])];
   }
   w.CheckCounts();
   lap(w.stats.restMs);
@@ -623,8 +651,9 @@ void DistributedWorld::Impl::Migrate(Real) {
   ClearOut();
   leavingIndex.clear();
   for (size_t o = 0; o < owned.size(); ++o) {
-    if (OwnerOf(owned[o].center) != rank) leavingIndex.push_back(static_cast<int>(o));
+    if (tileOwner[size_t(ownedTile[o])] != rank) leavingIndex.push_back(static_cast<int>(o));
   }
+  if (!leavingIndex.empty()) SyncOwned();  // records travel, and the list changes
   leavingIds.resize(neighbours.size());
   for (auto& ids : leavingIds) ids.clear();
   for (int o : leavingIndex) {
@@ -672,6 +701,7 @@ void DistributedWorld::Impl::Migrate(Real) {
   for (size_t k = 0; k < neighbours.size(); ++k) {
     size_t at = 0;
     const uint32_t bodies = Take<uint32_t>(in[k], at);
+    if (bodies > 0) SyncOwned();  // the list changes: ownedLocal no longer maps it
     for (uint32_t j = 0; j < bodies; ++j) owned.push_back(Take<Record>(in[k], at));
     stats.migratedIn += static_cast<int>(bodies);
     const uint32_t entries = Take<uint32_t>(in[k], at);
@@ -717,6 +747,7 @@ void DistributedWorld::Impl::SendShadows(Real reach, Real) {
     }
     std::sort(targets.begin(), targets.end());
     targets.erase(std::unique(targets.begin(), targets.end()), targets.end());
+    if (!targets.empty() && ownedStale) SyncOwnedRecord(o);
     for (int t : targets) {
       const int k = neighbourSlot[size_t(t)];
       if (k < 0) throw std::logic_error("DistributedWorld: a shadow for a rank that is not a neighbour");
@@ -758,6 +789,7 @@ void DistributedWorld::Impl::BuildLocal(Real dt) {
     stats.shadowBodies = static_cast<int>(count);
     return;
   }
+  SyncOwned();  // the local arrays are rebuilt from the records
   sources.clear();
   shadows.clear();
   for (size_t i = 0; i < statics.size(); ++i) sources.push_back({statics[i].id, 0, int(i), -1});
@@ -895,10 +927,15 @@ void DistributedWorld::Impl::StoreCache() {
 void DistributedWorld::Impl::CheckCounts() {
   int64_t cost = 0;
   for (int64_t c : tileCost) cost += c;
-  uint64_t local[3] = {uint64_t(owned.size()), 0, uint64_t(cost)};
-  for (const Record& r : owned) local[1] += MixId(r.id);
+  uint64_t mine[3] = {uint64_t(owned.size()), 0, uint64_t(cost)};
+  // The ids from the local arrays where they map the owned list (contiguous, not 268-byte strides).
+  if (ownedStale) {
+    for (int i : ownedLocal) mine[1] += MixId(local.slot[size_t(i)]);
+  } else {
+    for (const Record& r : owned) mine[1] += MixId(r.id);
+  }
   uint64_t global[3] = {0, 0, 0};
-  MPI_Allreduce(local, global, 3, MPI_UINT64_T, MPI_SUM, comm);
+  MPI_Allreduce(mine, global, 3, MPI_UINT64_T, MPI_SUM, comm);
   int64_t most = 0;
   MPI_Allreduce(&cost, &most, 1, MPI_INT64_T, MPI_MAX, comm);
   stats.imbalance = global[2] > 0 ? double(most) / (double(global[2]) / size) : 1.0;
@@ -908,6 +945,7 @@ void DistributedWorld::Impl::CheckCounts() {
 }
 
 std::vector<BodyState> DistributedWorld::GatherStates() const {
+  impl_->SyncOwned();  // the records are read whole (the world's state itself does not change)
   const Impl& w = *impl_;
   std::vector<BodyState> mine;
   auto state = [](const Record& r) {
@@ -987,6 +1025,7 @@ std::vector<char> GatherBytes(const std::vector<char>& mine, int rank, int size,
 }  // namespace
 
 void DistributedWorld::WriteCheckpoint(const std::string& path) const {
+  impl_->SyncOwned();
   const Impl& w = *impl_;
   Require(w.loaded, "DistributedWorld::WriteCheckpoint: Load a scene first");
   std::vector<char> mine;
@@ -1091,6 +1130,7 @@ void DistributedWorld::ReadCheckpoint(const std::string& path) {
   w.owned.swap(owned);
   w.cache.swap(cache);
   w.layoutValid = false;
+  w.ownedStale = false;
   w.expectedCount = count;
   w.expectedChecksum = checksum;
   w.loaded = true;
