@@ -183,6 +183,7 @@ struct DistributedWorld::Impl {
   // tile changed owner, nothing loaded since. BuildLocal then only refreshes the shadows' rows
   // (if the same shadows came) and every box.
   bool layoutValid = false;
+  int localCustomFilters = 0;  // local bodies whose Filter is not the default (the pair filter runs)
   // The owned records' state (xf, centre, velocity) is older than their rows in `local`: Step
   // leaves it there (copying 16004 circles back into 268-byte records cost about 0.1 ms a step and
   // reading them again as much); SyncOwned brings the records up to date where they are read whole.
@@ -826,6 +827,8 @@ void DistributedWorld::Impl::BuildLocal(Real dt) {
     if (sources[i].kind == 2) receivedShadows[size_t(sources[i].neighbour)].push_back(static_cast<int>(i));
   }
   stats.shadowBodies = static_cast<int>(shadows.size());
+  localCustomFilters = 0;
+  for (const Filter& f : local.filter) localCustomFilters += f == Filter{} ? 0 : 1;
   layoutValid = true;
 }
 
@@ -834,14 +837,19 @@ void DistributedWorld::Impl::BuildLocal(Real dt) {
 // warm-start impulses.
 void DistributedWorld::Impl::FindContacts(Real dt) {
   broadPhase->FindPairs(local.aabb, local.dynamic, pairs, *run);
+  // Without shadows every pair has a movable body, which is owned; without a custom filter every
+  // pair collides: then all of them are kept, as they are.
+  const bool keepAll = stats.shadowBodies == 0 && localCustomFilters == 0;
   ownPairs.clear();
   // The World's collision filter (Box2D's rule) on the same pairs; its compaction keeps order.
   const std::vector<Filter>& f = local.filter;
-  for (const CandidatePair& p : pairs) {
+  for (size_t k = 0; !keepAll && k < pairs.size(); ++k) {
+    const CandidatePair p = pairs[k];
     if (!localOwned[size_t(p.a)] && !localOwned[size_t(p.b)]) continue;
     if (!ShouldCollide(f[size_t(p.a)], f[size_t(p.b)])) continue;
     ownPairs.push_back(p);
   }
+  if (keepAll) ownPairs.swap(pairs);
   // The World's narrow phase and contact sort (per-worker lists merged in key order): the
   // same contacts in the same order for any thread count.
   workerContacts.Reset(run->Workers());
