@@ -788,6 +788,7 @@ void DistributedWorld::Impl::BuildLocal(Real dt) {
     }
     for (size_t o = 0; o < owned.size(); ++o) local.aabb[size_t(ownedLocal[o])] = ownedBoxes[o];
     stats.shadowBodies = static_cast<int>(count);
+    stats.layoutKept = 1;
     return;
   }
   SyncOwned();  // the local arrays are rebuilt from the records
