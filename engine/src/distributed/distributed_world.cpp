@@ -165,6 +165,7 @@ struct DistributedWorld::Impl {
     int neighbour;
   };
   std::vector<Source> sources;
+  std::vector<size_t> runEnds;  // BuildLocal: where each id-ordered run of sources ends
   std::vector<Record> shadows;
   Bodies local;
   std::vector<uint8_t> localOwned;
@@ -255,12 +256,6 @@ struct DistributedWorld::Impl {
     r.shape = b.shape[i];
     r.filter = b.filter[i];
     return r;
-  }
-
-  static void AppendRecord(Bodies& b, const Record& r) {
-    const int i = b.Count();
-    b.ForEachArray([](auto& v) { v.emplace_back(); });
-    SetRow(b, i, r);
   }
 
   static void SetRow(Bodies& b, int i, const Record& r) {
@@ -794,27 +789,49 @@ void DistributedWorld::Impl::BuildLocal(Real dt) {
   SyncOwned();  // the local arrays are rebuilt from the records
   sources.clear();
   shadows.clear();
+  // Runs each in id order (statics, owned, and every neighbour's shadows, sent in its id order)
+  // are merged, not sorted: a sort of 16004 sources was 17 % of a rebuilding step.
+  runEnds.clear();
   for (size_t i = 0; i < statics.size(); ++i) sources.push_back({statics[i].id, 0, int(i), -1});
+  runEnds.push_back(sources.size());
   for (size_t i = 0; i < owned.size(); ++i) sources.push_back({owned[i].id, 1, int(i), -1});
+  runEnds.push_back(sources.size());
   for (size_t k = 0; k < neighbours.size(); ++k) {
     size_t at = 0;
     while (at < in[k].size()) {
       shadows.push_back(Take<Record>(in[k], at));
       sources.push_back({shadows.back().id, 2, int(shadows.size() - 1), int(k)});
     }
+    runEnds.push_back(sources.size());
   }
-  std::sort(sources.begin(), sources.end(), [](const Source& a, const Source& b) { return a.id < b.id; });
+  const auto byId = [](const Source& a, const Source& b) { return a.id < b.id; };
+  bool runsSorted = true;
+  for (size_t r = 0, from = 0; r < runEnds.size(); from = runEnds[r++]) {
+    runsSorted = runsSorted && std::is_sorted(sources.begin() + std::ptrdiff_t(from), sources.begin() + std::ptrdiff_t(runEnds[r]), byId);
+  }
+  if (runsSorted) {
+    for (size_t r = 1; r < runEnds.size(); ++r) {
+      std::inplace_merge(sources.begin(), sources.begin() + std::ptrdiff_t(runEnds[r - 1]),
+                         sources.begin() + std::ptrdiff_t(runEnds[r]), byId);
+    }
+  } else {
+    std::sort(sources.begin(), sources.end(), byId);
+  }
   for (size_t i = 1; i < sources.size(); ++i) {
     if (sources[i].id == sources[i - 1].id) throw std::logic_error("DistributedWorld: a body held twice");
   }
-  local.ForEachArray([](auto& v) { v.clear(); });  // capacity kept: no allocation once warm
+  // Every array sized to the new count (capacity kept: no allocation once warm), then each row
+  // written by SetRow. The arrays SetRow leaves alone (aabb aside: below) hold their defaults in
+  // every row: nothing in this world writes them (no user data, gravity scale, bullet or compound).
+  const size_t n = sources.size();
+  local.ForEachArray([n](auto& v) { v.resize(n); });
   localOwned.assign(sources.size(), 0);
   ownedLocal.assign(owned.size(), -1);
   for (auto& r : receivedShadows) r.clear();
   for (size_t i = 0; i < sources.size(); ++i) {
     const Source& s = sources[i];
     const Record& r = s.kind == 0 ? statics[size_t(s.index)] : s.kind == 1 ? owned[size_t(s.index)] : shadows[size_t(s.index)];
-    AppendRecord(local, r);
+    SetRow(local, static_cast<int>(i), r);
     // As the World: a static body's box is made once at creation (dt 0), a moving one's each step.
     local.aabb[i] = s.kind == 1 ? ownedBoxes[size_t(s.index)] : BroadPhaseBox(local, static_cast<int>(i), def, r.type == BodyType::kStatic ? Real(0) : dt);
     if (s.kind == 1) {
