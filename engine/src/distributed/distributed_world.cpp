@@ -1,13 +1,20 @@
 // The distributed world: tiles, ownership, migration, shadows, neighbour rounds and the split
-// Jacobi solve (quadrant/distributed_world.h describes the scheme).
+// Jacobi solve (quadrant/distributed_world.h gives the scheme and its contract).
 //
-// Where the time goes (DistributedStats' stage times; circle stress, 16000 circles per rank, 100
-// steps, amd-epyc-2c, 3 runs; docs/distributed.md): on one rank 5.3-5.9 ms a step, of which the
-// local arrays and contacts (collide) 2.6-2.9 ms and migration 1.6-1.8 ms with nothing to
-// migrate: copying the owned records (268 bytes each, the whole ShapeDef among them) to a new
-// list and sorting them by id every step; the Jacobi solve itself 0.25 ms. On two ranks 21-26 ms:
-// migration 13-17 and shadows 5-8 ms on the slowest rank, 7-12 ms of it inside MPI receive and
-// completion calls. The rounds, not the solver, are what the distributed world must make cheap.
+// State between steps: `owned`, one Record per owned body (what a rank needs to collide, solve
+// and integrate it; the unit of migration, shadows and checkpoints), and `local`, the World's
+// arrays of the rank's statics, owned bodies and shadows in id order. While no body leaves or
+// arrives, no tile changes owner and the same shadows come (layoutValid), a step keeps `local`
+// and writes only the shadows' rows and the boxes; the owned bodies' state then lives in `local`
+// (ownedStale) and reaches the records only where they are read whole (SyncOwned). Either way the
+// arrays are in id order, so the arithmetic, and the state hash, is the same.
+//
+// Why (circle stress, 16004 circles, one rank, amd-epyc-2c; docs/distributed.md has the commands):
+// the step took 6.9-7.4 ms, of which rebuilding the local arrays, pairs and contacts 3.3-3.5 ms
+// and migration with nothing to migrate 2.1-2.4 ms (every 268-byte record copied and sorted by id
+// every step), the Jacobi solve 0.4. Kept arrays make it 1.14-1.19 ms (collide 0.58, solve 0.31,
+// halo 0.23), 1.2-1.4x the World's default engine on the same scene. On a dense scene the gap is
+// the Jacobi solve itself (base-100 pyramid: 7.4 of 9.4 ms at 8 iterations, the World 2.9 ms).
 #include "quadrant/distributed_world.h"
 
 #include <algorithm>
