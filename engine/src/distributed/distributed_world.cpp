@@ -144,6 +144,7 @@ struct DistributedWorld::Impl {
   MPI_Comm comm = MPI_COMM_NULL;
   int rank = 0, size = 1;
   Real tileW = 0, tileH = 0;
+  double perTileX = 0, perTileY = 0;  // 1 / tile width and height: a body's tile by a multiplication
   std::vector<int> tileOwner;  // by tile index tx + ty * tilesX
   std::vector<int> tileOrder;  // tile indices in Morton order (the order ranks get them in)
   std::vector<int64_t> tileCost;  // this rank's work per tile in the last step (load balance)
@@ -210,11 +211,11 @@ struct DistributedWorld::Impl {
   }
 
   int TileX(Real x) const {
-    const double t = std::floor((double(x) - double(dist.bounds.lower.x)) / double(tileW));
+    const double t = std::floor((double(x) - double(dist.bounds.lower.x)) * perTileX);
     return int(std::clamp(t, 0.0, double(dist.tilesX - 1)));
   }
   int TileY(Real y) const {
-    const double t = std::floor((double(y) - double(dist.bounds.lower.y)) / double(tileH));
+    const double t = std::floor((double(y) - double(dist.bounds.lower.y)) * perTileY);
     return int(std::clamp(t, 0.0, double(dist.tilesY - 1)));
   }
   int OwnerOf(Vec2 c) const { return tileOwner[size_t(TileX(c.x) + TileY(c.y) * dist.tilesX)]; }
@@ -330,6 +331,8 @@ DistributedWorld::DistributedWorld(const WorldDef& def, const DistributedDef& di
   MPI_Comm_dup(comm, &w.comm);
   w.tileW = (dist.bounds.upper.x - dist.bounds.lower.x) / Real(dist.tilesX);
   w.tileH = (dist.bounds.upper.y - dist.bounds.lower.y) / Real(dist.tilesY);
+  w.perTileX = 1.0 / double(w.tileW);
+  w.perTileY = 1.0 / double(w.tileH);
 
   // Tiles in Morton order, dealt in contiguous runs: at first equal numbers of tiles per rank.
   w.tileOrder.resize(static_cast<size_t>(tiles));
@@ -562,17 +565,19 @@ void DistributedWorld::Step(Real dt) {
   // The halo: the farthest any moving body's box reaches from its centre this step, over all
   // ranks (a max is exact in any order), and whether any body left its neighbourhood of tiles.
   // Each owned body's box and tile are kept for the rest of the step; read from the local arrays
-  // where they hold the newest state (ownedStale), else from the records.
+  // while they map the owned list (layoutValid), else from the records.
   double local[2] = {0, 0};
   w.ownedBoxes.resize(w.owned.size());
   w.ownedTile.resize(w.owned.size());
   for (size_t o = 0; o < w.owned.size(); ++o) {
     Vec2 c;
     AABB box;
-    if (w.ownedStale) {
+    if (w.layoutValid) {
+      // The local rows hold the newest state whenever the layout is valid (SyncOwned only copies
+      // them to the records); the box goes to the row too, which BuildLocal keeps if it can.
       const int i = w.ownedLocal[o];
       c = w.local.center[size_t(i)];
-      box = BroadPhaseBox(w.local, i, w.def, dt);
+      box = w.local.aabb[size_t(i)] = BroadPhaseBox(w.local, i, w.def, dt);
     } else {
       c = w.owned[o].center;
       box = w.BoxOf(w.owned[o], dt);
@@ -788,7 +793,7 @@ void DistributedWorld::Impl::BuildLocal(Real dt) {
       }
       count += receivedShadows[k].size();
     }
-    for (size_t o = 0; o < owned.size(); ++o) local.aabb[size_t(ownedLocal[o])] = ownedBoxes[o];
+    // The owned rows' boxes were written by the halo pass (the layout was valid then).
     stats.shadowBodies = static_cast<int>(count);
     stats.layoutKept = 1;
     return;
