@@ -10,11 +10,12 @@
 // arrays are in id order, so the arithmetic, and the state hash, is the same.
 //
 // Why (circle stress, 16004 circles, one rank, amd-epyc-2c; docs/distributed.md has the commands):
-// the step took 6.9-7.4 ms, of which rebuilding the local arrays, pairs and contacts 3.3-3.5 ms
-// and migration with nothing to migrate 2.1-2.4 ms (every 268-byte record copied and sorted by id
-// every step), the Jacobi solve 0.4. Kept arrays make it 1.14-1.19 ms (collide 0.58, solve 0.31,
-// halo 0.23), 1.2-1.4x the World's default engine on the same scene. On a dense scene the gap is
-// the Jacobi solve itself (base-100 pyramid: 7.4 of 9.4 ms at 8 iterations, the World 2.9 ms).
+// the step took 6.3-7.5 ms, of which rebuilding the local arrays, pairs and contacts 3.1-3.7 ms
+// and migration with nothing to migrate 1.8-2.0 ms (every 268-byte record copied and sorted by id
+// every step), the Jacobi solve 0.4. With the arrays kept it takes 1.0-1.2 ms (collide 0.5-0.6,
+// solve 0.26-0.30, halo 0.19-0.23), 1.1-1.3x the World's default engine on the same scene. On a
+// dense scene the gap is the Jacobi solve itself (base-100 pyramid: 80-95 % of the step, one rank
+// 4-10x the World at 8 iterations).
 #include "quadrant/distributed_world.h"
 
 #include <algorithm>
