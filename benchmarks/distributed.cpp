@@ -1,13 +1,17 @@
 // quadrant_distributed: one distributed run under mpirun, for tools/quadrant bench --ranks.
 //
 //   mpirun -np R quadrant_distributed --scene circle_stress --count N [--per-rank] [--steps S]
-//          [--warmup W] [--tiles T] [--iterations K]
+//          [--warmup W] [--tiles T] [--iterations K] [--threads N] [--world]
 //
 // Rank 0 prints one JSON object (a run of distributed.json): ms per step (the slowest rank's wall
 // time over the measured steps), neighbour rounds per step, payload bytes sent per step (all
 // ranks), bytes per shadow body, shadow fraction (shadows / bodies), imbalance (max / mean over the
 // ranks of owned bodies plus their contacts, averaged over the steps; a work measure, not a time),
-// the state hash, and peak resident memory summed over the ranks (and per body).
+// the state hash, and peak resident memory summed over the ranks (and per body); oversubscribed
+// when ranks x threads exceed the cores. With --world,
+// also world_ms_per_step: the single-process World with its default engine (the quadrant adapter's
+// mapping of the scene, --threads threads) on the same bodies, timed the same way on rank 0 after
+// the distributed run.
 // Bad options: one line on stderr, exit 2 (every rank parses the same arguments).
 #include <mpi.h>
 
@@ -22,6 +26,8 @@
 #include "cli_args.h"
 #include "quadrant/distributed_world.h"
 #include "quadrant/error.h"
+#include "quadrant/world.h"
+#include "quadrant_variant.h"
 #include "scenes.h"
 
 using namespace quadrant;
@@ -57,8 +63,8 @@ int main(int argc, char** argv) {
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
   MPI_Comm_size(MPI_COMM_WORLD, &size);
   std::string sceneName = "circle_stress";
-  int count = 16000, steps = 100, warmup = 10, tiles = 0, iterations = 8;
-  bool perRank = false;
+  int count = 16000, steps = 100, warmup = 10, tiles = 0, iterations = 8, threads = 1;
+  bool perRank = false, compareWorld = false;
   std::string ownersPath;  // --owners FILE: every body's position, radius and owner rank as CSV
   cli::Parser parser("quadrant_distributed",
                 "One distributed run under mpirun (tools/quadrant bench --ranks): rank 0 prints one JSON "
@@ -71,6 +77,8 @@ int main(int argc, char** argv) {
   parser.Int("--warmup", &warmup, 0, 1000000, "steps before measuring");
   parser.Int("--tiles", &tiles, 1, 1024, "tiles per side").Default("about 14 m per tile (circle_stress), 2 (pyramid)");
   parser.Int("--iterations", &iterations, 1, 1000, "velocity iterations");
+  parser.Int("--threads", &threads, 1, 64, "threads inside each rank (WorldDef::threadCount; also the World's with --world)");
+  parser.Flag("--world", &compareWorld, "also time the World's default engine on the same scene (world_ms_per_step)");
   parser.String("--owners", &ownersPath, "FILE", "write every body's position, radius and owner rank as CSV");
   parser.Quiet(rank != 0);  // every rank parses the same arguments; rank 0 speaks for them
   parser.OnExit([](int status) {
@@ -110,6 +118,7 @@ int main(int argc, char** argv) {
     def.gravity = s.gravity;
     def.solver = SolverType::kJacobi;
     def.velocityIterations = iterations;
+    def.threadCount = threads;
     def.restitutionThreshold = s.restitutionThreshold;
     def.effects = s.effects;
     const std::vector<BodyDef> bodies = ToBodyDefs(s);
@@ -189,19 +198,32 @@ int main(int argc, char** argv) {
         std::fclose(f);
       }
     }
+    // After the distributed run: timed first, the World shared the core with mpirun's daemon
+    // starting up (1.05-1.80 ms a step where quadrant_bench measured 0.83-1.32 minutes apart).
+    double worldMs = 0;
+    if (compareWorld && rank == 0) {
+      World world(scene::QuadrantVariant{}.MakeWorldDef(s, threads));
+      for (const BodyDef& b : bodies) world.CreateBody(b);
+      for (int i = 0; i < warmup; ++i) world.Step(s.timeStep);
+      const double w0 = MPI_Wtime();
+      for (int i = 0; i < steps; ++i) world.Step(s.timeStep);
+      worldMs = 1000.0 * (MPI_Wtime() - w0) / steps;
+    }
     if (rank == 0) {
+      char world[64] = "";
+      if (compareWorld) std::snprintf(world, sizeof world, ", \"world_ms_per_step\": %.4f", worldMs);
       const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
       std::printf(
           "{\"scene\": \"%s\", \"ranks\": %d, \"bodies\": %zu, \"steps\": %d, \"warmup\": %d, \"tiles\": %d, "
-          "\"iterations\": %d, \"weak\": %s, \"ms_per_step\": %.4f, \"rounds_per_step\": %d, \"bytes_per_step\": %.1f, "
+          "\"iterations\": %d, \"threads\": %d, \"weak\": %s, \"ms_per_step\": %.4f, \"rounds_per_step\": %d, \"bytes_per_step\": %.1f, "
           "\"bytes_per_boundary_body\": %.1f, \"shadow_fraction\": %.5f, \"imbalance\": %.4f, "
           "\"state_hash\": \"%016llx\", \"oversubscribed\": %s, \"cores\": %u, \"peak_rss_mb\": %.1f, "
-          "\"rss_bytes_per_body\": %.0f, \"stage_ms\": {%s}}\n",
-          sceneName.c_str(), size, bodies.size(), steps, warmup, tiles, iterations, perRank ? "true" : "false",
+          "\"rss_bytes_per_body\": %.0f, \"stage_ms\": {%s}%s}\n",
+          sceneName.c_str(), size, bodies.size(), steps, warmup, tiles, iterations, threads, perRank ? "true" : "false",
           1000.0 * slowest / steps, rounds, bytes / steps, shadows > 0 ? bytes / shadows : 0.0,
           shadows / steps / double(bodies.size()), imbalance / steps, (unsigned long long)hash,
-          unsigned(size) > cores ? "true" : "false", cores, rssTotalKb / 1024.0,
-          1024.0 * double(rssTotalKb) / double(bodies.size()), profile.c_str());
+          unsigned(size * threads) > cores ? "true" : "false", cores, rssTotalKb / 1024.0,
+          1024.0 * double(rssTotalKb) / double(bodies.size()), profile.c_str(), world);
     }
   } catch (const Error& e) {
     std::fprintf(stderr, "quadrant_distributed: rank %d: error: %s\n", rank, e.what());

@@ -59,6 +59,9 @@ struct DistributedStats {
   int64_t bytesSent = 0;  ///< payload bytes sent to neighbours
   int neighbours = 0;
   int rebalances = 0;       ///< tile re-deals at the start of the step (0 or 1)
+  /// 1 if the step kept last step's local arrays (no body left or arrived, no tile changed owner,
+  /// the same shadows came): only the shadows' rows and the boxes were written; 0 if it rebuilt them.
+  int layoutKept = 0;
   /// Load imbalance of the step: max / mean over ranks of the work (owned bodies plus their
   /// contacts), the same on every rank.
   double imbalance = 1;

@@ -1,13 +1,21 @@
 // The distributed world: tiles, ownership, migration, shadows, neighbour rounds and the split
-// Jacobi solve (quadrant/distributed_world.h describes the scheme).
+// Jacobi solve (quadrant/distributed_world.h gives the scheme and its contract).
 //
-// Where the time goes (DistributedStats' stage times; circle stress, 16000 circles per rank, 100
-// steps, amd-epyc-2c, 3 runs; docs/distributed.md): on one rank 5.3-5.9 ms a step, of which the
-// local arrays and contacts (collide) 2.6-2.9 ms and migration 1.6-1.8 ms with nothing to
-// migrate: copying the owned records (268 bytes each, the whole ShapeDef among them) to a new
-// list and sorting them by id every step; the Jacobi solve itself 0.25 ms. On two ranks 21-26 ms:
-// migration 13-17 and shadows 5-8 ms on the slowest rank, 7-12 ms of it inside MPI receive and
-// completion calls. The rounds, not the solver, are what the distributed world must make cheap.
+// State between steps: `owned`, one Record per owned body (what a rank needs to collide, solve
+// and integrate it; the unit of migration, shadows and checkpoints), and `local`, the World's
+// arrays of the rank's statics, owned bodies and shadows in id order. While no body leaves or
+// arrives, no tile changes owner and the same shadows come (layoutValid), a step keeps `local`
+// and writes only the shadows' rows and the boxes; the owned bodies' state then lives in `local`
+// (ownedStale) and reaches the records only where they are read whole (SyncOwned). Either way the
+// arrays are in id order, so the arithmetic, and the state hash, is the same.
+//
+// Why (circle stress, 16004 circles, one rank, amd-epyc-2c; docs/distributed.md has the commands):
+// the step took 6.3-7.5 ms, of which rebuilding the local arrays, pairs and contacts 3.1-3.7 ms
+// and migration with nothing to migrate 1.8-2.0 ms (every 268-byte record copied and sorted by id
+// every step), the Jacobi solve 0.4. With the arrays kept it takes 1.0-1.2 ms (collide 0.5-0.6,
+// solve 0.26-0.30, halo 0.19-0.23), 1.1-1.3x the World's default engine on the same scene. On a
+// dense scene the gap is the Jacobi solve itself (base-100 pyramid: 80-95 % of the step, one rank
+// 4-10x the World at 8 iterations).
 #include "quadrant/distributed_world.h"
 
 #include <algorithm>
@@ -19,6 +27,7 @@
 #include <type_traits>
 
 #include "collision/broad_phase.h"
+#include "collision/contact_sort.h"
 #include "dynamics/jacobi_solve.h"
 #include "quadrant/bit_hash.h"
 #include "quadrant/task_system.h"
@@ -136,11 +145,12 @@ struct DistributedWorld::Impl {
   MPI_Comm comm = MPI_COMM_NULL;
   int rank = 0, size = 1;
   Real tileW = 0, tileH = 0;
+  double perTileX = 0, perTileY = 0;  // 1 / tile width and height: a body's tile by a multiplication
   std::vector<int> tileOwner;  // by tile index tx + ty * tilesX
   std::vector<int> tileOrder;  // tile indices in Morton order (the order ranks get them in)
   std::vector<int64_t> tileCost;  // this rank's work per tile in the last step (load balance)
   int64_t stepCount = 0;
-  std::vector<Vec2> stepStartCenters;  // owned bodies' centres when the step began (tile costs)
+  std::vector<int> ownedTile;  // owned index -> the tile its centre was in when the step began
   std::vector<int> neighbours;  // ascending ranks
   std::vector<int> neighbourSlot;  // rank -> index in neighbours, -1 if not a neighbour
 
@@ -164,6 +174,7 @@ struct DistributedWorld::Impl {
     int neighbour;
   };
   std::vector<Source> sources;
+  std::vector<size_t> runEnds;  // BuildLocal: where each id-ordered run of sources ends
   std::vector<Record> shadows;
   Bodies local;
   std::vector<uint8_t> localOwned;
@@ -172,14 +183,40 @@ struct DistributedWorld::Impl {
   std::vector<std::vector<int>> receivedShadows;  // per neighbour: local indices, in order
   std::vector<std::vector<char>> out, in;
   std::vector<CandidatePair> pairs, ownPairs;
+  WorkerLists<Contact> workerContacts;
+  ContactSorter sorter;
   std::vector<Contact> contacts;
+  std::vector<AABB> ownedBoxes;              // owned index -> this step's broad-phase box
+  std::vector<int> leavingIndex;             // Migrate: owned indices that leave
+  std::vector<std::vector<uint32_t>> leavingIds;  // Migrate: per neighbour, the ids that go there
+  // `local` holds last step's bodies in the order this step needs: no body left or arrived, no
+  // tile changed owner, nothing loaded since. BuildLocal then only refreshes the shadows' rows
+  // (if the same shadows came) and every box.
+  bool layoutValid = false;
+  int localCustomFilters = 0;  // local bodies whose Filter is not the default (the pair filter runs)
+  // The owned records' state (xf, centre, velocity) is older than their rows in `local`: Step
+  // leaves it there (copying 16004 circles back into 268-byte records cost about 0.1 ms a step and
+  // reading them again as much); SyncOwned brings the records up to date where they are read whole.
+  bool ownedStale = false;
+
+  void SyncOwnedRecord(size_t o) {
+    const size_t i = size_t(ownedLocal[o]);
+    owned[o].xf = local.xf[i];
+    owned[o].center = local.center[i];
+    owned[o].vel = local.vel[i];
+  }
+  void SyncOwned() {
+    if (!ownedStale) return;
+    for (size_t o = 0; o < owned.size(); ++o) SyncOwnedRecord(o);
+    ownedStale = false;
+  }
 
   int TileX(Real x) const {
-    const double t = std::floor((double(x) - double(dist.bounds.lower.x)) / double(tileW));
+    const double t = std::floor((double(x) - double(dist.bounds.lower.x)) * perTileX);
     return int(std::clamp(t, 0.0, double(dist.tilesX - 1)));
   }
   int TileY(Real y) const {
-    const double t = std::floor((double(y) - double(dist.bounds.lower.y)) / double(tileH));
+    const double t = std::floor((double(y) - double(dist.bounds.lower.y)) * perTileY);
     return int(std::clamp(t, 0.0, double(dist.tilesY - 1)));
   }
   int OwnerOf(Vec2 c) const { return tileOwner[size_t(TileX(c.x) + TileY(c.y) * dist.tilesX)]; }
@@ -230,9 +267,7 @@ struct DistributedWorld::Impl {
     return r;
   }
 
-  static void AppendRecord(Bodies& b, const Record& r) {
-    const int i = b.Count();
-    b.ForEachArray([](auto& v) { v.emplace_back(); });
+  static void SetRow(Bodies& b, int i, const Record& r) {
     b.type[i] = r.type;
     b.xf[i] = r.xf;
     b.center[i] = r.center;
@@ -297,6 +332,8 @@ DistributedWorld::DistributedWorld(const WorldDef& def, const DistributedDef& di
   MPI_Comm_dup(comm, &w.comm);
   w.tileW = (dist.bounds.upper.x - dist.bounds.lower.x) / Real(dist.tilesX);
   w.tileH = (dist.bounds.upper.y - dist.bounds.lower.y) / Real(dist.tilesY);
+  w.perTileX = 1.0 / double(w.tileW);
+  w.perTileY = 1.0 / double(w.tileH);
 
   // Tiles in Morton order, dealt in contiguous runs: at first equal numbers of tiles per rank.
   w.tileOrder.resize(static_cast<size_t>(tiles));
@@ -365,6 +402,7 @@ void DistributedWorld::Impl::FindNeighbours() {
   sentShadows.assign(nb, {});
   receivedShadows.assign(nb, {});
   stats.neighbours = static_cast<int>(nb);
+  layoutValid = false;  // the neighbours' message slots start again
 }
 
 // Load balance: the tiles' costs of the last step (bodies owned plus their contacts: counts, not
@@ -385,6 +423,7 @@ void DistributedWorld::Impl::Rebalance(bool force) {
   const double imbalance = total > 0 ? *std::max_element(perRank.begin(), perRank.end()) / (total / size) : 1.0;
   if (!force && !(imbalance > double(dist.rebalanceThreshold))) return;
   if (total <= 0) return;
+  SyncOwned();
   DealTiles(cost);
   ++stats.rebalances;
 
@@ -495,6 +534,8 @@ void DistributedWorld::Load(std::span<const BodyDef> bodies) {
   w.statics.swap(statics);
   w.owned.swap(owned);
   w.cache.clear();
+  w.layoutValid = false;
+  w.ownedStale = false;
   w.expectedCount = count;
   w.expectedChecksum = checksum;
   w.loaded = true;
@@ -524,13 +565,31 @@ void DistributedWorld::Step(Real dt) {
 
   // The halo: the farthest any moving body's box reaches from its centre this step, over all
   // ranks (a max is exact in any order), and whether any body left its neighbourhood of tiles.
+  // Each owned body's box and tile are kept for the rest of the step; read from the local arrays
+  // while they map the owned list (layoutValid), else from the records.
   double local[2] = {0, 0};
-  for (const Record& r : w.owned) {
-    const AABB box = w.BoxOf(r, dt);
-    const double reach = std::max({double(r.center.x - box.lower.x), double(box.upper.x - r.center.x),
-                                   double(r.center.y - box.lower.y), double(box.upper.y - r.center.y)});
+  w.ownedBoxes.resize(w.owned.size());
+  w.ownedTile.resize(w.owned.size());
+  for (size_t o = 0; o < w.owned.size(); ++o) {
+    Vec2 c;
+    AABB box;
+    if (w.layoutValid) {
+      // The local rows hold the newest state whenever the layout is valid (SyncOwned only copies
+      // them to the records); the box goes to the row too, which BuildLocal keeps if it can.
+      const int i = w.ownedLocal[o];
+      c = w.local.center[size_t(i)];
+      box = w.local.aabb[size_t(i)] = BroadPhaseBox(w.local, i, w.def, dt);
+    } else {
+      c = w.owned[o].center;
+      box = w.BoxOf(w.owned[o], dt);
+    }
+    w.ownedBoxes[o] = box;
+    const double reach = std::max({double(c.x - box.lower.x), double(box.upper.x - c.x), double(c.y - box.lower.y),
+                                   double(box.upper.y - c.y)});
     local[0] = std::max(local[0], reach);
-    const int owner = w.OwnerOf(r.center);
+    const int t = w.TileX(c.x) + w.TileY(c.y) * w.dist.tilesX;
+    w.ownedTile[o] = t;
+    const int owner = w.tileOwner[size_t(t)];
     if (owner != w.rank && w.neighbourSlot[size_t(owner)] < 0) local[1] = 1;
   }
   double global[2] = {0, 0};
@@ -544,8 +603,16 @@ void DistributedWorld::Step(Real dt) {
   lap(w.stats.haloMs);
 
   w.Migrate(dt);
-  w.stepStartCenters.clear();
-  for (const Record& r : w.owned) w.stepStartCenters.push_back(r.center);
+  if (w.ownedBoxes.size() != w.owned.size() || !w.layoutValid) {
+    // Bodies left or arrived (the records are in sync then): this step's boxes for the new list.
+    w.ownedBoxes.resize(w.owned.size());
+    w.ownedTile.resize(w.owned.size());
+    for (size_t o = 0; o < w.owned.size(); ++o) {
+      const Record& r = w.owned[o];
+      w.ownedBoxes[o] = w.BoxOf(r, dt);
+      w.ownedTile[o] = w.TileX(r.center.x) + w.TileY(r.center.y) * w.dist.tilesX;
+    }
+  }
   lap(w.stats.migrateMs);
   w.SendShadows(Real(global[0]), dt);
   lap(w.stats.shadowsMs);
@@ -571,12 +638,7 @@ void DistributedWorld::Step(Real dt) {
   w.solve.Finish(w.local, w.def, dt, w.contacts, *w.run);
   lap(w.stats.solveMs);
   w.StoreCache();
-  for (size_t o = 0; o < w.owned.size(); ++o) {
-    const int i = w.ownedLocal[o];
-    w.owned[o].xf = w.local.xf[i];
-    w.owned[o].center = w.local.center[i];
-    w.owned[o].vel = w.local.vel[i];
-  }
+  w.ownedStale = true;  // the owned bodies' new state is in `local`
   w.stats.ownedBodies = static_cast<int>(w.owned.size());
   w.stats.contacts = static_cast<int>(w.contacts.size());
   // Work per tile of this step, for load balancing: each owned body and each of its contacts,
@@ -584,78 +646,105 @@ void DistributedWorld::Step(Real dt) {
   std::fill(w.tileCost.begin(), w.tileCost.end(), 0);
   const std::vector<int32_t>& counts = w.solve.Counts();
   for (size_t o = 0; o < w.owned.size(); ++o) {
-    const int i = w.ownedLocal[o];
-    const Vec2 c0 = w.stepStartCenters[o];
-    w.tileCost[size_t(w.TileX(c0.x) + w.TileY(c0.y) * w.dist.tilesX)] += 1 + counts[size_t(i)];
+    w.tileCost[size_t(w.ownedTile[o])] += 1 + counts[size_t(w.ownedLocal[o])];
   }
   w.CheckCounts();
   lap(w.stats.restMs);
 }
 
 // Round 1: bodies whose centre is now in another rank's tile go there, with the warm-start
-// entries of their contacts (the new owner computes those contacts next).
+// entries of their contacts (the new owner computes those contacts next). Most steps move no body
+// on most ranks: then `owned` is left as it is (no copy, no sort) and the local arrays of the last
+// step stay valid (BuildLocal). Arrivals are merged in by id, the order a full sort would give.
 void DistributedWorld::Impl::Migrate(Real) {
   ClearOut();
-  std::vector<std::vector<uint32_t>> leaving(neighbours.size());
-  std::vector<Record> staying;
-  staying.reserve(owned.size());
-  for (const Record& r : owned) {
-    const int owner = OwnerOf(r.center);
-    if (owner == rank) {
-      staying.push_back(r);
-      continue;
-    }
-    const int k = neighbourSlot[size_t(owner)];  // checked collectively in Step
-    leaving[size_t(k)].push_back(r.id);
+  leavingIndex.clear();
+  for (size_t o = 0; o < owned.size(); ++o) {
+    if (tileOwner[size_t(ownedTile[o])] != rank) leavingIndex.push_back(static_cast<int>(o));
+  }
+  if (!leavingIndex.empty()) SyncOwned();  // records travel, and the list changes
+  leavingIds.resize(neighbours.size());
+  for (auto& ids : leavingIds) ids.clear();
+  for (int o : leavingIndex) {
+    const Record& r = owned[size_t(o)];
+    const int k = neighbourSlot[size_t(OwnerOf(r.center))];  // checked collectively in Step
+    leavingIds[size_t(k)].push_back(r.id);
     Put(out[size_t(k)], r);
   }
   for (size_t k = 0; k < neighbours.size(); ++k) {
     // Entries touching a leaving body, after a separator count of bodies (records first).
-    std::vector<char> entries;
-    uint32_t n = 0;
-    const auto& ids = leaving[k];
-    for (const CacheEntry& e : cache) {
-      const uint32_t a = uint32_t(e.key >> 32), b = uint32_t(e.key);
-      if (std::binary_search(ids.begin(), ids.end(), a) || std::binary_search(ids.begin(), ids.end(), b)) {
-        Put(entries, e);
-        ++n;
-      }
-    }
+    const auto& ids = leavingIds[k];
     std::vector<char> message;
     Put(message, uint32_t(ids.size()));
     message.insert(message.end(), out[k].begin(), out[k].end());
-    Put(message, n);
-    message.insert(message.end(), entries.begin(), entries.end());
+    const size_t countAt = message.size();
+    Put(message, uint32_t(0));
+    uint32_t n = 0;
+    if (!ids.empty()) {
+      for (const CacheEntry& e : cache) {
+        const uint32_t a = uint32_t(e.key >> 32), b = uint32_t(e.key);
+        if (std::binary_search(ids.begin(), ids.end(), a) || std::binary_search(ids.begin(), ids.end(), b)) {
+          Put(message, e);
+          ++n;
+        }
+      }
+    }
+    std::memcpy(message.data() + countAt, &n, sizeof n);
     out[k].swap(message);
   }
   Round(1);
-  owned.swap(staying);
+  if (!leavingIndex.empty()) {
+    // Stable compaction: the staying bodies keep their id order.
+    size_t keep = 0, next = 0;
+    for (size_t o = 0; o < owned.size(); ++o) {
+      if (next < leavingIndex.size() && size_t(leavingIndex[next]) == o) {
+        ++next;
+        continue;
+      }
+      if (keep != o) owned[keep] = owned[o];
+      ++keep;
+    }
+    owned.resize(keep);
+  }
+  const size_t ownedBefore = owned.size(), cacheBefore = cache.size();
   for (size_t k = 0; k < neighbours.size(); ++k) {
     size_t at = 0;
     const uint32_t bodies = Take<uint32_t>(in[k], at);
+    if (bodies > 0) SyncOwned();  // the list changes: ownedLocal no longer maps it
     for (uint32_t j = 0; j < bodies; ++j) owned.push_back(Take<Record>(in[k], at));
     stats.migratedIn += static_cast<int>(bodies);
     const uint32_t entries = Take<uint32_t>(in[k], at);
     for (uint32_t j = 0; j < entries; ++j) cache.push_back(Take<CacheEntry>(in[k], at));
   }
-  std::sort(owned.begin(), owned.end(), [](const Record& a, const Record& b) { return a.id < b.id; });
-  // The same contact may arrive from two ranks (both bodies moved); the entries are equal (both
-  // ranks computed it with the same arithmetic), so one is kept.
-  std::stable_sort(cache.begin(), cache.end(), [](const CacheEntry& a, const CacheEntry& b) { return a.key < b.key; });
-  cache.erase(std::unique(cache.begin(), cache.end(), [](const CacheEntry& a, const CacheEntry& b) { return a.key == b.key; }),
-              cache.end());
+  if (owned.size() > ownedBefore) {
+    const auto byId = [](const Record& a, const Record& b) { return a.id < b.id; };
+    std::sort(owned.begin() + std::ptrdiff_t(ownedBefore), owned.end(), byId);
+    std::inplace_merge(owned.begin(), owned.begin() + std::ptrdiff_t(ownedBefore), owned.end(), byId);
+  }
+  if (cache.size() > cacheBefore) {
+    // The same contact may arrive from two ranks (both bodies moved); the entries are equal (both
+    // ranks computed it with the same arithmetic), so one is kept: the first, as a stable sort of
+    // the whole list keeps it (the list is in key order, each key once, before the arrivals).
+    const auto byKey = [](const CacheEntry& a, const CacheEntry& b) { return a.key < b.key; };
+    std::stable_sort(cache.begin() + std::ptrdiff_t(cacheBefore), cache.end(), byKey);
+    std::inplace_merge(cache.begin(), cache.begin() + std::ptrdiff_t(cacheBefore), cache.end(), byKey);
+    cache.erase(std::unique(cache.begin(), cache.end(), [](const CacheEntry& a, const CacheEntry& b) { return a.key == b.key; }),
+                cache.end());
+  }
+  if (!leavingIndex.empty() || owned.size() > ownedBefore) layoutValid = false;
 }
 
 // Round 2: every owned body goes as a shadow to each other rank owning a tile that its box,
 // widened by the global reach, overlaps. An owned body of that rank has its centre in such a tile
 // and its box within `reach` of it, so every pair with one of its bodies is found there.
-void DistributedWorld::Impl::SendShadows(Real reach, Real dt) {
+void DistributedWorld::Impl::SendShadows(Real reach, Real) {
   ClearOut();
   for (auto& s : sentShadows) s.clear();
   std::vector<int> targets;
-  for (size_t o = 0; o < owned.size(); ++o) {
+  // One rank, or no neighbour: nobody to send to.
+  for (size_t o = 0; !neighbours.empty() && o < owned.size(); ++o) {
     const Record& r = owned[o];
-    const AABB box = BoxOf(r, dt);
+    const AABB box = ownedBoxes[o];
     const int x0 = TileX(box.lower.x - reach), x1 = TileX(box.upper.x + reach);
     const int y0 = TileY(box.lower.y - reach), y1 = TileY(box.upper.y + reach);
     targets.clear();
@@ -667,6 +756,7 @@ void DistributedWorld::Impl::SendShadows(Real reach, Real dt) {
     }
     std::sort(targets.begin(), targets.end());
     targets.erase(std::unique(targets.begin(), targets.end()), targets.end());
+    if (!targets.empty() && ownedStale) SyncOwnedRecord(o);
     for (int t : targets) {
       const int k = neighbourSlot[size_t(t)];
       if (k < 0) throw std::logic_error("DistributedWorld: a shadow for a rank that is not a neighbour");
@@ -678,33 +768,85 @@ void DistributedWorld::Impl::SendShadows(Real reach, Real dt) {
 }
 
 // The rank's bodies in id order (statics, owned, shadows merged): every pair then has the same
-// orientation (a < b) and every contact list the same order as in one process.
+// orientation (a < b) and every contact list the same order as in one process. When the layout
+// is still valid and the same shadows came in the same order, last step's arrays are kept: the
+// owned rows already hold the bodies' state (Step writes it back), statics do not move, so only
+// the shadows' rows and the moving bodies' boxes are written (on one rank, with 16004 circles,
+// rebuilding cost about 1 ms a step).
 void DistributedWorld::Impl::BuildLocal(Real dt) {
+  bool same = layoutValid;
+  for (size_t k = 0; same && k < neighbours.size(); ++k) {
+    same = in[k].size() == receivedShadows[k].size() * sizeof(Record);
+    for (size_t j = 0, at = 0; same && j < receivedShadows[k].size(); ++j, at += sizeof(Record)) {
+      uint32_t id;
+      std::memcpy(&id, in[k].data() + at + offsetof(Record, id), sizeof id);
+      same = id == local.slot[size_t(receivedShadows[k][j])];
+    }
+  }
+  if (same) {
+    size_t count = 0;
+    for (size_t k = 0; k < neighbours.size(); ++k) {
+      size_t at = 0;
+      for (int i : receivedShadows[k]) {
+        const Record r = Take<Record>(in[k], at);
+        SetRow(local, i, r);
+        local.aabb[size_t(i)] = BoxOf(r, dt);
+      }
+      count += receivedShadows[k].size();
+    }
+    // The owned rows' boxes were written by the halo pass (the layout was valid then).
+    stats.shadowBodies = static_cast<int>(count);
+    stats.layoutKept = 1;
+    return;
+  }
+  SyncOwned();  // the local arrays are rebuilt from the records
   sources.clear();
   shadows.clear();
+  // Runs each in id order (statics, owned, and every neighbour's shadows, sent in its id order)
+  // are merged, not sorted: a sort of 16004 sources was 17 % of a rebuilding step.
+  runEnds.clear();
   for (size_t i = 0; i < statics.size(); ++i) sources.push_back({statics[i].id, 0, int(i), -1});
+  runEnds.push_back(sources.size());
   for (size_t i = 0; i < owned.size(); ++i) sources.push_back({owned[i].id, 1, int(i), -1});
+  runEnds.push_back(sources.size());
   for (size_t k = 0; k < neighbours.size(); ++k) {
     size_t at = 0;
     while (at < in[k].size()) {
       shadows.push_back(Take<Record>(in[k], at));
       sources.push_back({shadows.back().id, 2, int(shadows.size() - 1), int(k)});
     }
+    runEnds.push_back(sources.size());
   }
-  std::sort(sources.begin(), sources.end(), [](const Source& a, const Source& b) { return a.id < b.id; });
+  const auto byId = [](const Source& a, const Source& b) { return a.id < b.id; };
+  bool runsSorted = true;
+  for (size_t r = 0, from = 0; r < runEnds.size(); from = runEnds[r++]) {
+    runsSorted = runsSorted && std::is_sorted(sources.begin() + std::ptrdiff_t(from), sources.begin() + std::ptrdiff_t(runEnds[r]), byId);
+  }
+  if (runsSorted) {
+    for (size_t r = 1; r < runEnds.size(); ++r) {
+      std::inplace_merge(sources.begin(), sources.begin() + std::ptrdiff_t(runEnds[r - 1]),
+                         sources.begin() + std::ptrdiff_t(runEnds[r]), byId);
+    }
+  } else {
+    std::sort(sources.begin(), sources.end(), byId);
+  }
   for (size_t i = 1; i < sources.size(); ++i) {
     if (sources[i].id == sources[i - 1].id) throw std::logic_error("DistributedWorld: a body held twice");
   }
-  local.ForEachArray([](auto& v) { v.clear(); });  // capacity kept: no allocation once warm
+  // Every array sized to the new count (capacity kept: no allocation once warm), then each row
+  // written by SetRow. The arrays SetRow leaves alone (aabb aside: below) hold their defaults in
+  // every row: nothing in this world writes them (no user data, gravity scale, bullet or compound).
+  const size_t n = sources.size();
+  local.ForEachArray([n](auto& v) { v.resize(n); });
   localOwned.assign(sources.size(), 0);
   ownedLocal.assign(owned.size(), -1);
   for (auto& r : receivedShadows) r.clear();
   for (size_t i = 0; i < sources.size(); ++i) {
     const Source& s = sources[i];
     const Record& r = s.kind == 0 ? statics[size_t(s.index)] : s.kind == 1 ? owned[size_t(s.index)] : shadows[size_t(s.index)];
-    AppendRecord(local, r);
+    SetRow(local, static_cast<int>(i), r);
     // As the World: a static body's box is made once at creation (dt 0), a moving one's each step.
-    local.aabb[i] = BroadPhaseBox(local, static_cast<int>(i), def, r.type == BodyType::kStatic ? Real(0) : dt);
+    local.aabb[i] = s.kind == 1 ? ownedBoxes[size_t(s.index)] : BroadPhaseBox(local, static_cast<int>(i), def, r.type == BodyType::kStatic ? Real(0) : dt);
     if (s.kind == 1) {
       localOwned[i] = 1;
       ownedLocal[size_t(s.index)] = static_cast<int>(i);
@@ -716,6 +858,9 @@ void DistributedWorld::Impl::BuildLocal(Real dt) {
     if (sources[i].kind == 2) receivedShadows[size_t(sources[i].neighbour)].push_back(static_cast<int>(i));
   }
   stats.shadowBodies = static_cast<int>(shadows.size());
+  localCustomFilters = 0;
+  for (const Filter& f : local.filter) localCustomFilters += f == Filter{} ? 0 : 1;
+  layoutValid = true;
 }
 
 // The contacts of the rank's own bodies: broad phase over everything it holds, pairs without an
@@ -723,23 +868,37 @@ void DistributedWorld::Impl::BuildLocal(Real dt) {
 // warm-start impulses.
 void DistributedWorld::Impl::FindContacts(Real dt) {
   broadPhase->FindPairs(local.aabb, local.dynamic, pairs, *run);
+  // Without shadows every pair has a movable body, which is owned; without a custom filter every
+  // pair collides: then all of them are kept, as they are.
+  const bool keepAll = stats.shadowBodies == 0 && localCustomFilters == 0;
   ownPairs.clear();
   // The World's collision filter (Box2D's rule) on the same pairs; its compaction keeps order.
   const std::vector<Filter>& f = local.filter;
-  for (const CandidatePair& p : pairs) {
+  for (size_t k = 0; !keepAll && k < pairs.size(); ++k) {
+    const CandidatePair p = pairs[k];
     if (!localOwned[size_t(p.a)] && !localOwned[size_t(p.b)]) continue;
     if (!ShouldCollide(f[size_t(p.a)], f[size_t(p.b)])) continue;
     ownPairs.push_back(p);
   }
-  contacts.clear();
-  CollidePairs(local, def, dt, ownPairs, contacts);
-  std::sort(contacts.begin(), contacts.end(), [](const Contact& x, const Contact& y) { return x.Key() < y.Key(); });
+  if (keepAll) ownPairs.swap(pairs);
+  // The World's narrow phase and contact sort (per-worker lists merged in key order): the
+  // same contacts in the same order for any thread count.
+  workerContacts.Reset(run->Workers());
+  run->For(Stage::kNarrowPhase, static_cast<int>(ownPairs.size()), run->MinHeavyItems(), [&](int begin, int end, int worker) {
+    CollidePairs(local, def, dt, std::span<const CandidatePair>(ownPairs).subspan(size_t(begin), size_t(end - begin)),
+                 workerContacts[worker]);
+  });
+  sorter.Sort(*run, local.Count(), workerContacts, contacts, nullptr);
   if (!def.effects.warmStarting) return;
-  // ContactCache::Restore's rule: the entry of the same pair, points matched by feature id.
+  // ContactCache::Restore's rule: the entry of the same pair, points matched by feature id. The
+  // local arrays are in id order, so the contacts' key order is the cache's id-pair order: one
+  // walk through both.
+  auto it = cache.begin();
   for (Contact& c : contacts) {
     const uint64_t key = PairKey(local.slot[size_t(c.a)], local.slot[size_t(c.b)]);
-    auto it = std::lower_bound(cache.begin(), cache.end(), key, [](const CacheEntry& e, uint64_t k) { return e.key < k; });
-    if (it == cache.end() || it->key != key) continue;
+    while (it != cache.end() && it->key < key) ++it;
+    if (it == cache.end()) break;
+    if (it->key != key) continue;
     for (int k = 0; k < c.manifold.pointCount; ++k) {
       ManifoldPoint& p = c.manifold.points[k];
       for (int j = 0; j < it->pointCount; ++j) {
@@ -807,10 +966,15 @@ void DistributedWorld::Impl::StoreCache() {
 void DistributedWorld::Impl::CheckCounts() {
   int64_t cost = 0;
   for (int64_t c : tileCost) cost += c;
-  uint64_t local[3] = {uint64_t(owned.size()), 0, uint64_t(cost)};
-  for (const Record& r : owned) local[1] += MixId(r.id);
+  uint64_t mine[3] = {uint64_t(owned.size()), 0, uint64_t(cost)};
+  // The ids from the local arrays where they map the owned list (contiguous, not 268-byte strides).
+  if (ownedStale) {
+    for (int i : ownedLocal) mine[1] += MixId(local.slot[size_t(i)]);
+  } else {
+    for (const Record& r : owned) mine[1] += MixId(r.id);
+  }
   uint64_t global[3] = {0, 0, 0};
-  MPI_Allreduce(local, global, 3, MPI_UINT64_T, MPI_SUM, comm);
+  MPI_Allreduce(mine, global, 3, MPI_UINT64_T, MPI_SUM, comm);
   int64_t most = 0;
   MPI_Allreduce(&cost, &most, 1, MPI_INT64_T, MPI_MAX, comm);
   stats.imbalance = global[2] > 0 ? double(most) / (double(global[2]) / size) : 1.0;
@@ -820,6 +984,7 @@ void DistributedWorld::Impl::CheckCounts() {
 }
 
 std::vector<BodyState> DistributedWorld::GatherStates() const {
+  impl_->SyncOwned();  // the records are read whole (the world's state itself does not change)
   const Impl& w = *impl_;
   std::vector<BodyState> mine;
   auto state = [](const Record& r) {
@@ -899,6 +1064,7 @@ std::vector<char> GatherBytes(const std::vector<char>& mine, int rank, int size,
 }  // namespace
 
 void DistributedWorld::WriteCheckpoint(const std::string& path) const {
+  impl_->SyncOwned();
   const Impl& w = *impl_;
   Require(w.loaded, "DistributedWorld::WriteCheckpoint: Load a scene first");
   std::vector<char> mine;
@@ -1002,6 +1168,8 @@ void DistributedWorld::ReadCheckpoint(const std::string& path) {
   w.statics.swap(statics);
   w.owned.swap(owned);
   w.cache.swap(cache);
+  w.layoutValid = false;
+  w.ownedStale = false;
   w.expectedCount = count;
   w.expectedChecksum = checksum;
   w.loaded = true;
