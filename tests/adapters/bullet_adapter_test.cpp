@@ -13,6 +13,7 @@
 #include "adapter.h"
 #include "adapter_factories.h"
 #include "quadrant/error.h"
+#include "scenes.h"
 
 namespace quadrant::scene {
 
@@ -633,20 +634,11 @@ TEST(BulletAdapter, WeldHoldsTwoBoxesRelativePose) {
   EXPECT_LT(st[1].position.y, Real(1.6));  // it fell onto the ground
 }
 
-// A box on a horizontal prismatic joint through a static post, travel [-2, 2] m, launched at
-// 10 m/s: it stops at 2 m (within 5 cm), stays on the axis and does not turn.
+// The prismatic_stop hard case's scene (a box on a horizontal prismatic joint through a static
+// post, travel [-2, 2] m, launched at 10 m/s, gravity across the axis): it stops at 2 m (within
+// 5 cm), stays on the axis and does not turn.
 TEST(BulletAdapter, PrismaticLimitStopsTheSlider) {
-  Scene s = BaseScene();
-  BodyDesc slider = Box({0, 5}, Real(0.5), Real(0.5));
-  slider.velocity = {10, 0};
-  s.bodies = {Box({0, 5}, Real(0.1), Real(0.1), false), slider};
-  JointDesc j{0, 1, {0, 5}};
-  j.kind = JointKind::kPrismatic;
-  j.axis = {1, 0};
-  j.enableLimit = true;
-  j.lowerTranslation = -2;
-  j.upperTranslation = 2;
-  s.joints = {j};
+  const Scene s = MakePrismaticStop();
   auto a = MakeBulletAdapter();
   a->Load(s, 1);
   std::vector<BodyState> st;
