@@ -8,12 +8,14 @@
 // (WorldDef::thesisCoupledImpulse), "points" for its impulse at each touching point
 // (WorldDef::thesisPointImpulses), "passes<N>" for its passes (WorldDef::thesisPasses), "accum"
 // for its impulses accumulated and clamped over the passes (WorldDef::thesisAccumulatedImpulse),
+// "block" for its two-point contacts' normal impulses solved together (WorldDef::thesisBlockImpulse),
 // "b2pos" for Box2D 2.4.1's position pass instead of its push (WorldDef::thesisPositionPass),
 // "relaxfriction" for soft_step's friction in every relax pass, "b3soft"
 // for soft_step with Box2D 3's settings (one relax pass, no mass-ratio limit, damping ratio 10),
 // "nochain" for revolute chains solved joint by joint (WorldDef::jointChainSolve off), "nospec"
 // for touching contact points only (WorldDef::speculativeContacts off, as Box2D 2.4.1), "b2clip"
-// for Box2D 2.4.1's polygon manifolds (WorldDef::box2dPolygonClip), "norecycle"
+// for Box2D 2.4.1's polygon manifolds (WorldDef::box2dPolygonClip), "b2possolve" for its position
+// pass's geometry (WorldDef::box2dPositionSolve, pgs and thesis), "norecycle"
 // for manifolds computed every step (WorldDef::contactRecycleDistance 0, as Box2D 2.4.1).
 // The default is the engine's own (WorldDef: soft_step with two relax passes and a mass-ratio
 // limit of 10) with the uniform grid and the deterministic scheme.
@@ -82,6 +84,10 @@ QuadrantVariant QuadrantVariant::Parse(std::string_view variant) {
       v.thesisPoints = true;
     } else if (token == "accum") {
       v.thesisAccumulated = true;
+    } else if (token == "b2possolve") {
+      v.box2dPositions = true;
+    } else if (token == "block") {
+      v.thesisBlock = true;
     } else if (token == "b2pos") {
       v.thesisPositionPass = true;
     } else if (token == "nochain") {
@@ -105,8 +111,8 @@ QuadrantVariant QuadrantVariant::Parse(std::string_view variant) {
     } else {
       throw Error("unknown quadrant variant '" + std::string(token) +
                   "' (known: thesis, pgs, soft_step, jacobi, quadtree, grid, deterministic, quadrants, sub<N>, it<N>, "
-                  "pos<N>, relax<N>, ratio<N>, passes<N>, b3soft, relaxfriction, b2rest, b2skin, coupled, points, accum, b2pos, "
-                  "nochain, nospec, b2clip, norecycle)");
+                  "pos<N>, relax<N>, ratio<N>, passes<N>, b3soft, relaxfriction, b2rest, b2skin, coupled, points, accum, block, b2pos, "
+                  "nochain, nospec, b2clip, b2possolve, norecycle)");
     }
     if (end == std::string_view::npos) break;
     start = end + 1;
@@ -145,6 +151,8 @@ WorldDef QuadrantVariant::MakeWorldDef(const Scene& scene, int threads) const {
   def.thesisPointImpulses = thesisPoints;
   if (thesisPasses > 0) def.thesisPasses = thesisPasses;
   def.thesisAccumulatedImpulse = thesisAccumulated;
+  def.thesisBlockImpulse = thesisBlock;
+  def.box2dPositionSolve = box2dPositions;
   def.thesisPositionPass = thesisPositionPass;
   def.jointChainSolve = jointChainSolve;
   def.speculativeContacts = speculativeContacts;

@@ -24,6 +24,8 @@ struct QuadrantVariant {
   bool thesisPoints = false;   ///< points: the thesis solver's impulse at each touching point
   int thesisPasses = 0;        ///< passes<N>: the thesis solver's WorldDef::thesisPasses; 0: the engine's
   bool thesisAccumulated = false;  ///< accum: the thesis solver's WorldDef::thesisAccumulatedImpulse
+  bool box2dPositions = false;  ///< b2possolve: WorldDef::box2dPositionSolve
+  bool thesisBlock = false;  ///< block: the thesis solver's WorldDef::thesisBlockImpulse
   bool thesisPositionPass = false;  ///< b2pos: the thesis solver's WorldDef::thesisPositionPass
   bool jointChainSolve = true;   // nochain: WorldDef::jointChainSolve off
   bool speculativeContacts = true;  ///< nospec: WorldDef::speculativeContacts off (touching points only, as Box2D 2.4.1)

@@ -550,7 +550,11 @@ std::string Markdown(const qs::Campaign& c, const std::vector<qs::CampaignRow>& 
        "the impulses); `accumulated` = `WorldDef::thesisAccumulatedImpulse` (`accum`: each point's impulse a "
        "total over the step's passes, clamped as a total, so a later pass can take back what an earlier one "
        "gave a point, as Box2D's iterations do; `passes8`: `WorldDef::thesisPasses = 8`, Box2D's 8 velocity "
-       "iterations; either alone changes nothing); others are Quadrant "
+       "iterations; either alone changes nothing); `box2d_position_solve` = `WorldDef::box2dPositionSolve` "
+       "(`b2possolve`: the position pass with Box2D 2.4.1's geometry, the reference face's normal turning with "
+       "its body and the incident point with its own, instead of a normal fixed in the world); `block` = "
+       "`WorldDef::thesisBlockImpulse` (the thesis's two touching points' normal impulses solved together, as "
+       "Box2D's block solver, instead of one after the other); others are Quadrant "
        "adapter variants given with `--runs`.\n\n"
     << "| class | engine | setting | p90 | p90 with more choices switched |\n|---|---|---|---:|---|\n";
   auto tokens = [](const std::string& setting) {

@@ -360,6 +360,15 @@ std::vector<CampaignRun> DefaultCampaignRuns() {
        "quadrant:soft_step+b2rest+b2skin+relax4+relaxfriction+nospec+b2clip"},
       {"quadrant:thesis", "coupled+points+box2d_skin+box2d_positions+accumulated+passes8+touching+box2d_clip",
        "quadrant:thesis+coupled+points+b2skin+b2pos+accum+passes8+nospec+b2clip"},
+      // Box2D 2.4.1's solver where it still differed: its position pass's geometry, and the
+      // thesis solver's two-point impulses solved together.
+      {"quadrant:pgs", "box2d_restitution+box2d_skin+touching+box2d_clip+box2d_position_solve",
+       "quadrant:pgs+b2rest+b2skin+nospec+b2clip+b2possolve"},
+      {"quadrant:thesis", "coupled+points+box2d_skin+box2d_positions+accumulated+passes8+touching+box2d_clip+block",
+       "quadrant:thesis+coupled+points+b2skin+b2pos+accum+passes8+nospec+b2clip+block"},
+      {"quadrant:thesis",
+       "coupled+points+box2d_skin+box2d_positions+accumulated+passes8+touching+box2d_clip+block+box2d_position_solve",
+       "quadrant:thesis+coupled+points+b2skin+b2pos+accum+passes8+nospec+b2clip+block+b2possolve"},
   };
 }
 

@@ -358,6 +358,13 @@ struct WorldDef {
   /// incident edge's far end only where Box2D does. false (the default): side planes through the
   /// face's ends. docs/validation.md (the random campaign) gives what it changes.
   bool box2dPolygonClip = false;
+  /// pgs's position pass, and the thesis solver's with thesisPositionPass, as Box2D 2.4.1's: a
+  /// point's reference normal and plane turn with the reference body and the incident point (a
+  /// circle's centre, the clipped vertex) with its own, two circles are measured centre to
+  /// centre, and the pass stops after the first iteration with no point deeper than 3
+  /// linearSlop. false (the default): the normal fixed, the anchors turned, until nothing moves.
+  /// engine/src/dynamics/box2d_position.h says why; docs/validation.md what it changes.
+  bool box2dPositionSolve = false;
   /// thesis solver: solve its one impulse per contact with the normal and friction parts coupled
   /// (the 2x2 effective mass and the Coulomb cone) instead of by two separate formulas. Off (the
   /// default): the thesis's method. docs/validation.md gives what it changes.
@@ -375,6 +382,13 @@ struct WorldDef {
   /// do, instead of a fresh impulse per pass that only pushes. Only matters with thesisPasses > 1.
   /// Off (the default): the thesis's method. docs/validation.md gives what it changes.
   bool thesisAccumulatedImpulse = false;
+  /// thesis solver, with thesisPointImpulses and thesisAccumulatedImpulse: a contact's two
+  /// touching points take their normal impulses together, as the 2x2 complementarity problem
+  /// Box2D 2.4.1's block solver solves (friction first, each point's row clamped by its normal
+  /// total), and both restitution targets are read before either point's impulse. Off (the
+  /// default): one point after the other, the second point's target read after the first's
+  /// impulse. docs/validation.md gives what it changes.
+  bool thesisBlockImpulse = false;
   /// thesis solver: remove penetration after the positions are integrated, by positionIterations
   /// passes of non-linear Gauss-Seidel at the touching points (Box2D 2.4.1's and pgs's position
   /// pass, which turns the bodies too), instead of the thesis's translation push before the

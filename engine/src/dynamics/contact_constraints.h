@@ -13,6 +13,7 @@
 #include <utility>
 #include <vector>
 
+#include "dynamics/box2d_position.h"
 #include "dynamics/constraint_graph.h"
 #include "dynamics/contact_ends.h"
 #include "dynamics/integrate.h"
@@ -460,6 +461,56 @@ class ContactConstraints {
     if (anyMoved) SyncContactBodies(run, graph, bodies);
   }
 
+  // WorldDef::box2dPositionSolve (box2d_position.h): each point's Box2D geometry, taken with the
+  // bodies where the narrow phase saw them (before the positions are integrated).
+  void SnapshotBox2dGeometry(const StepContext& ctx) {
+    box2dGeometry_.resize(2 * list_.size());
+    for (size_t k = 0; k < list_.size(); ++k) {
+      const ContactConstraint& cc = list_[k];
+      for (int j = 0; j < cc.pointCount; ++j) {
+        box2dGeometry_[2 * k + j] = MakeBox2dPositionPoint(*ctx.bodies, ctx.contacts[cc.contact], j, cc.points[j].separation);
+      }
+    }
+  }
+
+  // The position pass as Box2D 2.4.1's (WorldDef::box2dPositionSolve): its geometry, in colour
+  // order on one thread (the same bits at any thread count), up to `iterations` passes, stopping
+  // after the first in which no point was deeper than 3 linearSlop. A validation setting.
+  template <bool kRotation>
+  void CorrectPositionsBox2d(Bodies& bodies, const WorldDef& def, int iterations) {
+    bool anyMoved = false;
+    for (int it = 0; it < iterations; ++it) {
+      Real minSeparation = 0;
+      for (size_t c = 0; c < list_.size(); ++c) {
+        const ContactConstraint& cc = list_[c];
+        for (int k = 0; k < cc.pointCount; ++k) {
+          const Box2dPositionPoint& g = box2dGeometry_[2 * c + k];
+          Real s;
+          Vec2 n = cc.normal, rA, rB;
+          if (g.kind == Box2dPositionPoint::kDefault) {
+            s = CurrentSeparation<kRotation>(bodies, cc, cc.points[k], rA, rB);
+          } else {
+            const Rot turnA = kRotation ? InvMul(rot0_[cc.a], bodies.xf[cc.a].q) : Rot{};
+            const Rot turnB = kRotation ? InvMul(rot0_[cc.b], bodies.xf[cc.b].q) : Rot{};
+            Vec2 point;
+            Box2dPositionNow(g, bodies.center[cc.a], turnA, bodies.center[cc.b], turnB, s, n, point);
+            rA = point - bodies.center[cc.a];
+            rB = point - bodies.center[cc.b];
+          }
+          minSeparation = std::min(minSeparation, s);
+          anyMoved |= ApplyBox2dPositionCorrection<kRotation>(bodies, def, cc.a, cc.invMassA, cc.invIA, cc.b, cc.invMassB,
+                                                              cc.invIB, s, n, rA, rB);
+        }
+      }
+      if (minSeparation >= -3 * def.linearSlop) break;
+    }
+    if (!anyMoved) return;
+    for (const ContactConstraint& cc : list_) {
+      if (cc.invMassA > 0) SyncTransform(bodies, cc.a);
+      if (cc.invMassB > 0) SyncTransform(bodies, cc.b);
+    }
+  }
+
   // Restitution: passes of ApplyCollisions, colour by colour, until one finds no collision (at
   // most restitutionIterations). stepGravity as ApplyCollisions says.
   template <bool kRotation>
@@ -479,6 +530,7 @@ class ContactConstraints {
   std::vector<ContactConstraint> list_;  // in colour order
   std::vector<Vec2> center0_;            // SnapshotPositions: where each body was before the step
   std::vector<Rot> rot0_;
+  std::vector<Box2dPositionPoint> box2dGeometry_;  // SnapshotBox2dGeometry: 2 per constraint
 };
 
 }  // namespace quadrant

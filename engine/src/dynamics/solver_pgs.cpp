@@ -71,12 +71,16 @@ class PgsSolver final : public Solver {
 
     const bool correct = def.positionIterations > 0 && m > 0;
     if (correct) constraints_.SnapshotPositions(run, bodies);
+    const bool box2dPositions = correct && def.box2dPositionSolve;
+    if (box2dPositions) run.Serial(Stage::kSolve, [&] { constraints_.SnapshotBox2dGeometry(ctx); });
     IntegratePositions(bodies, def, dt, run);
     if (collisions && m > 0) {
       graph_.ForEachColor(run, [&](int b, int e) { constraints_.ApplyBounceShifts(bodies, b, e); });
     }
     auto t3 = Clock::now();
-    if (correct) {
+    if (box2dPositions) {
+      run.Serial(Stage::kSolve, [&] { constraints_.CorrectPositionsBox2d<kRotation>(bodies, def, def.positionIterations); });
+    } else if (correct) {
       constraints_.CorrectPositions<kRotation>(run, graph_, bodies, def, def.linearSlop, def.positionIterations);
     }
     auto t4 = Clock::now();

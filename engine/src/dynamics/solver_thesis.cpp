@@ -28,6 +28,8 @@
 #include <span>
 #include <vector>
 
+#include "dynamics/box2d_position.h"
+#include "dynamics/contact_constraints.h"
 #include "dynamics/integrate.h"
 #include "dynamics/restitution_policy.h"
 #include "dynamics/solver.h"
@@ -103,6 +105,7 @@ class ThesisSolver final : public Solver {
     int a, b;
     Vec2 n, rA, rB;
     Real separation;  // at the narrow phase, less the pair's skins
+    Box2dPositionPoint box2d;  // WorldDef::box2dPositionSolve
   };
   std::vector<PositionPoint> posPoints_;
   std::vector<Vec2> center0_;
@@ -121,7 +124,9 @@ class ThesisSolver final : public Solver {
       for (int k = 0; k < c.manifold.pointCount; ++k) {
         const ManifoldPoint& mp = c.manifold.points[k];
         posPoints_.push_back({c.a, c.b, c.manifold.normal, mp.point - bodies.center[c.a], mp.point - bodies.center[c.b],
-                              mp.separation - skin});
+                              mp.separation - skin,
+                              def.box2dPositionSolve ? MakeBox2dPositionPoint(bodies, c, k, mp.separation - skin)
+                                                     : Box2dPositionPoint{}});
       }
     }
     center0_.assign(bodies.center.begin(), bodies.center.end());
@@ -136,6 +141,33 @@ class ThesisSolver final : public Solver {
     bool any = false;
     for (int it = 0; it < def.positionIterations; ++it) {
       bool moved = false;
+      if (def.box2dPositionSolve) {
+        // Box2D 2.4.1's geometry and stopping rule (box2d_position.h).
+        Real minSeparation = 0;
+        for (const PositionPoint& p : posPoints_) {
+          const Rot turnA = kRotation ? InvMul(rot0_[p.a], bodies.xf[p.a].q) : Rot{};
+          const Rot turnB = kRotation ? InvMul(rot0_[p.b], bodies.xf[p.b].q) : Rot{};
+          Real sep;
+          Vec2 n = p.n, rA = p.rA, rB = p.rB;
+          if (p.box2d.kind == Box2dPositionPoint::kDefault) {
+            rA = Rotate(turnA, p.rA);
+            rB = Rotate(turnB, p.rB);
+            const Vec2 d = (bodies.center[p.b] - center0_[p.b]) - (bodies.center[p.a] - center0_[p.a]) + (rB - p.rB) - (rA - p.rA);
+            sep = p.separation + Dot(p.n, d);
+          } else {
+            Vec2 point;
+            Box2dPositionNow(p.box2d, bodies.center[p.a], turnA, bodies.center[p.b], turnB, sep, n, point);
+            rA = point - bodies.center[p.a];
+            rB = point - bodies.center[p.b];
+          }
+          minSeparation = std::min(minSeparation, sep);
+          const Real mA = bodies.inv[p.a].invMass, mB = bodies.inv[p.b].invMass;
+          const Real iA = kRotation ? bodies.inv[p.a].invInertia : Real(0), iB = kRotation ? bodies.inv[p.b].invInertia : Real(0);
+          any |= ApplyBox2dPositionCorrection<kRotation>(bodies, def, p.a, mA, iA, p.b, mB, iB, sep, n, rA, rB);
+        }
+        if (minSeparation >= -3 * def.linearSlop) break;
+        continue;
+      }
       for (const PositionPoint& p : posPoints_) {
         const Real mA = bodies.inv[p.a].invMass, mB = bodies.inv[p.b].invMass;
         const Real iA = kRotation ? bodies.inv[p.a].invInertia : Real(0), iB = kRotation ? bodies.inv[p.b].invInertia : Real(0);
@@ -308,6 +340,21 @@ class ThesisSolver final : public Solver {
       count = 1;
     }
     const Vec2 t = RightPerp(n);
+    // One impulse per contact, in sequence, overshoots where a body rests on two supports
+    // (projecting onto one slanted normal, then the other, leaves it moving up), and with the
+    // supports immovable that lift would be handed up the whole pile every step: a body is
+    // not sent up faster than what it rests on moves up.
+    auto limitRise = [&] {
+      if (upper < 0) return;
+      const Vec2 u = Normalize(up);
+      const Real rise = Dot(u, bodies.vel[upper].v) - std::max(Dot(u, bodies.vel[lower].v), Real(0));
+      if (rise > 0) bodies.vel[upper].v -= rise * u;
+    };
+    if (target != nullptr && def.thesisBlockImpulse && count == 2 &&
+        ResolveBlock<kRotation>(bodies, def, c, index, mA, mB, iA, iB, target, firstPass)) {
+      limitRise();
+      return;
+    }
     for (int k = 0; k < count; ++k) {
       point = points[k];
       const Vec2 rA = point - bodies.center[a];
@@ -382,16 +429,75 @@ class ThesisSolver final : public Solver {
         va.w -= iA * Cross(rA, P);
         vb.w += iB * Cross(rB, P);
       }
-      // One impulse per contact, in sequence, overshoots where a body rests on two supports
-      // (projecting onto one slanted normal, then the other, leaves it moving up), and with the
-      // supports immovable that lift would be handed up the whole pile every step: a body is
-      // not sent up faster than what it rests on moves up.
-      if (upper >= 0) {
-        const Vec2 u = Normalize(up);
-        const Real rise = Dot(u, bodies.vel[upper].v) - std::max(Dot(u, bodies.vel[lower].v), Real(0));
-        if (rise > 0) bodies.vel[upper].v -= rise * u;
+      limitRise();
+    }
+  }
+
+  // WorldDef::thesisBlockImpulse: a contact's two touching points (accumulated totals, index
+  // into its manifold) as Box2D 2.4.1 takes them. Both restitution targets are read first, then
+  // each point's friction row is clamped by its normal total, then the two normal totals solve
+  // the 2x2 complementarity problem together (SolveLcp2). Returns false, touching nothing, where
+  // the two points nearly coincide (the matrix's condition over 1000, Box2D's bound): the caller
+  // takes them one after the other.
+  template <bool kRotation>
+  static bool ResolveBlock(Bodies& bodies, const WorldDef& def, Contact& c, const int index[2], Real mA, Real mB,
+                           Real iA, Real iB, Real* target, bool firstPass) {
+    const Vec2 n = c.manifold.normal, t = RightPerp(n);
+    BodyVelocity& va = bodies.vel[c.a];
+    BodyVelocity& vb = bodies.vel[c.b];
+    ManifoldPoint* mp[2] = {&c.manifold.points[index[0]], &c.manifold.points[index[1]]};
+    Vec2 rA[2], rB[2];
+    Real kn[2], kt[2];
+    for (int k = 0; k < 2; ++k) {
+      rA[k] = mp[k]->point - bodies.center[c.a];
+      rB[k] = mp[k]->point - bodies.center[c.b];
+      kn[k] = kt[k] = mA + mB;
+      if constexpr (kRotation) {
+        kn[k] += iA * Cross(rA[k], n) * Cross(rA[k], n) + iB * Cross(rB[k], n) * Cross(rB[k], n);
+        kt[k] += iA * Cross(rA[k], t) * Cross(rA[k], t) + iB * Cross(rB[k], t) * Cross(rB[k], t);
       }
     }
+    Real k12 = mA + mB;
+    if constexpr (kRotation) k12 += iA * Cross(rA[0], n) * Cross(rA[1], n) + iB * Cross(rB[0], n) * Cross(rB[1], n);
+    constexpr Real kMaxCondition = 1000;
+    if (!(kn[0] > 0 && kn[0] * kn[0] < kMaxCondition * (kn[0] * kn[1] - k12 * k12))) return false;
+    auto velocity = [&](int k) {
+      Vec2 dv = vb.v - va.v;
+      if constexpr (kRotation) dv += Cross(vb.w, rB[k]) - Cross(va.w, rA[k]);
+      return dv;
+    };
+    auto apply = [&](int k, Vec2 P) {
+      va.v -= mA * P;
+      vb.v += mB * P;
+      if constexpr (kRotation) {
+        va.w -= iA * Cross(rA[k], P);
+        vb.w += iB * Cross(rB[k], P);
+      }
+    };
+    if (firstPass) {
+      for (int k = 0; k < 2; ++k) {
+        const Real vn = Dot(velocity(k), n);
+        target[k] = def.effects.restitution && vn < -def.restitutionThreshold ? -c.restitution * vn : Real(0);
+      }
+    }
+    if (def.effects.friction) {
+      for (int k = 0; k < 2; ++k) {
+        const Real oldT = mp[k]->tangentImpulse, bound = c.friction * mp[k]->normalImpulse;
+        const Real newT = std::clamp(oldT - Dot(velocity(k), t) / kt[k], -bound, bound);
+        apply(k, (newT - oldT) * t);
+        mp[k]->tangentImpulse = newT;
+      }
+    }
+    const Real a0 = mp[0]->normalImpulse, a1 = mp[1]->normalImpulse;
+    const Real b0 = Dot(velocity(0), n) - target[0] - (kn[0] * a0 + k12 * a1);
+    const Real b1 = Dot(velocity(1), n) - target[1] - (k12 * a0 + kn[1] * a1);
+    Real x0, x1;
+    if (!SolveLcp2(kn[0], k12, kn[1], b0, b1, x0, x1)) return true;  // no case fits: keep the totals
+    apply(0, (x0 - a0) * n);
+    apply(1, (x1 - a1) * n);
+    mp[0]->normalImpulse = x0;
+    mp[1]->normalImpulse = x1;
+    return true;
   }
 };
 
