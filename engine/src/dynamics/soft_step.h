@@ -150,7 +150,7 @@ class SoftStepSolver final : public Solver {
   void SolveJoints(int begin, int end, bool useBias);
   void StoreJoints(StageRunner& run);
   void FindChains(int bodyCount);
-  void SolveChain(int chain, bool useBias);
+  void SolveChain(int chain);
   // fn(begin, end) over the joint rows, a stage per joint colour, queued in the sub-step's region.
   static constexpr int kJointGrain = 32;
   template <class Fn>
@@ -337,7 +337,7 @@ class SoftStepSolver final : public Solver {
   };
   void LoadChains(StageRunner& run);
   template <int N>
-  void SolveChainOf(int chain, bool useBias);
+  void SolveChainOf(int chain);
   std::vector<int> chainRows_, chainStart_, chainShared_;
   std::vector<ChainSlot> chainSlots_;
   // Per chain colour (chains of one colour share no dynamic body): its first chain, and one past
@@ -351,11 +351,11 @@ class SoftStepSolver final : public Solver {
   std::vector<uint8_t> chainSeen_;
   int ChainCount() const { return static_cast<int>(chainStart_.size()) - 1; }
   // SolveChain over every chain, a stage per chain colour, queued in the region.
-  void ChainPass(bool useBias) {
+  void ChainPass() {
     if (ChainCount() <= 0) return;
     const int pass = static_cast<int>(regionFns_.size());
-    regionFns_.emplace_back([this, useBias](int b, int e) {
-      for (int c = b; c < e; ++c) SolveChain(c, useBias);
+    regionFns_.emplace_back([this](int b, int e) {
+      for (int c = b; c < e; ++c) SolveChain(c);
     });
     for (int c = 0; c < kChainColors; ++c) {
       const int first = chainColorStart_[size_t(c)], count = chainColorStart_[size_t(c) + 1] - first;

@@ -439,17 +439,18 @@ void SoftStepSolver::LoadChains(StageRunner& run) {
 // elimination along the chain (the Thomas algorithm), O(rows): one forward sweep builds each
 // row's block and right-hand side and eliminates the row before; the backward sweep finds each
 // row's impulse, softened as the row-by-row solve softens it, and applies it. The matrix is built
-// afresh in every pass: with last pass's (or the step's) anchors a 1000:1 chain blows up.
-void SoftStepSolver::SolveChain(int chain, bool useBias) {
+// afresh in every pass: with last pass's (or the step's) anchors a 1000:1 chain blows up. The
+// solve pass only (with its bias): the relax passes take chain rows one by one (SolveJoints).
+void SoftStepSolver::SolveChain(int chain) {
   if (jointRows_[size_t(chainSlots_[size_t(chainStart_[size_t(chain)])].row)].type == JointType::kWeld) {
-    SolveChainOf<3>(chain, useBias);
+    SolveChainOf<3>(chain);
   } else {
-    SolveChainOf<2>(chain, useBias);
+    SolveChainOf<2>(chain);
   }
 }
 
 template <int N>
-void SoftStepSolver::SolveChainOf(int chain, bool useBias) {
+void SoftStepSolver::SolveChainOf(int chain) {
   SolverBody* s = states_.data();
   const Softness rigid = jointSoft_;
   const int begin = chainStart_[size_t(chain)], end = chainStart_[size_t(chain) + 1];
@@ -471,11 +472,11 @@ void SoftStepSolver::SolveChainOf(int chain, bool useBias) {
     slot.rB = Rotate(B.dq, slot.frameB);
     const Vec2 rA = slot.rA, rB = slot.rB;
     const Vec2 cdot = (B.v + Cross(B.w, rB)) - (A.v + Cross(A.w, rA));
-    const Vec2 bias = useBias ? rigid.biasRate * ((B.dp - A.dp) + (rB - rA) + slot.deltaCenter) : Vec2{};
+    const Vec2 bias = rigid.biasRate * ((B.dp - A.dp) + (rB - rA) + slot.deltaCenter);
     slot.rhs[0] = -(cdot.x + bias.x);
     slot.rhs[1] = -(cdot.y + bias.y);
     if constexpr (N == 3) {
-      const Real angleBias = useBias ? rigid.biasRate * Wrap(slot.deltaAngle + RelativeAngle(A.dq, B.dq)) : Real(0);
+      const Real angleBias = rigid.biasRate * Wrap(slot.deltaAngle + RelativeAngle(A.dq, B.dq));
       slot.rhs[2] = -((B.w - A.w) + angleBias);
     }
     Coupling<N>(rA, rA, slot.mA, slot.iA, diag);
@@ -525,11 +526,11 @@ void SoftStepSolver::SolveChainOf(int chain, bool useBias) {
     MulVec<N>(slot.inv, y, slot.x);
     SoftJointRow& r = jointRows_[size_t(slot.row)];
     const Vec2 x{slot.x[0], slot.x[1]};
-    const Vec2 P = useBias ? rigid.massScale * x - rigid.impulseScale * r.linearImpulse : x;
+    const Vec2 P = rigid.massScale * x - rigid.impulseScale * r.linearImpulse;
     r.linearImpulse = r.linearImpulse + P;
     Real L = 0;
     if constexpr (N == 3) {
-      L = useBias ? rigid.massScale * slot.x[2] - rigid.impulseScale * r.angularImpulse : slot.x[2];
+      L = rigid.massScale * slot.x[2] - rigid.impulseScale * r.angularImpulse;
       r.angularImpulse += L;
     }
     SolverBody& A = s[slot.a];

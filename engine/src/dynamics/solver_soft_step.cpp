@@ -206,7 +206,7 @@ void SoftStepSolver::SubStep(StepContext& ctx, const StepPlan& step, int sub, co
     });
   }
   JointPass([this](int b, int e) { SolveJoints(b, e, true); });
-  ChainPass(true);
+  ChainPass();
   ForEachGroup(run, simd, [&](auto lanes, SoftRowGroup& g, int lane) {
     SolveRows<decltype(lanes), kRotation, kFriction, true>(states_.data(), g, lane, solvePrm);
   });
