@@ -390,7 +390,7 @@ Args Parse(int argc, char** argv) {
                           "What accuracy costs in time (issue 6): solver settings swept over piles and stress "
                           "scenes,\ntime per step next to error measures from the read-back, then the piles' hard "
                           "cases on every\nQuadrant setting. Writes JSON for tools/accuracy_report.py.");
-  p.String("--out", &a.out, "DIR", "the output directory");
+  p.OutputDirectory("--out", &a.out, "the output directory");
   p.String("--json", &a.json, "FILE", "the JSON file to write").Default("DIR/accuracy.json");
   p.Flag("--quick", &a.quick, "one cheap and one default setting per family, fewer steps and bodies");
   p.NameList("--settings", &a.settings, settingIds, "setting", "the settings to sweep")

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 
 namespace quadrant::cli {
 
@@ -150,6 +151,27 @@ Option& Parser::IntList(std::string name, std::vector<int>* target, int least, i
 Option& Parser::String(std::string name, std::string* target, std::string value, std::string help) {
   Option& o = Add(std::move(name), help, std::move(value), help, *target);
   o.set_ = [target](const Option&, const std::string& text) -> std::optional<std::string> {
+    *target = text;
+    return std::nullopt;
+  };
+  return o;
+}
+
+Option& Parser::OutputDirectory(std::string name, std::string* target, std::string help) {
+  Option& o = Add(std::move(name), std::move(help), "DIR", "a directory, or a path where one can be created", *target);
+  o.set_ = [target](const Option&, const std::string& text) -> std::optional<std::string> {
+    if (text.empty()) return "";
+    std::error_code ec;
+    std::filesystem::path at(text);
+    // The nearest part of the path that exists must be a directory.
+    while (!at.empty() && !std::filesystem::exists(at, ec)) {
+      const std::filesystem::path parent = at.parent_path();
+      if (parent == at) break;
+      at = parent;
+    }
+    if (!at.empty() && std::filesystem::exists(at, ec) && !std::filesystem::is_directory(at, ec)) {
+      return "'" + at.string() + "' is not a directory";
+    }
     *target = text;
     return std::nullopt;
   };

@@ -90,6 +90,10 @@ class Parser {
   Option& IntList(std::string name, std::vector<int>* target, int least, int most, std::string help);
   /// Any text (a file, a directory).
   Option& String(std::string name, std::string* target, std::string value, std::string help);
+  /// A directory the program writes into: one that exists, or a path where one can be created
+  /// (its nearest existing ancestor is a directory). Checked before the program runs, so a run
+  /// is not lost to an output path that cannot hold it. Nothing is created here.
+  Option& OutputDirectory(std::string name, std::string* target, std::string help);
   /// One name of `allowed` ("unknown <noun> 'x'" otherwise); an empty `allowed` takes any name
   /// that passes Check().
   Option& Name(std::string name, std::string* target, std::vector<std::string> allowed, std::string noun,

@@ -212,7 +212,7 @@ Args Parse(int argc, char** argv) {
                           "What each effect of the scene API costs Quadrant (issue 6): time per step with the "
                           "effect on and off,\nand the stress scenes with only the effects they need against "
                           "all effects on. Writes DIR/effects.json\nand DIR/effects.md.");
-  p.String("--out", &a.out, "DIR", "the output directory");
+  p.OutputDirectory("--out", &a.out, "the output directory");
   p.Flag("--quick", &a.quick, "fewer bodies and steps");
   p.Int("--count", &a.count, 1, 1000000, "bodies in the stress scenes").Default("8000; 1000 with --quick");
   p.Int("--steps", &a.steps, 1, 1000000, "timed steps per run").Default("120; 20 with --quick");

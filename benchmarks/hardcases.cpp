@@ -50,7 +50,7 @@ Args Parse(int argc, char** argv) {
                           "Runs every hard case on Quadrant (which must pass) and on the peers, and writes "
                           "DIR/hardcases.json\nand DIR/hardcases.md. Exit status 0 when every Quadrant case "
                           "passes, 1 when one fails.");
-  p.String("--out", &a.out, "DIR", "the output directory");
+  p.OutputDirectory("--out", &a.out, "the output directory");
   p.NameList("--peers", &a.peers, {}, "engine", "the peers to run the cases on too")
       .Accepts(quadrant::cli::kEngineList)
       .AllowNone()

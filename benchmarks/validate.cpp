@@ -66,7 +66,7 @@ Args Parse(int argc, char** argv) {
                           "campaign of N oblique hits, written to\nDIR/validation_random.{json,md} and "
                           "DIR/validation_random_hits.csv. Exit status 0 when every case\npasses, 1 when one "
                           "fails.");
-  p.String("--out", &a.out, "DIR", "the output directory");
+  p.OutputDirectory("--out", &a.out, "the output directory");
   p.NameList("--cases", &a.cases, qs::ValidationCaseNames(), "case", "the canonical cases to run").Default("all");
   p.Int("--random", &a.random, 1, 1000000, "run the random campaign of this many hits instead of the cases")
       .Default("");

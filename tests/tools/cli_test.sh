@@ -88,6 +88,9 @@ expect_refusal "nothing to run" "$BENCH" --scenes circle_stress --engines box2d 
 expect_refusal "unknown engine 'nosuchengine'" "$HARDCASES" --out "$OUT" --peers nosuchengine
 expect_refusal "unknown case 'nosuch'" "$HARDCASES" --out "$OUT" --cases nosuch
 expect_refusal "unknown case 'nosuch'" "$VALIDATE" --out "$OUT" --cases nosuch
+# An output path under a file is refused before the run, not after it (the programs themselves).
+expect_refusal "is not a directory" "$VALIDATE" --out "$WORK/a_file/x" --random 2 --seeds 1
+expect_refusal "is not a directory" "$HARDCASES" --out "$WORK/a_file/x" --cases confined
 
 # help lists every engine and scene the suite knows.
 help="$("$DRIVER" help)"
