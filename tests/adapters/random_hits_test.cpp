@@ -201,6 +201,30 @@ TEST(RandomHits, Box2dSettingsAreRefusedWhereTheyDoNotApply) {
   EXPECT_NO_THROW(World{def});
   def.scheme = ParallelScheme::kQuadrants;
   EXPECT_THROW(World{def}, Error);
+  // Box2D's position pass geometry: pgs, or the thesis with its position pass; not soft_step or
+  // jacobi (no such pass), not the quadrants scheme (its body copies carry no shapes).
+  def = WorldDef{};
+  def.box2dPositionSolve = true;
+  EXPECT_THROW(World{def}, Error);  // soft_step
+  def.solver = SolverType::kJacobi;
+  EXPECT_THROW(World{def}, Error);
+  def.solver = SolverType::kThesis;
+  EXPECT_THROW(World{def}, Error);
+  def.thesisPositionPass = true;
+  EXPECT_NO_THROW(World{def});
+  def.solver = SolverType::kPgs;
+  EXPECT_NO_THROW(World{def});
+  def.scheme = ParallelScheme::kQuadrants;
+  EXPECT_THROW(World{def}, Error);
+  // The thesis's two-point block needs its impulses per point and accumulated.
+  def = WorldDef{};
+  def.thesisBlockImpulse = true;
+  EXPECT_THROW(World{def}, Error);
+  def.solver = SolverType::kThesis;
+  def.thesisPointImpulses = true;
+  EXPECT_THROW(World{def}, Error);
+  def.thesisAccumulatedImpulse = true;
+  EXPECT_NO_THROW(World{def});
 }
 
 }  // namespace

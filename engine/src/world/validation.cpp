@@ -56,6 +56,15 @@ void ValidateWorldDef(const WorldDef& d) {
           "WorldDef.restitution is unknown");
   Require(d.restitution == RestitutionPolicy::kCollisions || d.solver != SolverType::kThesis,
           "WorldDef.restitution = kBox2d needs SolverType::kPgs or kSoftStep");
+  // Box2D 2.4.1's position pass geometry reads the bodies' shapes, which the quadrants scheme's
+  // private copies do not carry; soft_step and jacobi have no such pass.
+  Require(!d.box2dPositionSolve || d.solver == SolverType::kPgs || (d.solver == SolverType::kThesis && d.thesisPositionPass),
+          "WorldDef.box2dPositionSolve needs SolverType::kPgs, or kThesis with thesisPositionPass");
+  Require(!d.box2dPositionSolve || d.scheme == ParallelScheme::kDeterministic,
+          "WorldDef.box2dPositionSolve is not supported with ParallelScheme::kQuadrants (use kDeterministic)");
+  Require(!d.thesisBlockImpulse ||
+              (d.solver == SolverType::kThesis && d.thesisPointImpulses && d.thesisAccumulatedImpulse),
+          "WorldDef.thesisBlockImpulse needs SolverType::kThesis with thesisPointImpulses and thesisAccumulatedImpulse");
   Require(IsFinite(d.polygonSkin) && d.polygonSkin >= 0 && 2 * d.polygonSkin <= d.speculativeDistance,
           "WorldDef.polygonSkin must be in [0, speculativeDistance / 2]");
   // The quadrants scheme solves private copies of its bodies without their shapes (quadrants_scheme.cpp).
