@@ -153,6 +153,10 @@ struct DistributedWorld::Impl {
   std::vector<int> ownedTile;  // owned index -> the tile its centre was in when the step began
   std::vector<int> neighbours;  // ascending ranks
   std::vector<int> neighbourSlot;  // rank -> index in neighbours, -1 if not a neighbour
+  // By tile: 1 if this rank owns every tile within two of it (5 x 5). A body whose centre is in
+  // such a tile is a shadow nowhere: its box widened by the reach stays within one tile of the
+  // centre (Step checks 2 x reach <= a tile), the second tile is a margin for rounding.
+  std::vector<uint8_t> deepTile;
 
   bool loaded = false;
   std::vector<Record> statics;  // every static body, on every rank, id order
@@ -413,6 +417,17 @@ void DistributedWorld::Impl::FindNeighbours() {
         if (owner != rank) neighbourSlot[size_t(owner)] = 0;
       }
     }
+  }
+  deepTile.assign(size_t(tiles), 0);
+  for (int t = 0; t < tiles; ++t) {
+    const int tx = t % dist.tilesX, ty = t / dist.tilesX;
+    bool deep = true;
+    for (int y = std::max(ty - 2, 0); deep && y <= std::min(ty + 2, dist.tilesY - 1); ++y) {
+      for (int x = std::max(tx - 2, 0); deep && x <= std::min(tx + 2, dist.tilesX - 1); ++x) {
+        deep = tileOwner[size_t(x + y * dist.tilesX)] == rank;
+      }
+    }
+    deepTile[size_t(t)] = deep ? 1 : 0;
   }
   for (int r = 0; r < size; ++r) {
     if (neighbourSlot[size_t(r)] == 0) {
@@ -782,6 +797,7 @@ void DistributedWorld::Impl::SendShadows(Real reach, Real) {
   // One rank, or no neighbour: nobody to send to.
   const size_t count = neighbours.empty() ? 0 : OwnedCount();
   for (size_t o = 0; o < count; ++o) {
+    if (deepTile[size_t(ownedTile[o])]) continue;
     const AABB box = ownedBoxes[o];
     const int x0 = TileX(box.lower.x - reach), x1 = TileX(box.upper.x + reach);
     const int y0 = TileY(box.lower.y - reach), y1 = TileY(box.upper.y + reach);
