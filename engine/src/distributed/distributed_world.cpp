@@ -1020,6 +1020,7 @@ void DistributedWorld::Impl::PatchLocal(Real dt) {
     }
   }
   stats.shadowBodies = static_cast<int>(shadows.size());
+  stats.layoutPatched = 1;
   localCustomFilters = 0;
   for (const Filter& f : local.filter) localCustomFilters += f == Filter{} ? 0 : 1;
   ownedChanged = false;
