@@ -1,21 +1,26 @@
 // The distributed world: tiles, ownership, migration, shadows, neighbour rounds and the split
 // Jacobi solve (quadrant/distributed_world.h gives the scheme and its contract).
 //
-// State between steps: `owned`, one Record per owned body (what a rank needs to collide, solve
-// and integrate it; the unit of migration, shadows and checkpoints), and `local`, the World's
-// arrays of the rank's statics, owned bodies and shadows in id order. While no body leaves or
-// arrives, no tile changes owner and the same shadows come (layoutValid), a step keeps `local`
-// and writes only the shadows' rows and the boxes; the owned bodies' state then lives in `local`
-// (ownedStale) and reaches the records only where they are read whole (SyncOwned). Either way the
-// arrays are in id order, so the arithmetic, and the state hash, is the same.
+// State between steps: `local`, the World's arrays of the rank's statics, owned bodies and shadows
+// in id order, holds the owned bodies' state (ownedStale; ownedLocal names their rows). A Record
+// per owned body (what a rank needs to collide, solve and integrate it: the unit of migration,
+// shadows and checkpoints) is made from its row where it travels, and `owned` holds them all only
+// after Load, a checkpoint or a rebalance, or where they are read whole (SyncOwned). A step keeps
+// `local` while no body leaves or arrives and the same shadows come (layoutValid: only the
+// shadows' rows and the boxes are written), patches it when a few do (PatchLocal: the kept rows
+// copied in runs, arrivals' and shadows' rows written, merged by id) and rebuilds it from records
+// only when tiles change owner or a scene is loaded. Either way the arrays are in id order, so the
+// arithmetic, and the state hash, is the same at any rank count.
 //
-// Why (circle stress, 16004 circles, one rank, amd-epyc-2c; docs/distributed.md has the commands):
-// the step took 6.3-7.5 ms, of which rebuilding the local arrays, pairs and contacts 3.1-3.7 ms
-// and migration with nothing to migrate 1.8-2.0 ms (every 268-byte record copied and sorted by id
-// every step), the Jacobi solve 0.4. With the arrays kept it takes 1.0-1.2 ms (collide 0.5-0.6,
-// solve 0.26-0.30, halo 0.19-0.23), 1.1-1.3x the World's default engine on the same scene. On a
-// dense scene the gap is the Jacobi solve itself (base-100 pyramid: 80-95 % of the step, one rank
-// 4-10x the World at 8 iterations).
+// Why (circle stress, 16004 circles per rank, amd-epyc-2c; docs/distributed.md has the commands):
+// on one rank the step took 6.3-7.5 ms when every step rebuilt the arrays and copied and sorted
+// every 268-byte record; with the arrays kept it takes 1.0-1.2 ms (collide 0.5-0.6, solve
+// 0.26-0.30, halo 0.19-0.23), 1.1-1.3x the World's default engine. On two ranks a body crosses
+// the boundary nearly every step: refreshing, compacting and merging all records and rebuilding the
+// arrays then cost migrate 2.3-3.2 and collide 4.0 ms a step on a loaded machine, against 0.2-0.9
+// and 3.4 with the patch (the slowest rank; the rest of the gap to one rank is the rounds' wait).
+// On a dense scene the gap is the Jacobi solve itself (base-100 pyramid: 80-95 % of the step, one
+// rank 4-10x the World at 8 iterations).
 #include "quadrant/distributed_world.h"
 
 #include <algorithm>
