@@ -16,9 +16,10 @@
 // on one rank the step took 6.3-7.5 ms when every step rebuilt the arrays and copied and sorted
 // every 268-byte record; with the arrays kept it takes 1.0-1.2 ms (collide 0.5-0.6, solve
 // 0.26-0.30, halo 0.19-0.23), 1.1-1.3x the World's default engine. On two ranks a body crosses
-// the boundary nearly every step: refreshing, compacting and merging all records and rebuilding the
-// arrays then cost migrate 2.3-3.2 and collide 4.0 ms a step on a loaded machine, against 0.2-0.9
-// and 3.4 with the patch (the slowest rank; the rest of the gap to one rank is the rounds' wait).
+// the boundary, or the shadows change, nearly every step: refreshing, compacting and merging all
+// records and rebuilding the arrays from them made the step 2.5-2.8 ms (migrate 0.62-0.65,
+// shadows 0.38-0.41); patched, 1.6-1.8 (0.07 and 0.13-0.15). The patch still copies every row
+// (collide 0.80-0.94 against one rank's 0.49): an inserted shadow shifts the rows behind it.
 // On a dense scene the gap is the Jacobi solve itself (base-100 pyramid: 80-95 % of the step, one
 // rank 4-10x the World at 8 iterations).
 #include "quadrant/distributed_world.h"
