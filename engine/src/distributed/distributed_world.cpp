@@ -935,8 +935,8 @@ void DistributedWorld::Impl::BuildLocal(Real dt) {
 // whose rows hold their newest state and, from the halo pass, this step's box) are copied array by
 // array in runs, and only the arrivals' and shadows' rows are written from records, all merged by
 // id. The result is the rows a rebuild gives, in the same order (the same bits), without reading
-// every owned record (2 ranks, 16004 circles each: about one body leaves or arrives per step and
-// the shadow set changes nearly every step).
+// every owned record (2 ranks, 16004 circles each: bodies cross or the shadow set changes nearly
+// every step).
 void DistributedWorld::Impl::PatchLocal(Real dt) {
   const size_t before = size_t(local.Count());
   keepRow.assign(before, 0);
