@@ -90,14 +90,16 @@ struct SideBySide {
 
 // Steps a World (rank 0 only) and the distributed world side by side; compares their state
 // hashes every `every` steps. Returns the distributed world's migrations summed over steps and
-// ranks.
+// ranks; `patched`, if given, gets the steps summed over ranks that patched the local arrays
+// (DistributedStats::layoutPatched).
 int64_t CompareWithWorld(const WorldDef& def, const DistributedDef& dist, const std::vector<BodyDef>& bodies,
-                         Real dt, int steps, int every) {
+                         Real dt, int steps, int every, int64_t* patched = nullptr) {
   SideBySide both(def, dist, bodies);
-  int64_t migrated = 0;
+  int64_t migrated = 0, patches = 0;
   for (int step = 1; step <= steps; ++step) {
     both.Step(dt);
     migrated += both.dw.GetStats().migratedIn;
+    patches += both.dw.GetStats().layoutPatched;
     if (step % every == 0 || step == steps) {
       const uint64_t expected = both.WorldHash(), got = both.dw.StateHash();
       EXPECT_EQ(got, expected) << "step " << step << " at " << Size() << " ranks";
@@ -106,6 +108,7 @@ int64_t CompareWithWorld(const WorldDef& def, const DistributedDef& dist, const 
   }
   int64_t total = 0;
   MPI_Allreduce(&migrated, &total, 1, MPI_INT64_T, MPI_SUM, MPI_COMM_WORLD);
+  if (patched != nullptr) MPI_Allreduce(&patches, patched, 1, MPI_INT64_T, MPI_SUM, MPI_COMM_WORLD);
   return total;
 }
 
@@ -118,9 +121,11 @@ TEST(Distributed, CircleStressMatchesWorld) {
   DistributedDef dist;
   dist.bounds = s.bounds;
   dist.tilesX = dist.tilesY = 4;
-  const int64_t migrated = CompareWithWorld(JacobiDef(s), dist, ToBodyDefs(s), s.timeStep, 200, 50);
+  int64_t patched = 0;
+  const int64_t migrated = CompareWithWorld(JacobiDef(s), dist, ToBodyDefs(s), s.timeStep, 200, 50, &patched);
   if (Size() > 1) {
     EXPECT_GT(migrated, 0);  // bodies crossed between ranks (the 2000-step test below moves many more)
+    EXPECT_GT(patched, 0);   // and the steps where they did patched the local arrays (PatchLocal)
   }
   if (Rank() == 0) std::printf("[ info ] circle stress 1000, 200 steps, %d ranks: %lld migrations\n", Size(), (long long)migrated);
 }

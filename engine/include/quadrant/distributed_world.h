@@ -60,8 +60,13 @@ struct DistributedStats {
   int neighbours = 0;
   int rebalances = 0;       ///< tile re-deals at the start of the step (0 or 1)
   /// 1 if the step kept last step's local arrays (no body left or arrived, no tile changed owner,
-  /// the same shadows came): only the shadows' rows and the boxes were written; 0 if it rebuilt them.
+  /// the same shadows came): only the shadows' rows and the boxes were written; 0 if it patched
+  /// (layoutPatched) or rebuilt them.
   int layoutKept = 0;
+  /// 1 if the step patched last step's local arrays instead (bodies left or arrived, or other
+  /// shadows came, the tiles' owners unchanged): the kept rows were copied in runs and only the
+  /// arrivals' and shadows' rows written from records.
+  int layoutPatched = 0;
   /// Load imbalance of the step: max / mean over ranks of the work (owned bodies plus their
   /// contacts), the same on every rank.
   double imbalance = 1;
