@@ -91,15 +91,16 @@ struct SideBySide {
 // Steps a World (rank 0 only) and the distributed world side by side; compares their state
 // hashes every `every` steps. Returns the distributed world's migrations summed over steps and
 // ranks; `patched`, if given, gets the steps summed over ranks that patched the local arrays
-// (DistributedStats::layoutPatched).
+// (DistributedStats::layoutPatched), `moved` the rows those patches moved (rowsMoved).
 int64_t CompareWithWorld(const WorldDef& def, const DistributedDef& dist, const std::vector<BodyDef>& bodies,
-                         Real dt, int steps, int every, int64_t* patched = nullptr) {
+                         Real dt, int steps, int every, int64_t* patched = nullptr, int64_t* moved = nullptr) {
   SideBySide both(def, dist, bodies);
-  int64_t migrated = 0, patches = 0;
+  int64_t migrated = 0, patches = 0, moves = 0;
   for (int step = 1; step <= steps; ++step) {
     both.Step(dt);
     migrated += both.dw.GetStats().migratedIn;
     patches += both.dw.GetStats().layoutPatched;
+    moves += both.dw.GetStats().rowsMoved;
     if (step % every == 0 || step == steps) {
       const uint64_t expected = both.WorldHash(), got = both.dw.StateHash();
       EXPECT_EQ(got, expected) << "step " << step << " at " << Size() << " ranks";
@@ -109,6 +110,7 @@ int64_t CompareWithWorld(const WorldDef& def, const DistributedDef& dist, const 
   int64_t total = 0;
   MPI_Allreduce(&migrated, &total, 1, MPI_INT64_T, MPI_SUM, MPI_COMM_WORLD);
   if (patched != nullptr) MPI_Allreduce(&patches, patched, 1, MPI_INT64_T, MPI_SUM, MPI_COMM_WORLD);
+  if (moved != nullptr) MPI_Allreduce(&moves, moved, 1, MPI_INT64_T, MPI_SUM, MPI_COMM_WORLD);
   return total;
 }
 
@@ -121,11 +123,12 @@ TEST(Distributed, CircleStressMatchesWorld) {
   DistributedDef dist;
   dist.bounds = s.bounds;
   dist.tilesX = dist.tilesY = 4;
-  int64_t patched = 0;
-  const int64_t migrated = CompareWithWorld(JacobiDef(s), dist, ToBodyDefs(s), s.timeStep, 200, 50, &patched);
+  int64_t patched = 0, moved = 0;
+  const int64_t migrated = CompareWithWorld(JacobiDef(s), dist, ToBodyDefs(s), s.timeStep, 200, 50, &patched, &moved);
   if (Size() > 1) {
     EXPECT_GT(migrated, 0);  // bodies crossed between ranks (the 2000-step test below moves many more)
     EXPECT_GT(patched, 0);   // and the steps where they did patched the local arrays (PatchLocal)
+    EXPECT_GT(moved, 0);     // rows out of id order: pairs and contacts are ordered by id all the same
   }
   if (Rank() == 0) std::printf("[ info ] circle stress 1000, 200 steps, %d ranks: %lld migrations\n", Size(), (long long)migrated);
 }

@@ -64,9 +64,11 @@ struct DistributedStats {
   /// (layoutPatched) or rebuilt them.
   int layoutKept = 0;
   /// 1 if the step patched last step's local arrays instead (bodies left or arrived, or other
-  /// shadows came, the tiles' owners unchanged): the kept rows were copied in runs and only the
-  /// arrivals' and shadows' rows written from records.
+  /// shadows came, the tiles' owners unchanged): the kept rows stayed in place and only the
+  /// arrivals' and shadows' rows were written from records, into freed rows first.
   int layoutPatched = 0;
+  /// Kept rows the patch moved down into freed rows (more rows were freed than filled).
+  int rowsMoved = 0;
   /// Load imbalance of the step: max / mean over ranks of the work (owned bodies plus their
   /// contacts), the same on every rank.
   double imbalance = 1;
@@ -108,9 +110,9 @@ struct BodyState {
 // allreduces are the halo reach, the body count and checksum, and the most loaded rank's work;
 // with load balancing on, every rebalanceInterval steps an allreduce of the tiles' work and, when
 // it re-deals them, an all-to-all of the bodies that change owner.
-// Determinism: each rank builds its bodies in id order and computes every contact of its own
-// bodies, so every body sees the same contacts, in the same order, with the same arithmetic as in
-// one process.
+// Determinism: each rank computes every contact of its own bodies, each pair oriented and the
+// contacts ordered by body id, so every body sees the same contacts, in the same order, with the
+// same arithmetic as in one process.
 class DistributedWorld {
  public:
   /// Collective over `comm` (duplicated). Throws quadrant::Error on every rank for an invalid

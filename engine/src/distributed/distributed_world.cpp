@@ -1,25 +1,25 @@
 // The distributed world: tiles, ownership, migration, shadows, neighbour rounds and the split
 // Jacobi solve (quadrant/distributed_world.h gives the scheme and its contract).
 //
-// State between steps: `local`, the World's arrays of the rank's statics, owned bodies and shadows
-// in id order, holds the owned bodies' state (ownedStale; ownedLocal names their rows). A Record
-// per owned body (what a rank needs to collide, solve and integrate it: the unit of migration,
+// State between steps: `local`, the World's arrays of the rank's statics, owned bodies and
+// shadows, holds the owned bodies' state (ownedStale; ownedLocal names their rows). A Record per
+// owned body (what a rank needs to collide, solve and integrate it: the unit of migration,
 // shadows and checkpoints) is made from its row where it travels, and `owned` holds them all only
 // after Load, a checkpoint or a rebalance, or where they are read whole (SyncOwned). A step keeps
 // `local` while no body leaves or arrives and the same shadows come (layoutValid: only the
-// shadows' rows and the boxes are written), patches it when a few do (PatchLocal: the kept rows
-// copied in runs, arrivals' and shadows' rows written, merged by id) and rebuilds it from records
-// only when tiles change owner or a scene is loaded. Either way the arrays are in id order, so the
-// arithmetic, and the state hash, is the same at any rank count.
+// shadows' rows and the boxes are written), patches it when a few do (PatchLocal: kept rows stay,
+// arrivals and shadows fill the freed rows) and rebuilds it, in id order, from records only when
+// tiles change owner or a scene is loaded. Rows need not be in id order: FindContacts orients
+// every pair and sorts the contacts by body id, so the arithmetic, and the state hash, is the same
+// at any rank count.
 //
-// Why (circle stress, 16004 circles per rank, amd-epyc-2c; docs/distributed.md has the commands):
-// on one rank the step took 6.3-7.5 ms when every step rebuilt the arrays and copied and sorted
-// every 268-byte record; with the arrays kept it takes 1.0-1.2 ms (collide 0.5-0.6, solve
-// 0.26-0.30, halo 0.19-0.23), 1.1-1.3x the World's default engine. On two ranks a body crosses
-// the boundary, or the shadows change, nearly every step: refreshing, compacting and merging all
-// records and rebuilding the arrays from them made the step 2.5-2.8 ms (migrate 0.62-0.65,
-// shadows 0.38-0.41); patched, 1.6-1.8 (0.07 and 0.13-0.15). The patch still copies every row
-// (collide 0.80-0.94 against one rank's 0.49): an inserted shadow shifts the rows behind it.
+// Why (circle stress, 16004 circles per rank, amd-epyc-2c; docs/distributed.md has the commands
+// and figures): on one rank the step takes 1.1-1.2 ms (collide 0.55-0.6, solve 0.3, halo 0.25),
+// 1.1-1.3x the World's default engine; rebuilding the arrays from records every step made it
+// 6.3-7.5. On two ranks a body crosses the boundary, or the shadows change, nearly every step:
+// rebuilding made the step 2.5-2.8 ms, merging the patched rows by id (every kept row copied)
+// 1.6-1.8 with collide 0.80-0.94; patched in place, collide is 0.7-0.8 and what is left over one
+// rank is the rounds (migrate, shadows, eight velocity exchanges: 0.3-0.35 ms with their waits).
 // On a dense scene the gap is the Jacobi solve itself (base-100 pyramid: 80-95 % of the step, one
 // rank 4-10x the World at 8 iterations).
 #include "quadrant/distributed_world.h"
@@ -206,7 +206,7 @@ struct DistributedWorld::Impl {
   int localCustomFilters = 0;  // local bodies whose Filter is not the default (the pair filter runs)
   // Where the owned bodies live. ownedStale false: `owned` holds every owned body's record, up
   // to date. ownedStale true (after every Step): `owned` is empty and the owned bodies are the
-  // rows ownedLocal names in `local` (ascending, so id order), whose state is the newest; between
+  // rows ownedLocal names in `local` (in any order), whose state is the newest; between
   // Migrate and BuildLocal a body that just arrived has ownedLocal -(1 + its index in `arrivals`).
   // Records are made from the rows where they travel (OwnedRecord) and all at once only where
   // they are read whole (SyncOwned): at 2 ranks a step used to refresh, compact and merge all
@@ -220,9 +220,11 @@ struct DistributedWorld::Impl {
   std::vector<Record> ownedNext;             // Migrate's merge scratch (kept for capacity)
   std::vector<int> ownedLocalNext, ownedTileNext;
   std::vector<AABB> ownedBoxesNext;
-  Bodies localNext;                          // PatchLocal's target (swapped with `local`)
   std::vector<uint8_t> keepRow;              // PatchLocal: old rows that stay
   std::vector<int> newRowOf;                 // PatchLocal: old row -> new row (kept rows)
+  std::vector<int> freeRows;                 // PatchLocal: rows to write, in the order they are taken
+  std::vector<std::pair<int, int>> moves;    // PatchLocal: kept rows moved down (from, to)
+  std::vector<int32_t> rowOfId;              // FindContacts: body id -> row, for this step's rows
 
   size_t OwnedCount() const { return ownedStale ? ownedLocal.size() : owned.size(); }
   uint32_t OwnedId(size_t o) const {
@@ -829,12 +831,12 @@ void DistributedWorld::Impl::SendShadows(Real reach, Real) {
   Round(2);
 }
 
-// The rank's bodies in id order (statics, owned, shadows merged): every pair then has the same
-// orientation (a < b) and every contact list the same order as in one process. When the layout
-// is still valid and the same shadows came in the same order, last step's arrays are kept: the
-// owned rows already hold the bodies' state (Step writes it back), statics do not move, so only
-// the shadows' rows and the moving bodies' boxes are written (on one rank, with 16004 circles,
-// rebuilding cost about 1 ms a step).
+// The rank's bodies (statics, owned, shadows): rebuilt, they are merged in id order; patched
+// (PatchLocal), kept rows stay where they are. When the layout is still valid and the same
+// shadows came in the same order, last step's arrays are kept: the owned rows already hold the
+// bodies' state (Step writes it back), statics do not move, so only the shadows' rows and the
+// moving bodies' boxes are written (on one rank, with 16004 circles, rebuilding cost about 1 ms
+// a step).
 void DistributedWorld::Impl::BuildLocal(Real dt) {
   bool same = layoutValid && !ownedChanged;
   for (size_t k = 0; same && k < neighbours.size(); ++k) {
@@ -932,102 +934,86 @@ void DistributedWorld::Impl::BuildLocal(Real dt) {
 
 // BuildLocal when last step's `local` is still laid out for this rank's neighbours but bodies
 // left or arrived, or other shadows came: the rows that stay (statics and staying owned bodies,
-// whose rows hold their newest state and, from the halo pass, this step's box) are copied array by
-// array in runs, and only the arrivals' and shadows' rows are written from records, all merged by
-// id. The result is the rows a rebuild gives, in the same order (the same bits), without reading
-// every owned record (2 ranks, 16004 circles each: bodies cross or the shadow set changes nearly
-// every step).
+// whose rows hold their newest state and, from the halo pass, this step's box) stay where they
+// are; the arrivals and every shadow are written from records into the rows that were freed (last
+// step's shadows, bodies that left), then appended. Where more rows were freed than are needed,
+// the last kept rows move down into the gaps. Rows are thus in no particular order: FindContacts
+// orients every pair and orders the contacts by body id, so the arithmetic is a rebuild's.
+// Measured (2 ranks, 16004 circles each, amd-epyc-2c): merging by id instead copied every kept
+// row of every array into a second set of arrays (413 bytes a row, 6.6 MB a step), 18 % of the
+// step's profile: bodies cross or the shadow set changes nearly every step.
 void DistributedWorld::Impl::PatchLocal(Real dt) {
   const size_t before = size_t(local.Count());
   keepRow.assign(before, 0);
   for (size_t i = 0; i < before; ++i) keepRow[i] = local.type[i] == BodyType::kStatic ? 1 : 0;
+  size_t arriving = 0;
   for (int i : ownedLocal) {
-    if (i >= 0) keepRow[size_t(i)] = 1;
-  }
-  // The rows to write: arrivals (owned, no row yet) and every shadow, in id order.
-  sources.clear();
-  shadows.clear();
-  for (size_t o = 0; o < ownedLocal.size(); ++o) {
-    if (ownedLocal[o] < 0) sources.push_back({OwnedId(o), 1, int(o), -1});
-  }
-  for (size_t k = 0; k < neighbours.size(); ++k) {
-    size_t at = 0;
-    while (at < in[k].size()) {
-      shadows.push_back(Take<Record>(in[k], at));
-      sources.push_back({shadows.back().id, 2, int(shadows.size() - 1), int(k)});
-    }
-  }
-  std::sort(sources.begin(), sources.end(), [](const Source& a, const Source& b) { return a.id < b.id; });
-  // Merge: kept old rows (their ids from `slot`) and the new rows; a run of kept rows is one copy.
-  struct Run {
-    size_t from, to, count;
-  };
-  std::vector<Run> runs;
-  std::vector<size_t> newRow(sources.size());
-  newRowOf.assign(before, -1);
-  size_t n = 0, s = 0;
-  for (size_t i = 0; i < before; ++i) {
-    if (!keepRow[i]) continue;
-    const uint32_t id = local.slot[i];
-    for (; s < sources.size() && sources[s].id <= id; ++s) {
-      if (sources[s].id == id) throw std::logic_error("DistributedWorld: a body held twice");
-      newRow[s] = n++;
-    }
-    if (!runs.empty() && runs.back().from + runs.back().count == i && runs.back().to + runs.back().count == n) {
-      ++runs.back().count;
+    if (i >= 0) {
+      keepRow[size_t(i)] = 1;
     } else {
-      runs.push_back({i, n, 1});
+      ++arriving;
     }
-    newRowOf[i] = static_cast<int>(n++);
   }
-  for (; s < sources.size(); ++s) newRow[s] = n++;
-  // Each array of localNext sized to n and the kept runs copied from the same array of `local`
-  // (matched by position in ForEachArray's list). Arrays of non-trivial elements (the compound
-  // shapes) hold their defaults in every row of this world and are only resized.
-  int from = 0;
-  local.ForEachArray([&](auto& src) {
-    int to = 0;
-    localNext.ForEachArray([&](auto& dst) {
-      if constexpr (std::is_same_v<std::decay_t<decltype(src)>, std::decay_t<decltype(dst)>>) {
-        if (to == from) {
-          dst.resize(n);
-          using T = typename std::decay_t<decltype(dst)>::value_type;
-          if constexpr (std::is_trivially_copyable_v<T>) {
-            for (const Run& r : runs) std::memcpy(dst.data() + r.to, src.data() + r.from, r.count * sizeof(T));
-          }
-        }
-      }
-      ++to;
-    });
-    ++from;
+  size_t kept = 0;
+  for (uint8_t k : keepRow) kept += k;
+  size_t shadowCount = 0;
+  for (size_t k = 0; k < neighbours.size(); ++k) {
+    if (in[k].size() % sizeof(Record) != 0) throw std::logic_error("DistributedWorld: a shadow message is cut short");
+    shadowCount += in[k].size() / sizeof(Record);
+  }
+  const size_t n = kept + arriving + shadowCount;
+  // Free rows below n, ascending; kept rows at or above n move into the first of them.
+  freeRows.clear();
+  for (size_t i = 0; i < std::min(before, n); ++i) {
+    if (!keepRow[i]) freeRows.push_back(static_cast<int>(i));
+  }
+  for (size_t i = before; i < n; ++i) freeRows.push_back(static_cast<int>(i));
+  newRowOf.resize(before);
+  for (size_t i = 0; i < before; ++i) newRowOf[i] = keepRow[i] ? static_cast<int>(i) : -1;
+  moves.clear();
+  size_t nextFree = 0;
+  for (size_t i = n; i < before; ++i) {
+    if (!keepRow[i]) continue;
+    const int to = freeRows[nextFree++];
+    moves.push_back({static_cast<int>(i), to});
+    newRowOf[i] = to;
+  }
+  const size_t size = std::max(before, n);
+  local.ForEachArray([&](auto& v) {
+    v.resize(size);
+    for (const auto& m : moves) v[size_t(m.second)] = v[size_t(m.first)];
+    v.resize(n);
   });
-  std::swap(local, localNext);
-  // localOwned and ownedLocal for the new rows; owned rows kept keep their box (the halo pass).
   localOwned.assign(n, 0);
   for (size_t o = 0; o < ownedLocal.size(); ++o) {
-    if (ownedLocal[o] >= 0) {
-      ownedLocal[o] = newRowOf[size_t(ownedLocal[o])];
-      localOwned[size_t(ownedLocal[o])] = 1;
-    }
-  }
-  for (auto& r : receivedShadows) r.clear();
-  for (size_t j = 0; j < sources.size(); ++j) {
-    const Source& src = sources[j];
-    const int i = static_cast<int>(newRow[j]);
-    if (src.kind == 1) {
-      SetRow(local, i, OwnedRecord(size_t(src.index)));
-      local.aabb[size_t(i)] = ownedBoxes[size_t(src.index)];
-      localOwned[size_t(i)] = 1;
-      ownedLocal[size_t(src.index)] = i;
+    int& i = ownedLocal[o];
+    if (i >= 0) {
+      i = newRowOf[size_t(i)];
     } else {
-      const Record& r = shadows[size_t(src.index)];
-      SetRow(local, i, r);
-      local.aabb[size_t(i)] = BoxOf(r, dt);
-      receivedShadows[size_t(src.neighbour)].push_back(i);
+      // An arrival: its record, then its row (OwnedRecord reads the record through ownedLocal).
+      const Record r = OwnedRecord(o);
+      const int row = freeRows[nextFree++];
+      SetRow(local, row, r);
+      local.aabb[size_t(row)] = ownedBoxes[o];
+      i = row;
+    }
+    localOwned[size_t(i)] = 1;
+  }
+  for (size_t k = 0; k < neighbours.size(); ++k) {
+    receivedShadows[k].clear();
+    size_t at = 0;
+    while (at < in[k].size()) {
+      const Record r = Take<Record>(in[k], at);
+      const int row = freeRows[nextFree++];
+      SetRow(local, row, r);
+      local.aabb[size_t(row)] = BoxOf(r, dt);
+      receivedShadows[k].push_back(row);
     }
   }
-  stats.shadowBodies = static_cast<int>(shadows.size());
+  if (nextFree != freeRows.size()) throw std::logic_error("DistributedWorld: rows left unfilled");
+  stats.shadowBodies = static_cast<int>(shadowCount);
   stats.layoutPatched = 1;
+  stats.rowsMoved = static_cast<int>(moves.size());
   localCustomFilters = 0;
   for (const Filter& f : local.filter) localCustomFilters += f == Filter{} ? 0 : 1;
   ownedChanged = false;
@@ -1037,9 +1023,19 @@ void DistributedWorld::Impl::PatchLocal(Real dt) {
 // owned body dropped (their owners compute them), then the World's narrow phase, key order and
 // warm-start impulses.
 void DistributedWorld::Impl::FindContacts(Real dt) {
+  // Rows are in no particular order once patched (PatchLocal): each body's row by id, for the
+  // contacts' way back from id order; a body held twice is a bookkeeping error.
+  const int count = local.Count();
+  uint32_t idLimit = 0;
+  for (int i = 0; i < count; ++i) idLimit = std::max(idLimit, local.slot[size_t(i)] + 1);
+  if (rowOfId.size() < idLimit) rowOfId.resize(idLimit);
+  for (int i = 0; i < count; ++i) rowOfId[local.slot[size_t(i)]] = i;
+  for (int i = 0; i < count; ++i) {
+    if (rowOfId[local.slot[size_t(i)]] != i) throw std::logic_error("DistributedWorld: a body held twice");
+  }
   broadPhase->FindPairs(local.aabb, local.dynamic, pairs, *run);
   // Without shadows every pair has a movable body, which is owned; without a custom filter every
-  // pair collides: then all of them are kept, as they are.
+  // pair collides: then all of them are kept.
   const bool keepAll = stats.shadowBodies == 0 && localCustomFilters == 0;
   ownPairs.clear();
   // The World's collision filter (Box2D's rule) on the same pairs; its compaction keeps order.
@@ -1051,18 +1047,31 @@ void DistributedWorld::Impl::FindContacts(Real dt) {
     ownPairs.push_back(p);
   }
   if (keepAll) ownPairs.swap(pairs);
-  // The World's narrow phase and contact sort (per-worker lists merged in key order): the
-  // same contacts in the same order for any thread count.
+  // Every pair oriented as in one process, where rows are in id order: the lower id first.
+  for (CandidatePair& p : ownPairs) {
+    if (local.slot[size_t(p.a)] > local.slot[size_t(p.b)]) std::swap(p.a, p.b);
+  }
+  // The World's narrow phase, then its contact sort on the bodies' ids (per-worker lists merged
+  // in key order): the same contacts in the same order for any thread and rank count.
   workerContacts.Reset(run->Workers());
   run->For(Stage::kNarrowPhase, static_cast<int>(ownPairs.size()), run->MinHeavyItems(), [&](int begin, int end, int worker) {
     CollidePairs(local, def, dt, std::span<const CandidatePair>(ownPairs).subspan(size_t(begin), size_t(end - begin)),
                  workerContacts[worker]);
   });
-  sorter.Sort(*run, local.Count(), workerContacts, contacts, nullptr);
+  for (int w = 0; w < workerContacts.Count(); ++w) {
+    for (Contact& c : workerContacts[w]) {
+      c.a = static_cast<int32_t>(local.slot[size_t(c.a)]);
+      c.b = static_cast<int32_t>(local.slot[size_t(c.b)]);
+    }
+  }
+  sorter.Sort(*run, static_cast<int>(idLimit), workerContacts, contacts, nullptr);
+  for (Contact& c : contacts) {
+    c.a = rowOfId[size_t(c.a)];
+    c.b = rowOfId[size_t(c.b)];
+  }
   if (!def.effects.warmStarting) return;
   // ContactCache::Restore's rule: the entry of the same pair, points matched by feature id. The
-  // local arrays are in id order, so the contacts' key order is the cache's id-pair order: one
-  // walk through both.
+  // contacts are in id-pair order, as the cache is: one walk through both.
   auto it = cache.begin();
   for (Contact& c : contacts) {
     const uint64_t key = PairKey(local.slot[size_t(c.a)], local.slot[size_t(c.b)]);
