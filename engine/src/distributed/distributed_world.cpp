@@ -193,6 +193,8 @@ struct DistributedWorld::Impl {
   std::vector<std::vector<int>> receivedShadows;  // per neighbour: local indices, in order
   std::vector<std::vector<char>> out, in;
   std::vector<CandidatePair> pairs, ownPairs;
+  std::vector<MPI_Request> requests;              // PostVelocities: sends, then receives
+  std::vector<int32_t> interiorRows, boundaryRows;  // SplitRows: the solve's rows by whether they touch a shadow
   WorkerLists<Contact> workerContacts;
   ContactSorter sorter;
   std::vector<Contact> contacts;
@@ -335,7 +337,9 @@ struct DistributedWorld::Impl {
   void BuildLocal(Real dt);
   void PatchLocal(Real dt);
   void FindContacts(Real dt);
-  void ExchangeVelocities(bool counts, int tag);
+  void PostVelocities(int tag);
+  void CompleteVelocities(bool counts);
+  void SplitRows();
   void StoreCache();
   void CheckCounts();
 };
@@ -663,14 +667,23 @@ void DistributedWorld::Step(Real dt) {
   IntegrateVelocities(w.local, w.def, dt, *w.run);
   w.solve.Begin(w.local, w.def, dt, w.contacts);
   lap(w.stats.solveMs);
-  w.ExchangeVelocities(true, 3);
-  lap(w.stats.exchangeMs);
-  w.solve.Prepare(w.def);
+  // Each round's messages travel while the interior rows are solved (the first round's while
+  // they are prepared too); the boundary rows wait for them. Rounds: the counts after warm
+  // starting, then the velocities after every iteration but the last.
+  w.SplitRows();
+  w.PostVelocities(3);
+  w.solve.PrepareRows(w.def, w.interiorRows);
   for (int it = 0; it < k; ++it) {
-    w.solve.Iterate(w.local, w.def);
+    w.solve.SolveRows(w.local, w.def, w.interiorRows);
+    lap(w.stats.solveMs);
+    w.CompleteVelocities(it == 0);
+    lap(w.stats.exchangeMs);
+    if (it == 0) w.solve.PrepareRows(w.def, w.boundaryRows);
+    w.solve.SolveRows(w.local, w.def, w.boundaryRows);
+    w.solve.ApplyRows(w.local);
     lap(w.stats.solveMs);
     if (it + 1 < k) {
-      w.ExchangeVelocities(false, 4);
+      w.PostVelocities(4);
       lap(w.stats.exchangeMs);
     }
   }
@@ -1091,30 +1104,61 @@ void DistributedWorld::Impl::FindContacts(Real dt) {
   }
 }
 
-// A solve round: the velocities and pseudo velocities (and after warm starting, the contact counts) of every owned body
-// that is a shadow elsewhere replace that shadow's partial ones there.
-void DistributedWorld::Impl::ExchangeVelocities(bool counts, int tag) {
+// A solve round, in two halves so that rows away from the boundary are solved while it travels:
+// the velocities and pseudo velocities (and after warm starting, the contact counts) of every
+// owned body that is a shadow elsewhere replace that shadow's partial ones there. Each message's
+// size is known (one record per shadow, in the order both sides hold), so it is received
+// directly, with no probe.
+void DistributedWorld::Impl::PostVelocities(int tag) {
   ClearOut();
-  std::vector<int32_t>& count = solve.Counts();
-  std::vector<BodyVelocity>& pseudo = solve.Pseudo();
-  for (size_t k = 0; k < neighbours.size(); ++k) {
+  const std::vector<int32_t>& count = solve.Counts();
+  const std::vector<BodyVelocity>& pseudo = solve.Pseudo();
+  const size_t n = neighbours.size();
+  requests.assign(2 * n, MPI_REQUEST_NULL);
+  for (size_t k = 0; k < n; ++k) {
     for (int o : sentShadows[k]) {
       const int i = ownedLocal[size_t(o)];
       Put(out[k], VelocityRecord{local.vel[size_t(i)], pseudo[size_t(i)], count[size_t(i)]});
     }
+    in[k].resize(receivedShadows[k].size() * sizeof(VelocityRecord));
+    MPI_Irecv(in[k].data(), static_cast<int>(in[k].size()), MPI_BYTE, neighbours[k], tag, comm, &requests[n + k]);
+    MPI_Isend(out[k].data(), static_cast<int>(out[k].size()), MPI_BYTE, neighbours[k], tag, comm, &requests[k]);
+    stats.bytesSent += static_cast<int64_t>(out[k].size());
   }
-  Round(tag);
-  for (size_t k = 0; k < neighbours.size(); ++k) {
+}
+
+void DistributedWorld::Impl::CompleteVelocities(bool counts) {
+  const auto waitFrom = std::chrono::steady_clock::now();
+  std::vector<MPI_Status> status(requests.size());
+  MPI_Waitall(static_cast<int>(requests.size()), requests.data(), status.data());
+  stats.waitMs += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - waitFrom).count();
+  ++stats.rounds;
+  std::vector<int32_t>& count = solve.Counts();
+  std::vector<BodyVelocity>& pseudo = solve.Pseudo();
+  const size_t n = neighbours.size();
+  for (size_t k = 0; k < n; ++k) {
+    int got = 0;
+    MPI_Get_count(&status[n + k], MPI_BYTE, &got);
+    if (size_t(got) != in[k].size()) throw std::logic_error("DistributedWorld: a velocity message does not match the shadows");
     size_t at = 0;
-    if (in[k].size() != receivedShadows[k].size() * sizeof(VelocityRecord)) {
-      throw std::logic_error("DistributedWorld: a velocity message does not match the shadows");
-    }
     for (int i : receivedShadows[k]) {
       const VelocityRecord v = Take<VelocityRecord>(in[k], at);
       local.vel[size_t(i)] = v.vel;
       pseudo[size_t(i)] = v.pseudo;
       if (counts) count[size_t(i)] = v.count;
     }
+  }
+}
+
+// The solve's rows split by whether they touch a shadow (whose velocity comes from its owner
+// each iteration): interior rows first, boundary rows after the round.
+void DistributedWorld::Impl::SplitRows() {
+  interiorRows.clear();
+  boundaryRows.clear();
+  for (size_t c = 0; c < solve.RowCount(); ++c) {
+    const auto [a, b] = solve.RowBodies(c);
+    const auto shadow = [&](int32_t i) { return !localOwned[size_t(i)] && local.type[size_t(i)] != BodyType::kStatic; };
+    (shadow(a) || shadow(b) ? boundaryRows : interiorRows).push_back(static_cast<int32_t>(c));
   }
 }
 

@@ -36,6 +36,7 @@
 #include <algorithm>
 #include <cstdlib>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include "dynamics/contact_ends.h"
@@ -111,38 +112,52 @@ class JacobiSolve {
 
   /// Effective masses of mass splitting, from the counts (complete for every body by now).
   void Prepare(const WorldDef& def) {
-    const bool rotation = def.effects.rotation;
-    for (Row& r : rows_) {
-      const Real sA = Real(std::max(counts_[r.a], 1)), sB = Real(std::max(counts_[r.b], 1));
-      r.splitMassA = sA * r.invMassA;
-      r.splitMassB = sB * r.invMassB;
-      r.splitIA = sA * r.invIA;
-      r.splitIB = sB * r.invIB;
-      const Vec2 n = r.normal, t = RightPerp(n);
-      for (int k = 0; k < r.pointCount; ++k) {
-        Point& p = r.points[k];
-        Real kn = r.splitMassA + r.splitMassB, kt = kn;
-        if (rotation) {
-          const Real rnA = Cross(p.rA, n), rnB = Cross(p.rB, n), rtA = Cross(p.rA, t), rtB = Cross(p.rB, t);
-          kn += r.splitIA * rnA * rnA + r.splitIB * rnB * rnB;
-          kt += r.splitIA * rtA * rtA + r.splitIB * rtB * rtB;
-        }
-        p.normalMass = kn > 0 ? Real(1) / kn : Real(0);
-        p.tangentMass = kt > 0 ? Real(1) / kt : Real(0);
-      }
-    }
+    for (Row& r : rows_) PrepareRow(r, def.effects.rotation);
   }
 
   /// One Jacobi iteration: every row from the velocities (and pseudo velocities) as they are
   /// now, then the bodies' changes added in row order.
   void Iterate(Bodies& bodies, const WorldDef& def) {
-    const bool friction = def.effects.friction;
-    for (Row& r : rows_) {
-      SolveRow(r, bodies.vel[r.a], bodies.vel[r.b], friction);
-      SolvePushRow(r, pseudo_[r.a], pseudo_[r.b], def);
-    }
+    for (Row& r : rows_) SolveOne(bodies, def, r);
     ApplyRows(bodies);
   }
+
+  // The same in parts, for a caller that overlaps a part with communication (the distributed
+  // world's boundary rows wait for their shadows' velocities): each row's arithmetic reads only
+  // its two bodies and no velocity changes before ApplyRows, so any split and order of the rows
+  // gives Prepare's and Iterate's bits.
+  /// Prepare for the listed rows only.
+  void PrepareRows(const WorldDef& def, std::span<const int32_t> rows) {
+    for (int32_t c : rows) PrepareRow(rows_[size_t(c)], def.effects.rotation);
+  }
+  /// Iterate's rows for the listed rows only (no body changes yet).
+  void SolveRows(const Bodies& bodies, const WorldDef& def, std::span<const int32_t> rows) {
+    for (int32_t c : rows) SolveOne(bodies, def, rows_[size_t(c)]);
+  }
+  /// Iterate's second half: every row's change added to its bodies, in row order.
+  void ApplyRows(Bodies& bodies) {
+    for (const Row& r : rows_) {
+      if (r.invMassA > 0) {
+        BodyVelocity& va = bodies.vel[r.a];
+        va.v -= r.invMassA * r.P;
+        va.w -= r.invIA * r.angA;
+        BodyVelocity& pa = pseudo_[r.a];
+        pa.v -= r.invMassA * r.pushP;
+        pa.w -= r.invIA * r.pushAngA;
+      }
+      if (r.invMassB > 0) {
+        BodyVelocity& vb = bodies.vel[r.b];
+        vb.v += r.invMassB * r.P;
+        vb.w += r.invIB * r.angB;
+        BodyVelocity& pb = pseudo_[r.b];
+        pb.v += r.invMassB * r.pushP;
+        pb.w += r.invIB * r.pushAngB;
+      }
+    }
+  }
+  /// The bodies of row c (dense indices).
+  std::pair<int32_t, int32_t> RowBodies(size_t c) const { return {rows_[c].a, rows_[c].b}; }
+  size_t RowCount() const { return rows_.size(); }
 
   /// The accumulated impulses back into the contacts (warm starting), then positions.
   void Finish(Bodies& bodies, const WorldDef& def, Real dt, std::span<Contact> contacts, StageRunner& run) {
@@ -206,6 +221,31 @@ class JacobiSolve {
 
   // Sequential impulses on the row's own copies of its two bodies (split masses), from the
   // velocities at the start of the iteration; records the row's impulse in r.P / angA / angB.
+  void PrepareRow(Row& r, bool rotation) {
+    const Real sA = Real(std::max(counts_[r.a], 1)), sB = Real(std::max(counts_[r.b], 1));
+    r.splitMassA = sA * r.invMassA;
+    r.splitMassB = sB * r.invMassB;
+    r.splitIA = sA * r.invIA;
+    r.splitIB = sB * r.invIB;
+    const Vec2 n = r.normal, t = RightPerp(n);
+    for (int k = 0; k < r.pointCount; ++k) {
+      Point& p = r.points[k];
+      Real kn = r.splitMassA + r.splitMassB, kt = kn;
+      if (rotation) {
+        const Real rnA = Cross(p.rA, n), rnB = Cross(p.rB, n), rtA = Cross(p.rA, t), rtB = Cross(p.rB, t);
+        kn += r.splitIA * rnA * rnA + r.splitIB * rnB * rnB;
+        kt += r.splitIA * rtA * rtA + r.splitIB * rtB * rtB;
+      }
+      p.normalMass = kn > 0 ? Real(1) / kn : Real(0);
+      p.tangentMass = kt > 0 ? Real(1) / kt : Real(0);
+    }
+  }
+
+  void SolveOne(const Bodies& bodies, const WorldDef& def, Row& r) {
+    SolveRow(r, bodies.vel[r.a], bodies.vel[r.b], def.effects.friction);
+    SolvePushRow(r, pseudo_[r.a], pseudo_[r.b], def);
+  }
+
   void SolveRow(Row& r, BodyVelocity va, BodyVelocity vb, bool friction) const {
     const Vec2 n = r.normal, t = RightPerp(n);
     Vec2 P{};
@@ -274,27 +314,6 @@ class JacobiSolve {
   }
 
   // Each body's change, in row (key) order. Static and kinematic bodies are never written.
-  void ApplyRows(Bodies& bodies) {
-    for (const Row& r : rows_) {
-      if (r.invMassA > 0) {
-        BodyVelocity& va = bodies.vel[r.a];
-        va.v -= r.invMassA * r.P;
-        va.w -= r.invIA * r.angA;
-        BodyVelocity& pa = pseudo_[r.a];
-        pa.v -= r.invMassA * r.pushP;
-        pa.w -= r.invIA * r.pushAngA;
-      }
-      if (r.invMassB > 0) {
-        BodyVelocity& vb = bodies.vel[r.b];
-        vb.v += r.invMassB * r.P;
-        vb.w += r.invIB * r.angB;
-        BodyVelocity& pb = pseudo_[r.b];
-        pb.v += r.invMassB * r.pushP;
-        pb.w += r.invIB * r.pushAngB;
-      }
-    }
-  }
-
   std::vector<Row> rows_;
   std::vector<int32_t> counts_;
   std::vector<BodyVelocity> pseudo_;  // per body: the split impulses' velocity this step
