@@ -88,7 +88,7 @@ def main():
         if all("stage_ms" in r for r in rows):
             names = list(rows[0]["stage_ms"].keys())
             out.append("\nWhere the step went (ms a step, slowest rank; mean over ranks in brackets; "
-                       "`wait`: the part of the rounds spent in MPI receive and completion):\n")
+                       "`wait`: the part of the rounds and of the halo's reduction spent in MPI receive and completion):\n")
             out.append("| ranks | " + " | ".join(names) + " |")
             out.append("|---:|" + "---:|" * len(names))
             for r in rows:

@@ -77,7 +77,7 @@ struct DistributedStats {
   /// local arrays, pairs and contacts; solve: the Jacobi work; exchange: the velocity rounds
   /// between iterations with their packing; rest: the warm-start cache, the hand-back and the
   /// counts' reduction. wait: the part of all rounds spent in MPI receive and completion calls
-  /// (waiting for the slowest neighbour, and the transfer).
+  /// (waiting for the slowest neighbour, and the transfer), and of the halo's reduction.
   double haloMs = 0, migrateMs = 0, shadowsMs = 0, collideMs = 0, solveMs = 0, exchangeMs = 0, restMs = 0;
   double waitMs = 0;
 };

@@ -646,7 +646,11 @@ void DistributedWorld::Step(Real dt) {
     if (owner != w.rank && w.neighbourSlot[size_t(owner)] < 0) local[1] = 1;
   }
   double global[2] = {0, 0};
-  MPI_Allreduce(local, global, 2, MPI_DOUBLE, MPI_MAX, w.comm);
+  {
+    const auto waitFrom = StageTime::now();
+    MPI_Allreduce(local, global, 2, MPI_DOUBLE, MPI_MAX, w.comm);
+    w.stats.waitMs += std::chrono::duration<double, std::milli>(StageTime::now() - waitFrom).count();
+  }
   const double tile = std::min(double(w.tileW), double(w.tileH));
   Require(2 * global[0] <= tile,
           "DistributedWorld::Step: a body's broad-phase box reaches " + std::to_string(global[0]) +
