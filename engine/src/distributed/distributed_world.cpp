@@ -163,6 +163,10 @@ struct DistributedWorld::Impl {
   // such a tile is a shadow nowhere: its box widened by the reach stays within one tile of the
   // centre (Step checks 2 x reach <= a tile), the second tile is a margin for rounding.
   std::vector<uint8_t> deepTile;
+  // ownBefore[(x) + (y) * (tilesX + 1)]: how many tiles of this rank lie in [0, x) x [0, y) (a 2D
+  // prefix sum), so that whether a rectangle of tiles is all this rank's is four reads
+  // (OwnAll): SendShadows asks it for every owned body outside the deep tiles.
+  std::vector<int32_t> ownBefore;
 
   bool loaded = false;
   std::vector<Record> statics;  // every static body, on every rank, id order
@@ -227,6 +231,7 @@ struct DistributedWorld::Impl {
   std::vector<int> freeRows;                 // PatchLocal: rows to write, in the order they are taken
   std::vector<std::pair<int, int>> moves;    // PatchLocal: kept rows moved down (from, to)
   std::vector<int32_t> rowOfId;              // FindContacts: body id -> row, for this step's rows
+  std::vector<uint64_t> countsAll;           // CheckCounts: every rank's count, checksum and work
 
   size_t OwnedCount() const { return ownedStale ? ownedLocal.size() : owned.size(); }
   uint32_t OwnedId(size_t o) const {
@@ -258,6 +263,12 @@ struct DistributedWorld::Impl {
     return int(std::clamp(t, 0.0, double(dist.tilesY - 1)));
   }
   int OwnerOf(Vec2 c) const { return tileOwner[size_t(TileX(c.x) + TileY(c.y) * dist.tilesX)]; }
+  // Whether every tile of [x0, x1] x [y0, y1] is this rank's (ownBefore).
+  bool OwnAll(int x0, int x1, int y0, int y1) const {
+    const size_t w1 = size_t(dist.tilesX) + 1;
+    const auto at = [&](int x, int y) { return ownBefore[size_t(x) + size_t(y) * w1]; };
+    return at(x1 + 1, y1 + 1) - at(x0, y1 + 1) - at(x1 + 1, y0) + at(x0, y0) == (x1 - x0 + 1) * (y1 - y0 + 1);
+  }
 
   // One neighbour round: out[k] goes to neighbours[k] (every neighbour gets a message, empty or
   // not); in[k] is what neighbours[k] sent, read in rank order (a probe names its source).
@@ -441,6 +452,15 @@ void DistributedWorld::Impl::FindNeighbours() {
       }
     }
     deepTile[size_t(t)] = deep ? 1 : 0;
+  }
+  const size_t w1 = size_t(dist.tilesX) + 1;
+  ownBefore.assign(w1 * (size_t(dist.tilesY) + 1), 0);
+  for (int y = 0; y < dist.tilesY; ++y) {
+    for (int x = 0; x < dist.tilesX; ++x) {
+      const int own = tileOwner[size_t(x + y * dist.tilesX)] == rank ? 1 : 0;
+      ownBefore[size_t(x + 1) + size_t(y + 1) * w1] =
+          own + ownBefore[size_t(x) + size_t(y + 1) * w1] + ownBefore[size_t(x + 1) + size_t(y) * w1] - ownBefore[size_t(x) + size_t(y) * w1];
+    }
   }
   for (int r = 0; r < size; ++r) {
     if (neighbourSlot[size_t(r)] == 0) {
@@ -827,6 +847,7 @@ void DistributedWorld::Impl::SendShadows(Real reach, Real) {
     const AABB box = ownedBoxes[o];
     const int x0 = TileX(box.lower.x - reach), x1 = TileX(box.upper.x + reach);
     const int y0 = TileY(box.lower.y - reach), y1 = TileY(box.upper.y + reach);
+    if (OwnAll(x0, x1, y0, y1)) continue;  // most bodies near the boundary: no owner to gather
     targets.clear();
     for (int y = y0; y <= y1; ++y) {
       for (int x = x0; x <= x1; ++x) {
@@ -1196,10 +1217,15 @@ void DistributedWorld::Impl::CheckCounts() {
   const size_t count = OwnedCount();
   uint64_t mine[3] = {uint64_t(count), 0, uint64_t(cost)};
   for (size_t o = 0; o < count; ++o) mine[1] += MixId(OwnedId(o));
+  // One collective for the sums and the maximum (each rank's three numbers to every rank).
+  countsAll.resize(3 * size_t(size));
+  MPI_Allgather(mine, 3, MPI_UINT64_T, countsAll.data(), 3, MPI_UINT64_T, comm);
   uint64_t global[3] = {0, 0, 0};
-  MPI_Allreduce(mine, global, 3, MPI_UINT64_T, MPI_SUM, comm);
   int64_t most = 0;
-  MPI_Allreduce(&cost, &most, 1, MPI_INT64_T, MPI_MAX, comm);
+  for (int r = 0; r < size; ++r) {
+    for (int j = 0; j < 3; ++j) global[j] += countsAll[3 * size_t(r) + size_t(j)];
+    most = std::max(most, int64_t(countsAll[3 * size_t(r) + 2]));
+  }
   stats.imbalance = global[2] > 0 ? double(most) / (double(global[2]) / size) : 1.0;
   Require(global[0] == expectedCount && global[1] == expectedChecksum,
           "DistributedWorld: body bookkeeping broken: " + std::to_string(global[0]) + " bodies owned, " +
