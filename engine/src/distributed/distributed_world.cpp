@@ -209,6 +209,9 @@ struct DistributedWorld::Impl {
   // tile changed owner, nothing loaded since. BuildLocal then only refreshes the shadows' rows
   // (if the same shadows came) and every box.
   bool layoutValid = false;
+  // The rows of `local` are in id order (a rebuild's order; a patch gives it up): pairs and
+  // contacts in row order are then in id order too, and FindContacts skips the translation.
+  bool rowsInIdOrder = false;
   int localCustomFilters = 0;  // local bodies whose Filter is not the default (the pair filter runs)
   // Where the owned bodies live. ownedStale false: `owned` holds every owned body's record, up
   // to date. ownedStale true (after every Step): `owned` is empty and the owned bodies are the
@@ -691,24 +694,32 @@ void DistributedWorld::Step(Real dt) {
   IntegrateVelocities(w.local, w.def, dt, *w.run);
   w.solve.Begin(w.local, w.def, dt, w.contacts);
   lap(w.stats.solveMs);
-  // Each round's messages travel while the interior rows are solved (the first round's while
-  // they are prepared too); the boundary rows wait for them. Rounds: the counts after warm
-  // starting, then the velocities after every iteration but the last.
-  w.SplitRows();
-  w.PostVelocities(3);
-  w.solve.PrepareRows(w.def, w.interiorRows);
-  for (int it = 0; it < k; ++it) {
-    w.solve.SolveRows(w.local, w.def, w.interiorRows);
+  if (w.neighbours.empty()) {
+    // No neighbour (one rank): the rounds carry nothing; the solve in one piece.
+    w.solve.Prepare(w.def);
+    for (int it = 0; it < k; ++it) w.solve.Iterate(w.local, w.def);
+    w.stats.rounds += k;
     lap(w.stats.solveMs);
-    w.CompleteVelocities(it == 0);
-    lap(w.stats.exchangeMs);
-    if (it == 0) w.solve.PrepareRows(w.def, w.boundaryRows);
-    w.solve.SolveRows(w.local, w.def, w.boundaryRows);
-    w.solve.ApplyRows(w.local);
-    lap(w.stats.solveMs);
-    if (it + 1 < k) {
-      w.PostVelocities(4);
+  } else {
+    // Each round's messages travel while the interior rows are solved (the first round's while
+    // they are prepared too); the boundary rows wait for them. Rounds: the counts after warm
+    // starting, then the velocities after every iteration but the last.
+    w.SplitRows();
+    w.PostVelocities(3);
+    w.solve.PrepareRows(w.def, w.interiorRows);
+    for (int it = 0; it < k; ++it) {
+      w.solve.SolveRows(w.local, w.def, w.interiorRows);
+      lap(w.stats.solveMs);
+      w.CompleteVelocities(it == 0);
       lap(w.stats.exchangeMs);
+      if (it == 0) w.solve.PrepareRows(w.def, w.boundaryRows);
+      w.solve.SolveRows(w.local, w.def, w.boundaryRows);
+      w.solve.ApplyRows(w.local);
+      lap(w.stats.solveMs);
+      if (it + 1 < k) {
+        w.PostVelocities(4);
+        lap(w.stats.exchangeMs);
+      }
     }
   }
   w.solve.Finish(w.local, w.def, dt, w.contacts, *w.run);
@@ -967,6 +978,7 @@ void DistributedWorld::Impl::BuildLocal(Real dt) {
   localCustomFilters = 0;
   for (const Filter& f : local.filter) localCustomFilters += f == Filter{} ? 0 : 1;
   layoutValid = true;
+  rowsInIdOrder = true;
   ownedChanged = false;
 }
 
@@ -1052,6 +1064,7 @@ void DistributedWorld::Impl::PatchLocal(Real dt) {
   stats.shadowBodies = static_cast<int>(shadowCount);
   stats.layoutPatched = 1;
   stats.rowsMoved = static_cast<int>(moves.size());
+  rowsInIdOrder = false;
   localCustomFilters = 0;
   for (const Filter& f : local.filter) localCustomFilters += f == Filter{} ? 0 : 1;
   ownedChanged = false;
@@ -1061,15 +1074,17 @@ void DistributedWorld::Impl::PatchLocal(Real dt) {
 // owned body dropped (their owners compute them), then the World's narrow phase, key order and
 // warm-start impulses.
 void DistributedWorld::Impl::FindContacts(Real dt) {
-  // Rows are in no particular order once patched (PatchLocal): each body's row by id, for the
-  // contacts' way back from id order; a body held twice is a bookkeeping error.
+  // Rows out of id order (patched: PatchLocal): each body's row by id, for the contacts' way back
+  // from id order; a body held twice is a bookkeeping error.
   const int count = local.Count();
   uint32_t idLimit = 0;
-  for (int i = 0; i < count; ++i) idLimit = std::max(idLimit, local.slot[size_t(i)] + 1);
-  if (rowOfId.size() < idLimit) rowOfId.resize(idLimit);
-  for (int i = 0; i < count; ++i) rowOfId[local.slot[size_t(i)]] = i;
-  for (int i = 0; i < count; ++i) {
-    if (rowOfId[local.slot[size_t(i)]] != i) throw std::logic_error("DistributedWorld: a body held twice");
+  if (!rowsInIdOrder) {
+    for (int i = 0; i < count; ++i) idLimit = std::max(idLimit, local.slot[size_t(i)] + 1);
+    if (rowOfId.size() < idLimit) rowOfId.resize(idLimit);
+    for (int i = 0; i < count; ++i) rowOfId[local.slot[size_t(i)]] = i;
+    for (int i = 0; i < count; ++i) {
+      if (rowOfId[local.slot[size_t(i)]] != i) throw std::logic_error("DistributedWorld: a body held twice");
+    }
   }
   broadPhase->FindPairs(local.aabb, local.dynamic, pairs, *run);
   // Without shadows every pair has a movable body, which is owned; without a custom filter every
@@ -1086,8 +1101,10 @@ void DistributedWorld::Impl::FindContacts(Real dt) {
   }
   if (keepAll) ownPairs.swap(pairs);
   // Every pair oriented as in one process, where rows are in id order: the lower id first.
-  for (CandidatePair& p : ownPairs) {
-    if (local.slot[size_t(p.a)] > local.slot[size_t(p.b)]) std::swap(p.a, p.b);
+  if (!rowsInIdOrder) {
+    for (CandidatePair& p : ownPairs) {
+      if (local.slot[size_t(p.a)] > local.slot[size_t(p.b)]) std::swap(p.a, p.b);
+    }
   }
   // The World's narrow phase, then its contact sort on the bodies' ids (per-worker lists merged
   // in key order): the same contacts in the same order for any thread and rank count.
@@ -1096,16 +1113,20 @@ void DistributedWorld::Impl::FindContacts(Real dt) {
     CollidePairs(local, def, dt, std::span<const CandidatePair>(ownPairs).subspan(size_t(begin), size_t(end - begin)),
                  workerContacts[worker]);
   });
-  for (int w = 0; w < workerContacts.Count(); ++w) {
-    for (Contact& c : workerContacts[w]) {
-      c.a = static_cast<int32_t>(local.slot[size_t(c.a)]);
-      c.b = static_cast<int32_t>(local.slot[size_t(c.b)]);
+  if (rowsInIdOrder) {
+    sorter.Sort(*run, count, workerContacts, contacts, nullptr);
+  } else {
+    for (int w = 0; w < workerContacts.Count(); ++w) {
+      for (Contact& c : workerContacts[w]) {
+        c.a = static_cast<int32_t>(local.slot[size_t(c.a)]);
+        c.b = static_cast<int32_t>(local.slot[size_t(c.b)]);
+      }
     }
-  }
-  sorter.Sort(*run, static_cast<int>(idLimit), workerContacts, contacts, nullptr);
-  for (Contact& c : contacts) {
-    c.a = rowOfId[size_t(c.a)];
-    c.b = rowOfId[size_t(c.b)];
+    sorter.Sort(*run, static_cast<int>(idLimit), workerContacts, contacts, nullptr);
+    for (Contact& c : contacts) {
+      c.a = rowOfId[size_t(c.a)];
+      c.b = rowOfId[size_t(c.b)];
+    }
   }
   if (!def.effects.warmStarting) return;
   // ContactCache::Restore's rule: the entry of the same pair, points matched by feature id. The
