@@ -10,7 +10,7 @@
 // bodies are known to every rank. The step's phases are described above DistributedWorld.
 //
 // Cost: for k velocity iterations a step takes k + 2 neighbour rounds (one message to every
-// neighbour rank each, empty or not, read in rank order) and three small allreduces. The Jacobi
+// neighbour rank each, empty or not, read in rank order) and two small collectives. The Jacobi
 // solve needs about four times pgs's iterations for the same hold (base-10 pyramid, 300 steps,
 // apex drift: Jacobi 0.013 m at 32 iterations, pgs 0.013 m at 8; jacobi_solve.h).
 //
@@ -104,10 +104,11 @@ struct BodyState {
 //      bodies' velocities and contact counts after warm starting, one after every velocity
 //      iteration but the last;
 //   4. the global body count and an id checksum are compared with the loaded scene's by exact
-//      integer reductions (nothing lost, nothing duplicated).
+//      integer sums (nothing lost, nothing duplicated).
 // A round sends exactly one message to every neighbour rank (a rank owning a tile next to one of
-// its own) and reads the neighbours' messages in rank order, never arrival order. The three
-// allreduces are the halo reach, the body count and checksum, and the most loaded rank's work;
+// its own) and reads the neighbours' messages in rank order, never arrival order. The two
+// collectives are the halo reach (an allreduce) and every rank's body count, id checksum and work
+// (an allgather);
 // with load balancing on, every rebalanceInterval steps an allreduce of the tiles' work and, when
 // it re-deals them, an all-to-all of the bodies that change owner.
 // Determinism: each rank computes every contact of its own bodies, each pair oriented and the
