@@ -18,8 +18,9 @@
 // 1.1-1.3x the World's default engine; rebuilding the arrays from records every step made it
 // 6.3-7.5. On two ranks a body crosses the boundary, or the shadows change, nearly every step:
 // rebuilding made the step 2.5-2.8 ms, merging the patched rows by id (every kept row copied)
-// 1.6-1.8 with collide 0.80-0.94; patched in place, collide is 0.7-0.8 and what is left over one
-// rank is the rounds (migrate, shadows, eight velocity exchanges: 0.3-0.35 ms with their waits).
+// 2.4-3.0 in interleaved runs; patched in place with the velocity rounds overlapping the interior
+// rows, 1.7-2.1 (collide 0.7-0.9 against one rank's 0.55-0.6; migrate, shadows and the velocity
+// rounds about 0.1 ms each with their waits).
 // On a dense scene the gap is the Jacobi solve itself (base-100 pyramid: 80-95 % of the step, one
 // rank 4-10x the World at 8 iterations).
 #include "quadrant/distributed_world.h"
