@@ -15,7 +15,7 @@
 // "nochain" for revolute chains solved joint by joint (WorldDef::jointChainSolve off), "nospec"
 // for touching contact points only (WorldDef::speculativeContacts off, as Box2D 2.4.1), "b2clip"
 // for Box2D 2.4.1's polygon manifolds (WorldDef::box2dPolygonClip), "b2possolve" for its position
-// pass's geometry (WorldDef::box2dPositionSolve, pgs and thesis), "norecycle"
+// pass's geometry (WorldDef::box2dPositionSolve, pgs, soft_step and thesis), "norecycle"
 // for manifolds computed every step (WorldDef::contactRecycleDistance 0, as Box2D 2.4.1).
 // The default is the engine's own (WorldDef: soft_step with two relax passes and a mass-ratio
 // limit of 10) with the uniform grid and the deterministic scheme.

@@ -81,7 +81,7 @@ std::string CauseName(HitCause c) {
 std::vector<CampaignRun> CompatibleRuns() {
   std::vector<CampaignRun> out;
   for (const char* adapter : {"quadrant:pgs+b2rest+b2skin+nospec+b2clip+b2possolve",
-                              "quadrant:soft_step+b2rest+b2skin+relax4+relaxfriction+nospec+b2clip",
+                              "quadrant:soft_step+b2rest+b2skin+relax32+relaxfriction+nospec+b2clip+b2possolve",
                               "quadrant:thesis+coupled+points+b2skin+b2pos+accum+passes8+nospec+b2clip+block+b2possolve"}) {
     for (const CampaignRun& r : DefaultCampaignRuns()) {
       if (r.adapter == adapter) out.push_back(r);

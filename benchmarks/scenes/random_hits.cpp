@@ -364,6 +364,12 @@ std::vector<CampaignRun> DefaultCampaignRuns() {
       // thesis solver's two-point impulses solved together.
       {"quadrant:pgs", "box2d_restitution+box2d_skin+touching+box2d_clip+box2d_position_solve",
        "quadrant:pgs+b2rest+b2skin+nospec+b2clip+b2possolve"},
+      {"quadrant:soft_step", "box2d_restitution+box2d_skin+relax4+relaxfriction+touching+box2d_clip+box2d_position_solve",
+       "quadrant:soft_step+b2rest+b2skin+relax4+relaxfriction+nospec+b2clip+b2possolve"},
+      {"quadrant:soft_step", "box2d_restitution+box2d_skin+relax16+relaxfriction+touching+box2d_clip+box2d_position_solve",
+       "quadrant:soft_step+b2rest+b2skin+relax16+relaxfriction+nospec+b2clip+b2possolve"},
+      {"quadrant:soft_step", "box2d_restitution+box2d_skin+relax32+relaxfriction+touching+box2d_clip+box2d_position_solve",
+       "quadrant:soft_step+b2rest+b2skin+relax32+relaxfriction+nospec+b2clip+b2possolve"},
       {"quadrant:thesis", "coupled+points+box2d_skin+box2d_positions+accumulated+passes8+touching+box2d_clip+block",
        "quadrant:thesis+coupled+points+b2skin+b2pos+accum+passes8+nospec+b2clip+block"},
       {"quadrant:thesis",

@@ -130,10 +130,10 @@ struct Campaign {
 /// points, skin) with Box2D's position pass, with its impulses accumulated over 8 passes, and with
 /// both. Last, Box2D 2.4.1's contacts (issue #31): pgs's restitution and skin setting with touching
 /// points only (nospec), with Box2D's polygon clip (b2clip), with both; and the fullest setting of
-/// each solver with both. Then pgs's with Box2D's position pass geometry (b2possolve), the
-/// thesis's with its two-point impulses solved together (block) and with both. The
-/// Box2D-compatible settings (CompatibleRuns) are pgs's and the thesis's fullest and soft_step's
-/// fullest with Box2D's contacts.
+/// each solver with both. Then pgs's with Box2D's position pass geometry (b2possolve), soft_step's
+/// with it (in place of its soft push; 4, 16 and 32 relax passes), the thesis's with its two-point
+/// impulses solved together (block) and with both. The Box2D-compatible settings
+/// (CompatibleRuns) are the fullest of each solver: soft_step's is the one with 32 relax passes.
 std::vector<CampaignRun> DefaultCampaignRuns();
 
 /// Runs hits 0..count-1 of the campaign seeded `seed` on every run. A hit is single-point, and

@@ -139,6 +139,25 @@ TEST(RandomHits, Box2dPositionPassAndBlockHoldEveryClassOfPgsAndThesisBelowFiveP
   EXPECT_LT(Find(rows, "polygon-polygon e=1", "quadrant:thesis", contacts + "+block").max, 0.001);
 }
 
+TEST(RandomHits, Box2dPositionPassAndRelaxPassesHoldEveryClassOfSoftStepBelowFivePercent) {
+  // Issue #31: soft_step's compatible setting takes Box2D's position pass in place of its soft
+  // push (box2d_position_solve) and 32 relax passes. Every class stays below 5 % (the 10-seed
+  // campaign: worst class 2.80 % on the worst seed; 4.64 % on the 40 seeds first run after the
+  // setting was chosen, docs/notes/random_campaign_contacts.md). With
+  // the pass and 4 relax passes, two points at once (hit 71, polygon-polygon e=1) and
+  // polygon-polygon e=0's worst hit stay apart from Box2D's block solver.
+  const std::vector<CampaignRow> rows = Sample().Box2dRows();
+  const std::string contacts = "box2d_restitution+box2d_skin+relax4+relaxfriction+touching+box2d_clip";
+  const std::string positions = contacts + "+box2d_position_solve";
+  const std::string compatible = "box2d_restitution+box2d_skin+relax32+relaxfriction+touching+box2d_clip+box2d_position_solve";
+  EXPECT_LT(Find(rows, "all", "quadrant:soft_step", compatible).p90, 0.01);
+  for (const char* cls : kClasses) EXPECT_LT(Find(rows, cls, "quadrant:soft_step", compatible).p90, 0.05) << cls;
+  EXPECT_GT(Find(rows, "polygon-polygon e=0", "quadrant:soft_step", contacts).p90, 0.03);
+  EXPECT_LT(Find(rows, "polygon-polygon e=0", "quadrant:soft_step", positions).p90, 0.01);
+  EXPECT_GT(Find(rows, "polygon-polygon e=0", "quadrant:soft_step", positions).max, 0.10);
+  EXPECT_LT(Find(rows, "polygon-polygon e=0", "quadrant:soft_step", compatible).max, 0.01);
+}
+
 TEST(RandomHits, EverySolverWithinItsBoundOfBox2d) {
   const std::vector<CampaignRow> rows = Sample().Box2dRows();
   EXPECT_LT(Find(rows, "all", "quadrant:pgs", "default").p90, 0.07);
@@ -201,11 +220,14 @@ TEST(RandomHits, Box2dSettingsAreRefusedWhereTheyDoNotApply) {
   EXPECT_NO_THROW(World{def});
   def.scheme = ParallelScheme::kQuadrants;
   EXPECT_THROW(World{def}, Error);
-  // Box2D's position pass geometry: pgs, or the thesis with its position pass; not soft_step or
+  // Box2D's position pass geometry: pgs, soft_step, or the thesis with its position pass; not
   // jacobi (no such pass), not the quadrants scheme (its body copies carry no shapes).
   def = WorldDef{};
   def.box2dPositionSolve = true;
-  EXPECT_THROW(World{def}, Error);  // soft_step
+  EXPECT_NO_THROW(World{def});  // soft_step: in place of its push
+  def.scheme = ParallelScheme::kQuadrants;
+  EXPECT_THROW(World{def}, Error);
+  def.scheme = ParallelScheme::kDeterministic;
   def.solver = SolverType::kJacobi;
   EXPECT_THROW(World{def}, Error);
   def.solver = SolverType::kThesis;

@@ -363,6 +363,8 @@ struct WorldDef {
   /// circle's centre, the clipped vertex) with its own, two circles are measured centre to
   /// centre, and the pass stops after the first iteration with no point deeper than 3
   /// linearSlop. false (the default): the normal fixed, the anchors turned, until nothing moves.
+  /// soft_step with it: that pass on the bodies after the sub-steps, in place of the soft rows'
+  /// push (which then pushes nothing) and of its own position pass.
   /// engine/src/dynamics/box2d_position.h says why; docs/validation.md what it changes.
   bool box2dPositionSolve = false;
   /// thesis solver: solve its one impulse per contact with the normal and friction parts coupled

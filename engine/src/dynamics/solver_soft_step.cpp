@@ -83,13 +83,14 @@ void SoftStepSolver::Run(StepContext& ctx) {
   // The joints' colouring; it marks their dynamic bodies as in rows, for LoadStates.
   PrepareJoints(ctx, step.h);
   jointInvH_ = step.invH;
-  if (def.effects.restitution) constraints_.Resize(step.m);  // only restitution reads the list
+  // Only restitution and Box2D's position pass read the list.
+  if (def.effects.restitution || def.box2dPositionSolve) constraints_.Resize(step.m);
   contacts_ = ctx.contacts;
   gravityScaled_ = ctx.gravityScaled;
   inv_ = bodies.inv.data();
   step.simd = def.softSimd;
   vex_ = step.simd && def.softVex && CpuHasAvx();  // soft_rows.h: the rows eight at a time with AVX
-  step.lean = !def.effects.restitution;
+  step.lean = !def.effects.restitution && !def.box2dPositionSolve;
   step.box2dRestitution = def.effects.restitution && def.restitution == RestitutionPolicy::kBox2d;
 
   // 3. The rows' part and the free bodies' pass, which are independent: no row reads or writes
@@ -101,7 +102,8 @@ void SoftStepSolver::Run(StepContext& ctx) {
   auto rows = [&] { SolveContacts<kRotation, kFriction>(ctx, step, integrateMs); };
   constexpr int kRowCost = 16;
   const int count = bodies.Count();
-  if (int64_t(kRowCost) * (step.m + int64_t(jointRows_.size())) <= count) {
+  // Box2D's position pass snapshots every body (SolveContacts): not beside the free bodies' pass.
+  if (!def.box2dPositionSolve && int64_t(kRowCost) * (step.m + int64_t(jointRows_.size())) <= count) {
     run.Beside(Stage::kSolve, rows, count, run.MinItems(), [&](int b, int e) { MoveFreeBodies(bodies, def, ctx.dt, b, e); });
   } else {
     rows();
@@ -113,6 +115,11 @@ void SoftStepSolver::Run(StepContext& ctx) {
   // transforms of four bodies at a time (writing only the free ones).
   ti = Clock::now();
   StoreRowStates(run, bodies, def);
+  // WorldDef::box2dPositionSolve: Box2D 2.4.1's position pass on the bodies, in place of the soft
+  // push and the state position pass (SolveContacts), serially in colour order.
+  if (def.box2dPositionSolve && step.m > 0) {
+    run.Serial(Stage::kSolve, [&] { constraints_.CorrectPositionsBox2d<kRotation>(bodies, def, def.positionIterations); });
+  }
   integrateMs += Ms(ti, Clock::now());
   const double total = Ms(t0, Clock::now());
   ctx.profile->integrate += integrateMs;
@@ -133,6 +140,12 @@ void SoftStepSolver::SolveContacts(StepContext& ctx, const StepPlan& step, doubl
     run.For(Stage::kSolve, m, run.MinHeavyItems(),
             [&](int b, int e, int) { constraints_.Prepare<kRotation, true>(ctx, graph_, b, e); });
   }
+  if (def.box2dPositionSolve && m > 0) {
+    // Box2D's geometry of each point where the narrow phase saw the bodies (its position pass
+    // runs after the rows' bodies are stored: Step).
+    constraints_.SnapshotPositions(run, bodies);
+    run.Serial(Stage::kSolve, [&] { constraints_.SnapshotBox2dGeometry(ctx); });
+  }
   if (def.effects.restitution && !step.box2dRestitution) {
     const Vec2 stepGravity = def.effects.gravity ? ctx.dt * def.gravity : Vec2{};
     constraints_.ApplyCollisionPasses<kRotation>(run, graph_, bodies, def, Real(1) / ctx.dt, stepGravity);
@@ -142,7 +155,9 @@ void SoftStepSolver::SolveContacts(StepContext& ctx, const StepPlan& step, doubl
   auto tr = Clock::now();
   LoadStates(run, bodies);
   integrateMs += Ms(tr, Clock::now());
-  const SoftSolveParams prm{step.invH, def.contactPushMaxDepth, def.contactPushMaxVelocity};
+  // With Box2D's position pass the rows push nothing out (Box2D 2.4.1's velocity rows carry no
+  // position bias): overlap is the pass's alone.
+  const SoftSolveParams prm{step.invH, def.contactPushMaxDepth, def.box2dPositionSolve ? Real(0) : def.contactPushMaxVelocity};
   // Whether the position pass can move anything: the last sub-step's first relax pass sees every
   // point's separation at the step's final positions, and without restitution nothing moves the
   // bodies after it. A point counts as deep below -contactPushMaxDepth + kDeepMargin: the position
@@ -164,7 +179,7 @@ void SoftStepSolver::SolveContacts(StepContext& ctx, const StepPlan& step, doubl
   }
   // Overlap deeper than the soft contacts push out is moved out here, on the states: positions
   // change, velocities do not, so deep overlap cannot fling bodies.
-  if (m > 0 && (!maySkipPositions || deep.load(std::memory_order_relaxed))) {
+  if (m > 0 && !def.box2dPositionSolve && (!maySkipPositions || deep.load(std::memory_order_relaxed))) {
     CorrectStatePositions<kRotation>(run, def, step.simd);
   }
   // Lean, the last relax pass stored the impulses (RelaxPasses; WorldDef validation keeps

@@ -57,9 +57,10 @@ void ValidateWorldDef(const WorldDef& d) {
   Require(d.restitution == RestitutionPolicy::kCollisions || d.solver != SolverType::kThesis,
           "WorldDef.restitution = kBox2d needs SolverType::kPgs or kSoftStep");
   // Box2D 2.4.1's position pass geometry reads the bodies' shapes, which the quadrants scheme's
-  // private copies do not carry; soft_step and jacobi have no such pass.
-  Require(!d.box2dPositionSolve || d.solver == SolverType::kPgs || (d.solver == SolverType::kThesis && d.thesisPositionPass),
-          "WorldDef.box2dPositionSolve needs SolverType::kPgs, or kThesis with thesisPositionPass");
+  // private copies do not carry; jacobi has no such pass (its split impulses replace it).
+  Require(!d.box2dPositionSolve || d.solver == SolverType::kPgs || d.solver == SolverType::kSoftStep ||
+              (d.solver == SolverType::kThesis && d.thesisPositionPass),
+          "WorldDef.box2dPositionSolve needs SolverType::kPgs or kSoftStep, or kThesis with thesisPositionPass");
   Require(!d.box2dPositionSolve || d.scheme == ParallelScheme::kDeterministic,
           "WorldDef.box2dPositionSolve is not supported with ParallelScheme::kQuadrants (use kDeterministic)");
   Require(!d.thesisBlockImpulse ||
