@@ -119,6 +119,25 @@ TEST(Box2dPosition, OtherShapesKeepTheDefaultGeometry) {
   EXPECT_EQ(MakeBox2dPositionPoint(bodies, c, 0, Real(-0.01)).kind, Box2dPositionPoint::kDefault);
 }
 
+// A static ground box (its top at y = 0.5) and dynamic boxes of half size 0.5.
+void AddGround(World& world, Real halfWidth) {
+  BodyDef ground;
+  ground.type = BodyType::kStatic;
+  ground.shape.type = ShapeType::kPolygon;
+  ground.shape.polygon = MakeBox(halfWidth, 0.5f);
+  world.CreateBody(ground);
+}
+
+BodyId AddBox(World& world, Vec2 position, Real angle = 0) {
+  BodyDef box;
+  box.type = BodyType::kDynamic;
+  box.shape.type = ShapeType::kPolygon;
+  box.shape.polygon = MakeBox(0.5f, 0.5f);
+  box.position = position;
+  box.angle = angle;
+  return world.CreateBody(box);
+}
+
 TEST(Box2dPosition, WorldWithBox2dPositionPassPushesAnOverlapOut) {
   // A box created 5 cm into the ground, at rest, no gravity: pgs's position pass with Box2D's
   // geometry moves it out to within its stopping rule (3 linearSlop), as the default pass does;
@@ -130,17 +149,8 @@ TEST(Box2dPosition, WorldWithBox2dPositionPassPushesAnOverlapOut) {
     def.gravity = Vec2{0, 0};
     def.box2dPositionSolve = box2d;
     World world(def);
-    BodyDef ground;
-    ground.type = BodyType::kStatic;
-    ground.shape.type = ShapeType::kPolygon;
-    ground.shape.polygon = MakeBox(5, 0.5f);
-    world.CreateBody(ground);
-    BodyDef box;
-    box.type = BodyType::kDynamic;
-    box.shape.type = ShapeType::kPolygon;
-    box.shape.polygon = MakeBox(0.5f, 0.5f);
-    box.position = Vec2{0.2f, 0.95f};
-    const BodyId id = world.CreateBody(box);
+    AddGround(world, 5);
+    const BodyId id = AddBox(world, Vec2{0.2f, 0.95f});
     for (int i = 0; i < 30; ++i) world.Step(1.0f / 60);
     const Real y = world.GetPosition(id).y;
     EXPECT_GT(y, 1 - 3 * def.linearSlop - kTol) << box2d;
@@ -157,19 +167,9 @@ TEST(Box2dPosition, SoftStepWithTheBox2dPassIsTheSameOnAnyThreadCount) {
     def.box2dPositionSolve = true;
     def.threadCount = threads;
     World world(def);
-    BodyDef ground;
-    ground.type = BodyType::kStatic;
-    ground.shape.type = ShapeType::kPolygon;
-    ground.shape.polygon = MakeBox(20, 0.5f);
-    world.CreateBody(ground);
+    AddGround(world, 20);
     for (int i = 0; i < 60; ++i) {
-      BodyDef box;
-      box.type = BodyType::kDynamic;
-      box.shape.type = ShapeType::kPolygon;
-      box.shape.polygon = MakeBox(0.5f, 0.5f);
-      box.position = Vec2{Real(-6 + (i % 12) * 1.02f + 0.1f * (i / 12)), Real(1.2f + (i / 12) * 1.05f)};
-      box.angle = Real(0.05f * (i % 5));
-      world.CreateBody(box);
+      AddBox(world, Vec2{Real(-6 + (i % 12) * 1.02f + 0.1f * (i / 12)), Real(1.2f + (i / 12) * 1.05f)}, Real(0.05f * (i % 5)));
     }
     for (int i = 0; i < 120; ++i) world.Step(1.0f / 60);
     return world.StateHash();
