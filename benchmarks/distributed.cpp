@@ -1,6 +1,6 @@
 // quadrant_distributed: one distributed run under mpirun, for tools/quadrant bench --ranks.
 //
-//   mpirun -np R quadrant_distributed --scene circle_stress --count N [--per-rank] [--steps S]
+//   mpirun -np R quadrant_distributed --scene circle_stress|many_pyramids|pyramid --count N [--per-rank] [--steps S]
 //          [--warmup W] [--tiles T] [--iterations K] [--threads N] [--world]
 //
 // Rank 0 prints one JSON object (a run of distributed.json): ms per step (the slowest rank's wall
@@ -70,12 +70,15 @@ int main(int argc, char** argv) {
                 "One distributed run under mpirun (tools/quadrant bench --ranks): rank 0 prints one JSON "
                 "object\n(ms per step, neighbour rounds, payload bytes, shadow fraction, imbalance, state "
                 "hash, peak memory).");
-  parser.Name("--scene", &sceneName, {"circle_stress", "pyramid"}, "scene", "the scene");
-  parser.Int("--count", &count, 1, 10000000, "bodies (circle_stress), or the pyramid's base when below 200 (else 20)");
-  parser.Flag("--per-rank", &perRank, "--count is per rank (circle_stress)");
+  parser.Name("--scene", &sceneName, {"circle_stress", "pyramid", "many_pyramids"}, "scene", "the scene");
+  parser.Int("--count", &count, 1, 10000000,
+             "bodies (circle_stress), boxes (many_pyramids: base-10 pyramids in rows on shelves, at least 55), "
+             "or the pyramid's base when below 200 (else 20)");
+  parser.Flag("--per-rank", &perRank, "--count is per rank (circle_stress, many_pyramids)");
   parser.Int("--steps", &steps, 1, 1000000, "measured steps");
   parser.Int("--warmup", &warmup, 0, 1000000, "steps before measuring");
-  parser.Int("--tiles", &tiles, 1, 1024, "tiles per side").Default("about 14 m per tile (circle_stress), 2 (pyramid)");
+  parser.Int("--tiles", &tiles, 1, 1024, "tiles per side")
+      .Default("about 14 m per tile (circle_stress), 11 m across (many_pyramids), 2 (pyramid)");
   parser.Int("--iterations", &iterations, 1, 1000, "velocity iterations");
   parser.Int("--threads", &threads, 1, 64, "threads inside each rank (WorldDef::threadCount; also the World's with --world)");
   parser.Flag("--world", &compareWorld, "also time the World's default engine on the same scene (world_ms_per_step)");
@@ -97,6 +100,12 @@ int main(int argc, char** argv) {
       dist.bounds = s.bounds;
       // Tiles of about 14 m (a circle reaches 0.51 m from its centre): at 64000 bodies 32 x 32.
       if (tiles == 0) tiles = std::clamp(int((s.bounds.upper.x - s.bounds.lower.x) / 14), 2, 64);
+    } else if (sceneName == "many_pyramids") {
+      // The dense scene for weak scaling: Box2D 3's many_pyramids (base-10 pyramids on shelves),
+      // `count` boxes (per rank with --per-rank). Tiles about a pyramid's cell (11 m) across.
+      s = scene::MakeManyPyramids(perRank ? count * size : count);
+      dist.bounds = s.bounds;
+      if (tiles == 0) tiles = std::clamp(int((s.bounds.upper.x - s.bounds.lower.x) / 11), 2, 64);
     } else {
       // The pyramid of the hard cases with `count` as its base (default 20 when --count is not
       // below 200), centred on the corner of four tiles.
