@@ -199,6 +199,7 @@ struct DistributedWorld::Impl {
   std::vector<std::vector<char>> out, in;
   std::vector<CandidatePair> pairs, ownPairs;
   std::vector<MPI_Request> requests;              // PostVelocities: sends, then receives
+  std::vector<MPI_Status> statuses;               // CompleteVelocities (kept for its capacity)
   std::vector<int32_t> interiorRows, boundaryRows;  // SplitRows: the solve's rows by whether they touch a shadow
   WorkerLists<Contact> workerContacts;
   ContactSorter sorter;
@@ -1176,8 +1177,8 @@ void DistributedWorld::Impl::PostVelocities(int tag) {
 
 void DistributedWorld::Impl::CompleteVelocities(bool counts) {
   const auto waitFrom = std::chrono::steady_clock::now();
-  std::vector<MPI_Status> status(requests.size());
-  MPI_Waitall(static_cast<int>(requests.size()), requests.data(), status.data());
+  statuses.resize(requests.size());
+  MPI_Waitall(static_cast<int>(requests.size()), requests.data(), statuses.data());
   stats.waitMs += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - waitFrom).count();
   ++stats.rounds;
   std::vector<int32_t>& count = solve.Counts();
@@ -1185,7 +1186,7 @@ void DistributedWorld::Impl::CompleteVelocities(bool counts) {
   const size_t n = neighbours.size();
   for (size_t k = 0; k < n; ++k) {
     int got = 0;
-    MPI_Get_count(&status[n + k], MPI_BYTE, &got);
+    MPI_Get_count(&statuses[n + k], MPI_BYTE, &got);
     if (size_t(got) != in[k].size()) throw std::logic_error("DistributedWorld: a velocity message does not match the shadows");
     size_t at = 0;
     for (int i : receivedShadows[k]) {

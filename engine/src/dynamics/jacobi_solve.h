@@ -134,7 +134,8 @@ class JacobiSolve {
   void SolveRows(const Bodies& bodies, const WorldDef& def, std::span<const int32_t> rows) {
     for (int32_t c : rows) SolveOne(bodies, def, rows_[size_t(c)]);
   }
-  /// Iterate's second half: every row's change added to its bodies, in row order.
+  /// Iterate's second half: every row's change added to its bodies, in row (key) order. Static
+  /// and kinematic bodies are never written.
   void ApplyRows(Bodies& bodies) {
     for (const Row& r : rows_) {
       if (r.invMassA > 0) {
@@ -219,8 +220,7 @@ class JacobiSolve {
     return vb.v - va.v + Cross(vb.w, p.rB) - Cross(va.w, p.rA);
   }
 
-  // Sequential impulses on the row's own copies of its two bodies (split masses), from the
-  // velocities at the start of the iteration; records the row's impulse in r.P / angA / angB.
+  // Mass splitting's effective masses of one row, from its bodies' contact counts.
   void PrepareRow(Row& r, bool rotation) {
     const Real sA = Real(std::max(counts_[r.a], 1)), sB = Real(std::max(counts_[r.b], 1));
     r.splitMassA = sA * r.invMassA;
@@ -246,6 +246,8 @@ class JacobiSolve {
     SolvePushRow(r, pseudo_[r.a], pseudo_[r.b], def);
   }
 
+  // Sequential impulses on the row's own copies of its two bodies (split masses), from the
+  // velocities at the start of the iteration; records the row's impulse in r.P / angA / angB.
   void SolveRow(Row& r, BodyVelocity va, BodyVelocity vb, bool friction) const {
     const Vec2 n = r.normal, t = RightPerp(n);
     Vec2 P{};
@@ -313,7 +315,6 @@ class JacobiSolve {
     r.pushAngB = angB;
   }
 
-  // Each body's change, in row (key) order. Static and kinematic bodies are never written.
   std::vector<Row> rows_;
   std::vector<int32_t> counts_;
   std::vector<BodyVelocity> pseudo_;  // per body: the split impulses' velocity this step
