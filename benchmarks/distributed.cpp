@@ -65,6 +65,7 @@ int main(int argc, char** argv) {
   std::string sceneName = "circle_stress";
   int count = 16000, steps = 100, warmup = 10, tiles = 0, iterations = 8, threads = 1;
   bool perRank = false, compareWorld = false;
+  std::string solverName = "jacobi";
   std::string ownersPath;  // --owners FILE: every body's position, radius and owner rank as CSV
   cli::Parser parser("quadrant_distributed",
                 "One distributed run under mpirun (tools/quadrant bench --ranks): rank 0 prints one JSON "
@@ -79,7 +80,10 @@ int main(int argc, char** argv) {
   parser.Int("--warmup", &warmup, 0, 1000000, "steps before measuring");
   parser.Int("--tiles", &tiles, 1, 1024, "tiles per side")
       .Default("about 14 m per tile (circle_stress), 11 m across (many_pyramids), 2 (pyramid)");
-  parser.Int("--iterations", &iterations, 1, 1000, "velocity iterations");
+  parser.Name("--solver", &solverName, {"jacobi", "soft_step"}, "solver",
+              "jacobi: the same bits on any rank count (--iterations); soft_step: the World's default engine inside each "
+              "rank (its default budget)");
+  parser.Int("--iterations", &iterations, 1, 1000, "velocity iterations (jacobi)");
   parser.Int("--threads", &threads, 1, 64, "threads inside each rank (WorldDef::threadCount; also the World's with --world)");
   parser.Flag("--world", &compareWorld, "also time the World's default engine on the same scene (world_ms_per_step)");
   parser.String("--owners", &ownersPath, "FILE", "write every body's position, radius and owner rank as CSV");
@@ -124,16 +128,29 @@ int main(int argc, char** argv) {
     }
     dist.tilesX = dist.tilesY = tiles;
     WorldDef def;
-    def.gravity = s.gravity;
-    def.solver = SolverType::kJacobi;
-    def.velocityIterations = iterations;
-    def.threadCount = threads;
-    def.restitutionThreshold = s.restitutionThreshold;
-    def.effects = s.effects;
+    if (solverName == "soft_step") {
+      def = scene::QuadrantVariant{}.MakeWorldDef(s, threads);  // what --world times
+      def.effects.sleep = false;
+    } else {
+      def.gravity = s.gravity;
+      def.solver = SolverType::kJacobi;
+      def.velocityIterations = iterations;
+      def.threadCount = threads;
+      def.restitutionThreshold = s.restitutionThreshold;
+      def.effects = s.effects;
+    }
     const std::vector<BodyDef> bodies = ToBodyDefs(s);
     DistributedWorld dw(def, dist, MPI_COMM_WORLD);
     dw.Load(bodies);
     for (int i = 0; i < warmup; ++i) dw.Step(s.timeStep);
+    // The pyramid's stability (the hard cases' measure, from the pose after the warm-up, which
+    // settles it): the farthest its apex, the highest box at the start, moves from there.
+    size_t apex = 0;
+    for (size_t i = 0; i < bodies.size(); ++i) {
+      if (bodies[i].type == BodyType::kDynamic && bodies[i].position.y > bodies[apex].position.y) apex = i;
+    }
+    const bool pyramid = sceneName == "pyramid";
+    const Vec2 apexFrom = pyramid ? dw.GatherStates()[apex].position : Vec2{};
     double bytes = 0, shadows = 0, imbalance = 0;
     int rounds = 0;
     // Per stage, this rank's ms summed over the timed steps (DistributedStats).
@@ -142,8 +159,16 @@ int main(int argc, char** argv) {
     double stageMs[kStages] = {};
     MPI_Barrier(MPI_COMM_WORLD);
     const double t0 = MPI_Wtime();
+    double apexDrift = -1, sampleSeconds = 0;  // the largest apex drift of the samples, and their time
     for (int i = 0; i < steps; ++i) {
       dw.Step(s.timeStep);
+      // The hard cases sample every 0.5 s (30 steps at 60 Hz) and after the last step; the
+      // samples' time is taken out of the timing.
+      if (pyramid && ((i + 1) % 30 == 0 || i + 1 == steps)) {
+        const double from = MPI_Wtime();
+        apexDrift = std::max(apexDrift, double(Length(dw.GatherStates()[apex].position - apexFrom)));
+        sampleSeconds += MPI_Wtime() - from;
+      }
       const DistributedStats& st = dw.GetStats();
       double mine[2] = {double(st.bytesSent), double(st.shadowBodies)}, sum[2];
       // A statistics reduction between timed steps: a small, equal cost in every run.
@@ -155,7 +180,7 @@ int main(int argc, char** argv) {
       const double stage[kStages] = {st.haloMs, st.migrateMs, st.shadowsMs, st.collideMs, st.solveMs, st.exchangeMs, st.restMs, st.waitMs};
       for (int k = 0; k < kStages; ++k) stageMs[k] += stage[k];
     }
-    const double mine = MPI_Wtime() - t0;
+    const double mine = MPI_Wtime() - t0 - sampleSeconds;
     double slowest = 0;
     MPI_Allreduce(&mine, &slowest, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
     // The profile of the slowest rank (the one whose step time the run reports) and the mean.
@@ -219,16 +244,20 @@ int main(int argc, char** argv) {
       worldMs = 1000.0 * (MPI_Wtime() - w0) / steps;
     }
     if (rank == 0) {
-      char world[64] = "";
+      char world[128] = "";
       if (compareWorld) std::snprintf(world, sizeof world, ", \"world_ms_per_step\": %.4f", worldMs);
+      if (apexDrift >= 0) {
+        const size_t used = std::strlen(world);
+        std::snprintf(world + used, sizeof world - used, ", \"apex_drift_m\": %.5f", apexDrift);
+      }
       const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
       std::printf(
-          "{\"scene\": \"%s\", \"ranks\": %d, \"bodies\": %zu, \"steps\": %d, \"warmup\": %d, \"tiles\": %d, "
+          "{\"scene\": \"%s\", \"solver\": \"%s\", \"ranks\": %d, \"bodies\": %zu, \"steps\": %d, \"warmup\": %d, \"tiles\": %d, "
           "\"iterations\": %d, \"threads\": %d, \"weak\": %s, \"ms_per_step\": %.4f, \"rounds_per_step\": %d, \"bytes_per_step\": %.1f, "
           "\"bytes_per_boundary_body\": %.1f, \"shadow_fraction\": %.5f, \"imbalance\": %.4f, "
           "\"state_hash\": \"%016llx\", \"oversubscribed\": %s, \"cores\": %u, \"peak_rss_mb\": %.1f, "
           "\"rss_bytes_per_body\": %.0f, \"stage_ms\": {%s}%s}\n",
-          sceneName.c_str(), size, bodies.size(), steps, warmup, tiles, iterations, threads, perRank ? "true" : "false",
+          sceneName.c_str(), solverName.c_str(), size, bodies.size(), steps, warmup, tiles, iterations, threads, perRank ? "true" : "false",
           1000.0 * slowest / steps, rounds, bytes / steps, shadows > 0 ? bytes / shadows : 0.0,
           shadows / steps / double(bodies.size()), imbalance / steps, (unsigned long long)hash,
           unsigned(size * threads) > cores ? "true" : "false", cores, rssTotalKb / 1024.0,

@@ -6,11 +6,12 @@ Usage: distributed_report.py RUNS.jsonl --machine M --commit C --load L --json O
 distributed.json: {"context": {...}, "runs": [{"scene", "ranks", "bodies", "ms_per_step",
 "rounds_per_step", "bytes_per_step", "shadow_fraction", "imbalance", "state_hash", "stage_ms":
 {stage: [mean over ranks, slowest rank] ms a step}, ...}]}.
-distributed.md: one table per kind of run (weak scaling, strong scaling per scene) with the
-weak-scaling efficiency (1-rank ms / R-rank ms at equal bodies per rank) and the strong-scaling
-speed-up, and under each a per-stage profile of the step; oversubscribed rows (more ranks than
-cores) are marked, and rows whose state hash differs from the 1-rank run of the same scene and
-size are flagged (they must not exist).
+distributed.md: one table per solver and kind of run (weak scaling, strong scaling per scene)
+with the weak-scaling efficiency (1-rank ms / R-rank ms at equal bodies per rank) and the
+strong-scaling speed-up, the pyramid's apex drift where measured, and under each a per-stage
+profile of the step; oversubscribed rows (more ranks than cores) are marked. With the jacobi
+solver, rows whose state hash differs from the 1-rank run of the same scene and size are flagged
+(they must not exist); soft_step's hashes depend on the rank count by design.
 """
 import argparse
 import json
@@ -40,7 +41,7 @@ def main():
     if not runs:
         sys.exit("distributed_report: no runs")
     context = {"machine": args.machine, "commit": args.commit, "load_before": args.load,
-               "solver": "jacobi (SolverType::kJacobi)",
+               "solver": "soft_step: the World's default engine inside each rank; jacobi: the same bits on any rank count",
                "ms_per_step": "slowest rank's wall time over the timed steps",
                "imbalance": "max / mean over ranks of owned bodies plus their contacts, averaged over the steps"}
     with open(args.json, "w") as f:
@@ -52,29 +53,42 @@ def main():
         # Strong-scaling runs of one scene at different sizes (the 1,000,000-body run beside the
         # 64000-body series) are separate series: their hashes and times are not comparable.
         weak = bool(r.get("weak"))
-        groups.setdefault(("weak" if weak else "strong", r["scene"], 0 if weak else r["bodies"]), []).append(r)
+        solver = r.get("solver", "jacobi")
+        groups.setdefault((solver, "weak" if weak else "strong", r["scene"], 0 if weak else r["bodies"]), []).append(r)
     out = [f"# The distributed world (MPI)\n",
            f"Machine {args.machine}, commit {args.commit}, load average before the runs {args.load}. "
-           "Solver: Jacobi (the distributed world's; the single-process World gives the same state hashes). "
-           "`*`: more ranks than cores (oversubscribed). Imbalance: max / mean over the ranks of owned bodies plus their contacts (a work count).\n"]
-    for (kind, scene, _), rows in sorted(groups.items(), key=lambda g: (g[0][0] != "weak", g[0][1], g[0][2])):
+           "Solvers: `soft_step`, the default (`WorldDef::solver`): the World's soft step inside each rank at its default "
+           "budget, the boundary bodies' solver states exchanged between its passes (state hashes depend on the rank count; "
+           "on one rank they are the World's); `jacobi`, the deterministic option: the same state hashes on any rank count, "
+           "equal to the single-process World's with the same solver. "
+           "`*`: more ranks than cores (oversubscribed). Imbalance: max / mean over the ranks of owned bodies plus their contacts (a work count). "
+           "Apex drift: the pyramid's apex from its pose after the warm-up (1 s) to the end of the run, the largest of samples every 0.5 s.\n"]
+    order = lambda g: (g[0][0] != "soft_step", g[0][1] != "weak", g[0][2], g[0][3])
+    for (solver, kind, scene, _), rows in sorted(groups.items(), key=order):
         rows.sort(key=lambda r: r["ranks"])
         base = rows[0]
         if kind == "weak":
-            out.append(f"\n## Weak scaling: {scene}, {base['bodies'] // base['ranks']} bodies per rank\n")
+            out.append(f"\n## {solver}: weak scaling, {scene}, {base['bodies'] // base['ranks']} bodies per rank\n")
             out.append("| ranks | bodies | ms/step | efficiency | rounds/step | bytes/step | bytes/boundary body | shadow fraction | imbalance | peak MB (all ranks) | state hash |")
         else:
-            out.append(f"\n## Strong scaling: {scene}, {base['bodies']} bodies, {base['iterations']} iterations\n")
+            budget = f"{base['iterations']} iterations" if solver == "jacobi" else "default budget"
+            out.append(f"\n## {solver}: strong scaling, {scene}, {base['bodies']} bodies, {budget}\n")
             out.append("| ranks | bodies | ms/step | speed-up | rounds/step | bytes/step | bytes/boundary body | shadow fraction | imbalance | peak MB (all ranks) | state hash |")
-        out.append("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|")
+        drift = any("apex_drift_m" in r for r in rows)
+        if drift:
+            out[-1] += " apex drift (m) |"
+        out.append("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|" + ("---:|" if drift else ""))
         for r in rows:
             ratio = base["ms_per_step"] / r["ms_per_step"] if r["ms_per_step"] > 0 else 0.0
             ranks = f"{r['ranks']}{'*' if r.get('oversubscribed') else ''}"
             figure = f"{100 * ratio:.0f} %" if kind == "weak" else f"{ratio:.2f}"
-            same = "" if kind == "weak" or r["state_hash"] == base["state_hash"] else " (differs!)"
-            out.append(f"| {ranks} | {r['bodies']} | {r['ms_per_step']:.2f} | {figure} | {r['rounds_per_step']} | "
-                       f"{r['bytes_per_step']:.0f} | {r['bytes_per_boundary_body']:.0f} | {r['shadow_fraction']:.4f} | "
-                       f"{r['imbalance']:.3f} | {r.get('peak_rss_mb', 0):.0f} | `{r['state_hash']}`{same} |")
+            same = "" if kind == "weak" or solver != "jacobi" or r["state_hash"] == base["state_hash"] else " (differs!)"
+            line = (f"| {ranks} | {r['bodies']} | {r['ms_per_step']:.2f} | {figure} | {r['rounds_per_step']} | "
+                    f"{r['bytes_per_step']:.0f} | {r['bytes_per_boundary_body']:.0f} | {r['shadow_fraction']:.4f} | "
+                    f"{r['imbalance']:.3f} | {r.get('peak_rss_mb', 0):.0f} | `{r['state_hash']}`{same} |")
+            if drift:
+                line += f" {r['apex_drift_m']:.4f} |" if "apex_drift_m" in r else " |"
+            out.append(line)
         # One rank against the single-process World's default engine on the same scene (the run
         # with --world): issue #30 asks for at most 1.5x.
         for r in rows:
@@ -108,11 +122,13 @@ def plot(groups, args):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     fig, ax = plt.subplots(figsize=(7, 4.5))
-    for (kind, scene, _), rows in sorted(groups.items(), key=lambda g: (g[0][0] != "weak", g[0][1], g[0][2])):
+    for (solver, kind, scene, _), rows in sorted(groups.items(), key=lambda g: (g[0][0] != "soft_step", g[0][1] != "weak", g[0][2], g[0][3])):
         rows = sorted(rows, key=lambda r: r["ranks"])
+        if len(rows) < 2:
+            continue  # a single point (the 1,000,000-body run) is in the table
         size = f"{rows[0]['bodies'] // rows[0]['ranks']} per rank" if kind == "weak" else f"{rows[0]['bodies']} bodies"
-        ax.plot([r["ranks"] for r in rows], [r["ms_per_step"] for r in rows], marker="o",
-                label=f"{kind} scaling, {scene}, {size}")
+        ax.plot([r["ranks"] for r in rows], [r["ms_per_step"] for r in rows], marker="o" if solver == "soft_step" else "s",
+                linestyle="-" if solver == "soft_step" else "--", label=f"{solver}: {kind}, {scene}, {size}")
         for r in rows:
             if r.get("oversubscribed"):
                 ax.annotate("*", (r["ranks"], r["ms_per_step"]), textcoords="offset points", xytext=(4, 4))
@@ -121,7 +137,7 @@ def plot(groups, args):
     ax.set_yscale("log")
     ax.set_xticks(sorted({r["ranks"] for rows in groups.values() for r in rows}))
     ax.set_title(f"Quadrant distributed world, {args.machine}, {args.commit}")
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=7)
     fig.tight_layout()
     fig.savefig(args.png, dpi=120)
 

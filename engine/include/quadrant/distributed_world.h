@@ -1,24 +1,32 @@
-// Quadrant over MPI: a world split among processes (ranks) by fixed world-space tiles, whose
-// state is bit-identical for any number of ranks and equal to a single-process World's made from
-// the same bodies in the same order with the same WorldDef (solver kJacobi): GatherStates and
-// StateHash give that World's state and hash. Built only where MPI is found (CMake option
-// QUADRANT_MPI, target quadrant::mpi); the engine itself never needs MPI.
+// Quadrant over MPI: a world split among processes (ranks) by fixed world-space tiles. Built only
+// where MPI is found (CMake option QUADRANT_MPI, target quadrant::mpi); the engine itself never
+// needs MPI.
 //
 // Decomposition (after pe / waLBerla): the scene bounds are cut into a fixed grid of tiles, dealt
 // to the ranks in contiguous runs of Morton (Z) order (at 2x2 tiles and 4 ranks: the thesis's
 // four quadrants). A moving body belongs to the rank whose tile holds its centre of mass; static
 // bodies are known to every rank. The step's phases are described above DistributedWorld.
 //
-// Cost: for k velocity iterations a step takes k + 2 neighbour rounds (one message to every
-// neighbour rank each, empty or not, read in rank order) and two small collectives. The Jacobi
-// solve needs about four times pgs's iterations for the same hold (base-10 pyramid, 300 steps,
-// apex drift: Jacobi 0.013 m at 32 iterations, pgs 0.013 m at 8; jacobi_solve.h).
-//
-// Solvers: only kJacobi; pgs, soft_step and the thesis solver are sequential over a global order,
-// and splitting them changes their arithmetic (jacobi_solve.h). Sleep and the quadrants scheme
-// are refused. Bad input throws quadrant::Error with the same message on every rank (every check
-// runs on values all ranks share), so a program that lets it propagate exits non-zero on every
-// rank instead of leaving the others waiting. docs/distributed.md describes use and results.
+// Solvers (WorldDef::solver):
+// - kSoftStep, the default: the World's soft step on each rank's bodies and the shadows of its
+//   neighbours' (Gauss-Seidel inside a rank), the boundary bodies' solver states sent by their
+//   owners before each sub-step's solve pass, before its positions move and at the end (Jacobi
+//   across the boundary, as pe's subdomain Gauss-Seidel). On one rank its state is the World's
+//   bit for bit; on more it depends on the rank count (each rank solves its boundary contacts
+//   from its own side), the same on any thread count and every run. Cost: 3n neighbour rounds
+//   for n sub-steps (+ 2). Measured (amd-epyc-2c; docs/distributed.md): one rank 0.9-1.2x the
+//   World's step on circle stress and many_pyramids; the base-20 pyramid across four tiles holds
+//   its apex within 0.0025 m over 60 s at the default 4 sub-steps on 1-4 ranks.
+// - kJacobi, the deterministic option: the state is bit-identical for any number of ranks and
+//   equal to a single-process World's with the same bodies and WorldDef (GatherStates and
+//   StateHash give that World's state and hash). k velocity iterations take k + 2 rounds. Its
+//   cost is stability: the Jacobi solve needs about four times pgs's iterations for the same
+//   hold (base-10 pyramid, 300 steps, apex drift: 0.013 m at 32 iterations, pgs 0.013 m at 8;
+//   jacobi_solve.h), and at 32 iterations one rank is 10-13x the World on the base-20 pyramid.
+// pgs and the thesis solver are refused. Sleep and the quadrants scheme are refused. Bad input
+// throws quadrant::Error with the same message on every rank (every check runs on values all
+// ranks share), so a program that lets it propagate exits non-zero on every rank instead of
+// leaving the others waiting. docs/distributed.md describes use and results.
 #pragma once
 
 #include <mpi.h>
@@ -74,8 +82,9 @@ struct DistributedStats {
   double imbalance = 1;
   /// Where this rank's step went (ms, wall clock), stage by stage; they add up to the step. halo:
   /// the reach reduction; migrate and shadows: those rounds with their packing; collide: the
-  /// local arrays, pairs and contacts; solve: the Jacobi work; exchange: the velocity rounds
-  /// between iterations with their packing; rest: the warm-start cache, the hand-back and the
+  /// local arrays, pairs and contacts; solve: the solver's work; exchange: the rounds inside the
+  /// solve (kSoftStep: the solver states between passes; kJacobi: the velocities between
+  /// iterations) with their packing; rest: the warm-start cache, the hand-back and the
   /// counts' reduction. wait: the part of all rounds spent in MPI receive and completion calls
   /// (waiting for the slowest neighbour, and the transfer), and of the halo's reduction.
   double haloMs = 0, migrateMs = 0, shadowsMs = 0, collideMs = 0, solveMs = 0, exchangeMs = 0, restMs = 0;
@@ -99,10 +108,11 @@ struct BodyState {
 //   2. shadows: every moving body is sent, as a read-only shadow, to each other rank owning a
 //      tile that its broad-phase box reaches when widened by the largest such box's reach (so a
 //      rank sees every body that can touch one of its own);
-//   3. each rank finds the contacts of its own bodies and runs the Jacobi solve
-//      (engine/src/dynamics/jacobi_solve.h, SolverType::kJacobi): one exchange of its boundary
-//      bodies' velocities and contact counts after warm starting, one after every velocity
-//      iteration but the last;
+//   3. each rank finds the contacts of its own bodies and solves them: kSoftStep, the soft step
+//      with three exchanges of the boundary bodies' solver states per sub-step (the last
+//      sub-step's third only; one more before Box2D-style bounces); kJacobi, the Jacobi solve
+//      (engine/src/dynamics/jacobi_solve.h): one exchange of the boundary bodies' velocities
+//      and contact counts after warm starting, one after every velocity iteration but the last;
 //   4. the global body count and an id checksum are compared with the loaded scene's by exact
 //      integer sums (nothing lost, nothing duplicated).
 // A round sends exactly one message to every neighbour rank (a rank owning a tile next to one of
@@ -112,13 +122,13 @@ struct BodyState {
 // with load balancing on, every rebalanceInterval steps an allreduce of the tiles' work and, when
 // it re-deals them, an all-to-all of the bodies that change owner.
 // Determinism: each rank computes every contact of its own bodies, each pair oriented and the
-// contacts ordered by body id, so every body sees the same contacts, in the same order, with the
-// same arithmetic as in one process.
+// contacts ordered by body id, so every body sees the same contacts, in the same order; with
+// kJacobi also the same arithmetic as in one process.
 class DistributedWorld {
  public:
   /// Collective over `comm` (duplicated). Throws quadrant::Error on every rank for an invalid
-  /// WorldDef or DistributedDef, a solver other than kJacobi, sleep, the quadrants scheme, or
-  /// more ranks than tiles.
+  /// WorldDef or DistributedDef, a solver other than kSoftStep or kJacobi, sleep, the quadrants
+  /// scheme, or more ranks than tiles.
   DistributedWorld(const WorldDef& def, const DistributedDef& dist, MPI_Comm comm);
   ~DistributedWorld();
   DistributedWorld(const DistributedWorld&) = delete;
@@ -135,14 +145,16 @@ class DistributedWorld {
   /// Collective: deals the tiles again by the last step's work per tile (each owned body and each
   /// of its contacts, booked to the tile its centre was in), in Morton order, contiguous runs of
   /// about equal work, and moves every body whose tile changed owner (with its warm-start
-  /// entries). The states stay the same bits: the arithmetic does not depend on the partition.
+  /// entries). With kJacobi the states stay the same bits: the arithmetic does not depend on the
+  /// partition (with kSoftStep it does).
   void Rebalance();
   /// The owner rank of every tile (index tx + ty * tilesX).
   std::vector<int> TileOwners() const;
 
   /// Collective: every body's state, in id order, on every rank.
   std::vector<BodyState> GatherStates() const;
-  /// Collective: World::StateHash of the gathered states (same fields, same order).
+  /// Collective: World::StateHash of the gathered states (same fields, same order). With kJacobi
+  /// the same for any rank count; with kSoftStep the same for any thread count on a rank count.
   uint64_t StateHash() const;
 
   /// Collective: writes the world to `path` (rank 0 writes): every body in id order with its mass

@@ -1,5 +1,6 @@
-// The distributed world: tiles, ownership, migration, shadows, neighbour rounds and the split
-// Jacobi solve (quadrant/distributed_world.h gives the scheme and its contract).
+// The distributed world: tiles, ownership, migration, shadows, neighbour rounds and the two
+// solvers, the soft step per rank and the split Jacobi solve (quadrant/distributed_world.h gives
+// the scheme and its contract).
 //
 // State between steps: `local`, the World's arrays of the rank's statics, owned bodies and
 // shadows, holds the owned bodies' state (ownedStale; ownedLocal names their rows). A Record per
@@ -21,14 +22,20 @@
 // 2.4-3.0 in interleaved runs; patched in place with the velocity rounds overlapping the interior
 // rows, 1.7-2.1 (collide 0.7-0.9 against one rank's 0.55-0.6; migrate, shadows and the velocity
 // rounds about 0.1 ms each with their waits).
-// On a dense scene the gap is the Jacobi solve itself (base-100 pyramid: 80-95 % of the step, one
-// rank 4-10x the World at 8 iterations).
+// On a dense scene the gap was the Jacobi solve itself (many_pyramids, 2757 boxes: 85 % of the
+// step, one rank 3.0x the World at 8 iterations, which do not hold the pyramids); the soft step
+// per rank (kSoftStep: the World's solver on the local arrays, shadows' states from their owners
+// between passes) makes one rank the World (same bits) plus the rank's bookkeeping: 1.0-1.2x on
+// many_pyramids and circle stress. It is Gauss-Seidel inside a rank and Jacobi across the
+// boundary; what holds a pyramid across ranks there is the exchange after the warm start (a
+// shadow's warm start holds only this rank's rows) and recycling the manifolds as the World does.
 #include "quadrant/distributed_world.h"
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <string>
 #include <type_traits>
@@ -36,6 +43,7 @@
 #include "collision/broad_phase.h"
 #include "collision/contact_sort.h"
 #include "dynamics/jacobi_solve.h"
+#include "dynamics/soft_step.h"
 #include "quadrant/bit_hash.h"
 #include "quadrant/task_system.h"
 #include "parallel/stage_runner.h"
@@ -179,6 +187,13 @@ struct DistributedWorld::Impl {
   std::unique_ptr<StageRunner> run;
   std::unique_ptr<BroadPhase> broadPhase;
   JacobiSolve solve;
+  // kSoftStep: the World's soft step on the rank's owned bodies and shadows, the shadows' solver
+  // states replaced by their owners' after every pass (ExchangeStates); the shadows' result is
+  // dropped (their owners send them again next step).
+  std::unique_ptr<SoftStepSolver> rankSolver;
+  Profile rankProfile;
+  double exchangeInSolveMs = 0;  // this step's ExchangeStates time (inside the soft step)
+  std::vector<int32_t> contactCount;  // per local row: contacts this step (the tiles' work)
   DistributedStats stats;
 
   // Per-step scratch (kept between steps for its capacity).
@@ -204,6 +219,9 @@ struct DistributedWorld::Impl {
   WorkerLists<Contact> workerContacts;
   ContactSorter sorter;
   std::vector<Contact> contacts;
+  std::vector<Contact> lastContacts;  // kSoftStep: last step's, for recycling (FindContacts)
+  std::vector<int32_t> recycleFirst;  // row -> its first contact as body a in lastContacts, or -1
+  RecycleSource recycleSource;
   std::vector<AABB> ownedBoxes;              // owned index -> this step's broad-phase box
   std::vector<int> leavingIndex;             // Migrate: owned indices that leave
   std::vector<std::vector<uint32_t>> leavingIds;  // Migrate: per neighbour, the ids that go there
@@ -354,6 +372,7 @@ struct DistributedWorld::Impl {
   void PatchLocal(Real dt);
   void FindContacts(Real dt);
   void PostVelocities(int tag);
+  void ExchangeStates(std::span<SolverBody> states, std::span<const uint8_t> inRows);
   void CompleteVelocities(bool counts);
   void SplitRows();
   void StoreCache();
@@ -367,9 +386,9 @@ DistributedWorld::DistributedWorld(const WorldDef& def, const DistributedDef& di
   MPI_Comm_size(comm, &w.size);
   // Every check below reads only values every rank shares: all ranks throw alike.
   ValidateWorldDef(def);
-  Require(def.solver == SolverType::kJacobi,
-          "DistributedWorld: WorldDef.solver must be SolverType::kJacobi (pgs, soft_step and thesis are Gauss-Seidel "
-          "over a global order; see quadrant/distributed_world.h)");
+  Require(def.solver == SolverType::kJacobi || def.solver == SolverType::kSoftStep,
+          "DistributedWorld: WorldDef.solver must be kSoftStep (per rank) or kJacobi (the same bits on any rank count); "
+          "pgs and thesis are not supported (see quadrant/distributed_world.h)");
   Require(!def.effects.sleep, "DistributedWorld: effects.sleep is not supported");
   Require(def.scheme == ParallelScheme::kDeterministic, "DistributedWorld: only ParallelScheme::kDeterministic");
   Require(IsFinite(dist.bounds.lower) && IsFinite(dist.bounds.upper) && dist.bounds.lower.x < dist.bounds.upper.x &&
@@ -404,6 +423,12 @@ DistributedWorld::DistributedWorld(const WorldDef& def, const DistributedDef& di
   w.tasks = MakeThreadPool(def.threadCount);
   w.run = std::make_unique<StageRunner>(*w.tasks, def.minParallelItems);
   w.broadPhase = MakeBroadPhase(def.broadPhase, def.quadTreeMaxDepth);
+  if (def.solver == SolverType::kSoftStep) {
+    w.rankSolver = std::make_unique<SoftStepSolver>();
+    w.rankSolver->SetStateExchange([&w](std::span<SolverBody> states, std::span<const uint8_t> inRows) {
+      if (!w.neighbours.empty()) w.ExchangeStates(states, inRows);
+    });
+  }
 }
 
 // Deals the tiles, in Morton order, to the ranks in contiguous runs of about equal total cost
@@ -692,40 +717,57 @@ void DistributedWorld::Step(Real dt) {
   w.FindContacts(dt);
   lap(w.stats.collideMs);
 
-  const int k = w.def.velocityIterations;
-  IntegrateVelocities(w.local, w.def, dt, *w.run);
-  w.solve.Begin(w.local, w.def, dt, w.contacts);
-  lap(w.stats.solveMs);
-  if (w.neighbours.empty()) {
-    // No neighbour (one rank): the rounds carry nothing; the solve in one piece.
-    w.solve.Prepare(w.def);
-    for (int it = 0; it < k; ++it) w.solve.Iterate(w.local, w.def);
-    w.stats.rounds += k;
+  if (w.rankSolver) {
+    // WorldDef's solver on the rank's bodies and shadows, as a World steps its bodies: the
+    // ranks meet once a step (the shadows), not once an iteration.
+    StepContext ctx;
+    ctx.dt = dt;
+    ctx.def = &w.def;
+    ctx.bodies = &w.local;
+    ctx.contacts = w.contacts;
+    ctx.profile = &w.rankProfile;
+    ctx.run = w.run.get();
+    w.exchangeInSolveMs = 0;
+    w.rankSolver->Step(ctx);
     lap(w.stats.solveMs);
+    w.stats.solveMs -= w.exchangeInSolveMs;
+    w.stats.exchangeMs += w.exchangeInSolveMs;
   } else {
-    // Each round's messages travel while the interior rows are solved (the first round's while
-    // they are prepared too); the boundary rows wait for them. Rounds: the counts after warm
-    // starting, then the velocities after every iteration but the last.
-    w.SplitRows();
-    w.PostVelocities(3);
-    w.solve.PrepareRows(w.def, w.interiorRows);
-    for (int it = 0; it < k; ++it) {
-      w.solve.SolveRows(w.local, w.def, w.interiorRows);
+    const int k = w.def.velocityIterations;
+    IntegrateVelocities(w.local, w.def, dt, *w.run);
+    w.solve.Begin(w.local, w.def, dt, w.contacts);
+    lap(w.stats.solveMs);
+    if (w.neighbours.empty()) {
+      // No neighbour (one rank): the rounds carry nothing; the solve in one piece.
+      w.solve.Prepare(w.def);
+      for (int it = 0; it < k; ++it) w.solve.Iterate(w.local, w.def);
+      w.stats.rounds += k;
       lap(w.stats.solveMs);
-      w.CompleteVelocities(it == 0);
-      lap(w.stats.exchangeMs);
-      if (it == 0) w.solve.PrepareRows(w.def, w.boundaryRows);
-      w.solve.SolveRows(w.local, w.def, w.boundaryRows);
-      w.solve.ApplyRows(w.local);
-      lap(w.stats.solveMs);
-      if (it + 1 < k) {
-        w.PostVelocities(4);
+    } else {
+      // Each round's messages travel while the interior rows are solved (the first round's while
+      // they are prepared too); the boundary rows wait for them. Rounds: the counts after warm
+      // starting, then the velocities after every iteration but the last.
+      w.SplitRows();
+      w.PostVelocities(3);
+      w.solve.PrepareRows(w.def, w.interiorRows);
+      for (int it = 0; it < k; ++it) {
+        w.solve.SolveRows(w.local, w.def, w.interiorRows);
+        lap(w.stats.solveMs);
+        w.CompleteVelocities(it == 0);
         lap(w.stats.exchangeMs);
+        if (it == 0) w.solve.PrepareRows(w.def, w.boundaryRows);
+        w.solve.SolveRows(w.local, w.def, w.boundaryRows);
+        w.solve.ApplyRows(w.local);
+        lap(w.stats.solveMs);
+        if (it + 1 < k) {
+          w.PostVelocities(4);
+          lap(w.stats.exchangeMs);
+        }
       }
     }
+    w.solve.Finish(w.local, w.def, dt, w.contacts, *w.run);
+    lap(w.stats.solveMs);
   }
-  w.solve.Finish(w.local, w.def, dt, w.contacts, *w.run);
-  lap(w.stats.solveMs);
   w.StoreCache();
   w.ownedStale = true;  // the owned bodies' new state is in `local`
   w.owned.clear();
@@ -734,7 +776,14 @@ void DistributedWorld::Step(Real dt) {
   // Work per tile of this step, for load balancing: each owned body and each of its contacts,
   // booked to the tile its centre was in when the step began.
   std::fill(w.tileCost.begin(), w.tileCost.end(), 0);
-  const std::vector<int32_t>& counts = w.solve.Counts();
+  const std::vector<int32_t>& counts = w.rankSolver ? w.contactCount : w.solve.Counts();
+  if (w.rankSolver) {
+    w.contactCount.assign(size_t(w.local.Count()), 0);
+    for (const Contact& c : w.contacts) {
+      ++w.contactCount[size_t(c.a)];
+      ++w.contactCount[size_t(c.b)];
+    }
+  }
   for (size_t o = 0; o < w.ownedLocal.size(); ++o) {
     w.tileCost[size_t(w.ownedTile[o])] += 1 + counts[size_t(w.ownedLocal[o])];
   }
@@ -1108,12 +1157,29 @@ void DistributedWorld::Impl::FindContacts(Real dt) {
       if (local.slot[size_t(p.a)] > local.slot[size_t(p.b)]) std::swap(p.a, p.b);
     }
   }
+  // kSoftStep recycles last step's manifolds as the World does (contactRecycleDistance: a pair
+  // that barely moved keeps its manifold), where last step's rows are this step's (layoutKept):
+  // the old contacts name bodies by row. Without it a resting base-20 pyramid's apex drifted
+  // 0.013 m in 59 s on one rank, as the World's does without it (0.0014 m with it).
+  // Otherwise the source is empty: the narrow phase still records what the next step's recycling
+  // compares with.
+  const RecycleSource* recycle = nullptr;
+  if (rankSolver && def.contactRecycleDistance > 0 && def.effects.warmStarting) {
+    lastContacts.clear();
+    if (stats.layoutKept) lastContacts.swap(contacts);
+    recycleFirst.assign(size_t(count), -1);
+    for (size_t i = 0; i < lastContacts.size(); ++i) {
+      if (i == 0 || lastContacts[i - 1].a != lastContacts[i].a) recycleFirst[size_t(lastContacts[i].a)] = int32_t(i);
+    }
+    recycleSource = {lastContacts.data(), static_cast<int>(lastContacts.size()), recycleFirst.data(), def.contactRecycleDistance};
+    recycle = &recycleSource;
+  }
   // The World's narrow phase, then its contact sort on the bodies' ids (per-worker lists merged
   // in key order): the same contacts in the same order for any thread and rank count.
   workerContacts.Reset(run->Workers());
   run->For(Stage::kNarrowPhase, static_cast<int>(ownPairs.size()), run->MinHeavyItems(), [&](int begin, int end, int worker) {
     CollidePairs(local, def, dt, std::span<const CandidatePair>(ownPairs).subspan(size_t(begin), size_t(end - begin)),
-                 workerContacts[worker]);
+                 workerContacts[worker], recycle);
   });
   if (rowsInIdOrder) {
     sorter.Sort(*run, count, workerContacts, contacts, nullptr);
@@ -1196,6 +1262,49 @@ void DistributedWorld::Impl::CompleteVelocities(bool counts) {
       if (counts) count[size_t(i)] = v.count;
     }
   }
+}
+
+// The soft step's round (kSoftStep), after each pass of a sub-step: every owned body that is a
+// shadow elsewhere sends its solver state (velocity and the sub-steps' motion so far), which
+// replaces the shadow's there; a shadow's own state holds only this rank's rows. A body in no
+// row here has no state: it sends a mark and the other side keeps its own.
+void DistributedWorld::Impl::ExchangeStates(std::span<SolverBody> states, std::span<const uint8_t> inRows) {
+  const auto from = std::chrono::steady_clock::now();
+  struct StateRecord {
+    SolverBody state;
+    int32_t held;
+  };
+  static_assert(std::is_trivially_copyable_v<StateRecord>);
+  ClearOut();
+  const size_t n = neighbours.size();
+  requests.assign(2 * n, MPI_REQUEST_NULL);
+  for (size_t k = 0; k < n; ++k) {
+    for (int o : sentShadows[k]) {
+      const size_t i = size_t(ownedLocal[size_t(o)]);
+      Put(out[k], inRows[i] ? StateRecord{states[i], 1} : StateRecord{SolverBody{}, 0});
+    }
+    in[k].resize(receivedShadows[k].size() * sizeof(StateRecord));
+    MPI_Irecv(in[k].data(), static_cast<int>(in[k].size()), MPI_BYTE, neighbours[k], 5, comm, &requests[n + k]);
+    MPI_Isend(out[k].data(), static_cast<int>(out[k].size()), MPI_BYTE, neighbours[k], 5, comm, &requests[k]);
+    stats.bytesSent += static_cast<int64_t>(out[k].size());
+  }
+  const auto waitFrom = std::chrono::steady_clock::now();
+  statuses.resize(requests.size());
+  MPI_Waitall(static_cast<int>(requests.size()), requests.data(), statuses.data());
+  const auto waited = std::chrono::steady_clock::now();
+  stats.waitMs += std::chrono::duration<double, std::milli>(waited - waitFrom).count();
+  ++stats.rounds;
+  for (size_t k = 0; k < n; ++k) {
+    int got = 0;
+    MPI_Get_count(&statuses[n + k], MPI_BYTE, &got);
+    if (size_t(got) != in[k].size()) throw std::logic_error("DistributedWorld: a state message does not match the shadows");
+    size_t at = 0;
+    for (int i : receivedShadows[k]) {
+      const StateRecord r = Take<StateRecord>(in[k], at);
+      if (r.held && inRows[size_t(i)]) states[size_t(i)] = r.state;
+    }
+  }
+  exchangeInSolveMs += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - from).count();
 }
 
 // The solve's rows split by whether they touch a shadow (whose velocity comes from its owner

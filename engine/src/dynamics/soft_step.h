@@ -87,6 +87,13 @@ class SoftStepSolver final : public Solver {
   bool JointColoringKept() const override { return jointColoringKept_; }
   void Step(StepContext& ctx) override;
 
+  /// A call between the passes of every sub-step, on the calling thread: after the soft solve
+  /// and after the relax passes, with the bodies' solver states (by dense body index; a body
+  /// holds one only where inRows is set). The distributed world (quadrant::mpi) replaces its
+  /// shadows' states there with their owners'; nothing else sets it.
+  using StateExchange = std::function<void(std::span<SolverBody> states, std::span<const uint8_t> inRows)>;
+  void SetStateExchange(StateExchange exchange) { exchange_ = std::move(exchange); }
+
  private:
   struct StepPlan;  // what one step's stages share (solver_soft_step.cpp)
 
@@ -283,6 +290,7 @@ class SoftStepSolver final : public Solver {
   SharedFlag deep_, moved_;
 
   static constexpr int kFlagPad = 8;
+  StateExchange exchange_;
   std::vector<uint8_t> inRows_;  // per body (+ kFlagPad of padding): integrated by the sub-steps
   bool collecting_ = false;      // between BeginRegion and EndRegion
   std::vector<TaskSystem::StagePlan> regionPlan_;
