@@ -13,10 +13,11 @@
 //   owners before each sub-step's solve pass, before its positions move and at the end (Jacobi
 //   across the boundary, as pe's subdomain Gauss-Seidel). On one rank its state is the World's
 //   bit for bit; on more it depends on the rank count (each rank solves its boundary contacts
-//   from its own side), the same on any thread count and every run. Cost: 3n neighbour rounds
-//   for n sub-steps (+ 2). Measured (amd-epyc-2c; docs/distributed.md): one rank 0.9-1.2x the
-//   World's step on circle stress and many_pyramids; the base-20 pyramid across four tiles holds
-//   its apex within 0.0025 m over 60 s at the default 4 sub-steps on 1-4 ranks.
+//   from its own side), the same on any thread count and every run. Cost: 2n + 1 neighbour
+//   rounds for n sub-steps, plus 2. Measured (amd-epyc-2c; docs/distributed.md): one rank
+//   1.1-1.2x the World's step on circle stress and many_pyramids (medians); weak scaling to 2
+//   ranks 87-89 % on many_pyramids, 65-70 % on circle stress; the base-20 pyramid across four
+//   tiles holds its apex within 0.0025 m over 60 s at the default 4 sub-steps on 1-4 ranks.
 // - kJacobi, the deterministic option: the state is bit-identical for any number of ranks and
 //   equal to a single-process World's with the same bodies and WorldDef (GatherStates and
 //   StateHash give that World's state and hash). k velocity iterations take k + 2 rounds. Its

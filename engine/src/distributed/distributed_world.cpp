@@ -15,20 +15,19 @@
 // at any rank count.
 //
 // Why (circle stress, 16004 circles per rank, amd-epyc-2c; docs/distributed.md has the commands
-// and figures): on one rank the step takes 1.1-1.2 ms (collide 0.55-0.6, solve 0.3, halo 0.25),
-// 1.1-1.3x the World's default engine; rebuilding the arrays from records every step made it
-// 6.3-7.5. On two ranks a body crosses the boundary, or the shadows change, nearly every step:
-// rebuilding made the step 2.5-2.8 ms, merging the patched rows by id (every kept row copied)
-// 2.4-3.0 in interleaved runs; patched in place with the velocity rounds overlapping the interior
-// rows, 1.7-2.1 (collide 0.7-0.9 against one rank's 0.55-0.6; migrate, shadows and the velocity
-// rounds about 0.1 ms each with their waits).
+// and figures): on one rank the step takes 1.1-1.2 ms, 1.1-1.2x the World's default engine;
+// rebuilding the arrays from records every step made it 6.3-7.5. On two ranks a body crosses the
+// boundary, or the shadows change, nearly every step: rebuilding made the step 2.5-2.8 ms, and
+// any pass over every body every step shows (the owned list's merge, 85 instructions a body, and
+// the patch's passes over every row were 2.4M of a 15.3M-instruction step): the patch, the
+// merge and the shadows' pass visit what changed, and 2 ranks take 1.7-2.2 ms.
 // On a dense scene the gap was the Jacobi solve itself (many_pyramids, 2757 boxes: 85 % of the
-// step, one rank 3.0x the World at 8 iterations, which do not hold the pyramids); the soft step
+// step, one rank 3x the World at 8 iterations, which do not hold the pyramids); the soft step
 // per rank (kSoftStep: the World's solver on the local arrays, shadows' states from their owners
-// between passes) makes one rank the World (same bits) plus the rank's bookkeeping: 1.0-1.2x on
-// many_pyramids and circle stress. It is Gauss-Seidel inside a rank and Jacobi across the
-// boundary; what holds a pyramid across ranks there is the exchange after the warm start (a
-// shadow's warm start holds only this rank's rows) and recycling the manifolds as the World does.
+// between passes) makes one rank the World (same bits) plus the rank's bookkeeping. It is
+// Gauss-Seidel inside a rank and Jacobi across the boundary; what holds a pyramid across ranks
+// there is the exchange after the warm start (a shadow's warm start holds only this rank's rows)
+// and recycling the manifolds as the World does.
 #include "quadrant/distributed_world.h"
 
 #include <algorithm>
