@@ -14,7 +14,7 @@
 // every pair and sorts the contacts by body id, so the arithmetic, and the state hash, is the same
 // at any rank count.
 //
-// Why (circle stress, 16004 circles per rank, amd-epyc-2c; docs/distributed.md has the commands
+// Why (circle stress, 16004 circles per rank, amd-epyc-2c; docs/notes/distributed.md has the commands
 // and figures): on one rank the step takes 1.1-1.2 ms, 1.1-1.2x the World's default engine;
 // rebuilding the arrays from records every step made it 6.3-7.5. On two ranks a body crosses the
 // boundary, or the shadows change, nearly every step: rebuilding made the step 2.5-2.8 ms, and
