@@ -165,7 +165,9 @@ class DistributedWorld {
   void WriteCheckpoint(const std::string& path) const;
   /// Collective: replaces this world's bodies and warm-start impulses by the checkpoint's, on this
   /// world's ranks and tiles (any rank count: bodies go to the rank holding their centre). Stepping
-  /// on then gives the states the written world would have had. Throws quadrant::Error on every
+  /// on then gives the states the written world would have had (kJacobi; kSoftStep continues from
+  /// the same bodies and impulses without that promise: the manifolds it recycles from last step
+  /// are not in the file). Throws quadrant::Error on every
   /// rank, leaving the world as it was, for a missing, truncated or corrupt file.
   void ReadCheckpoint(const std::string& path);
 
