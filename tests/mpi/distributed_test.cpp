@@ -183,6 +183,25 @@ TEST(Distributed, GranularPileMatchesWorld) {
   }
 }
 
+// A pyramid's middle: the middle of its boxes' centres (the ground left out).
+Vec2 PyramidMiddle(const std::vector<BodyDef>& bodies) {
+  Real lo = 1e9, hi = -1e9, top = -1e9, bottom = 1e9;
+  for (const BodyDef& b : bodies) {
+    if (b.type != BodyType::kDynamic) continue;
+    lo = std::min(lo, b.position.x), hi = std::max(hi, b.position.x);
+    top = std::max(top, b.position.y), bottom = std::min(bottom, b.position.y);
+  }
+  return Vec2{(lo + hi) / 2, (bottom + top) / 2};
+}
+
+// 2 x 2 tiles of `half` metres whose common corner is `corner`.
+DistributedDef FourTilesAround(Vec2 corner, Real half) {
+  DistributedDef dist;
+  dist.bounds = AABB{corner - Vec2{half, half}, corner + Vec2{half, half}};
+  dist.tilesX = dist.tilesY = 2;
+  return dist;
+}
+
 // A base-10 pyramid whose centre is the corner of four tiles: contacts across every boundary.
 // Also measures what the Jacobi solve costs in stability: the apex's drift after 5 s against the
 // pgs solver's in one process. Jacobi needs about four times pgs's iterations for the same hold
@@ -191,17 +210,7 @@ TEST(Distributed, GranularPileMatchesWorld) {
 TEST(Distributed, PyramidAcrossTilesMatchesWorld) {
   const scene::Scene s = scene::MakePyramid(10);
   const std::vector<BodyDef> bodies = ToBodyDefs(s);
-  // The pyramid's middle (its boxes' centres, the ground left out).
-  Real lo = 1e9, hi = -1e9, top = -1e9, bottom = 1e9;
-  for (const BodyDef& b : bodies) {
-    if (b.type != BodyType::kDynamic) continue;
-    lo = std::min(lo, b.position.x), hi = std::max(hi, b.position.x);
-    top = std::max(top, b.position.y), bottom = std::min(bottom, b.position.y);
-  }
-  const Vec2 mid{(lo + hi) / 2, (bottom + top) / 2};
-  DistributedDef dist;
-  dist.bounds = AABB{mid - Vec2{20, 20}, mid + Vec2{20, 20}};
-  dist.tilesX = dist.tilesY = 2;
+  const DistributedDef dist = FourTilesAround(PyramidMiddle(bodies), 20);
   const int steps = 300;
   WorldDef def = JacobiDef(s);
   def.velocityIterations = 32;
@@ -261,22 +270,13 @@ WorldDef SoftStepDef(const scene::Scene& s, int threads = 1) {
 // The dense case for the per-rank solver: the hard cases' base-20 pyramid (210 boxes)
 // with its middle on the corner of four tiles, at soft_step's default budget (4 sub-steps), 60 s:
 // its apex stays within 0.02 m of where it stood after the first second (sampled every 0.5 s, as
-// the hard cases do). Measured 0.0008 / 0.0010 / 0.0025 / 0.0009 m at 1 / 2 / 3 / 4 ranks; without
+// the hard cases do). Measured 0.0014 / 0.0012 / 0.0019 / 0.0024 m at 1 / 2 / 3 / 4 ranks; without
 // the exchange after the warm start 0.14-0.56 m across ranks, and 0.013 m on one rank without the
 // manifolds' recycling (as the World's without it).
 TEST(DistributedSoftStep, PyramidAcrossFourTilesStandsAtTheDefaultBudget) {
   const scene::Scene s = scene::MakePyramid(20);
   const std::vector<BodyDef> bodies = ToBodyDefs(s);
-  Real lo = 1e9, hi = -1e9, top = -1e9, bottom = 1e9;
-  for (const BodyDef& b : bodies) {
-    if (b.type != BodyType::kDynamic) continue;
-    lo = std::min(lo, b.position.x), hi = std::max(hi, b.position.x);
-    top = std::max(top, b.position.y), bottom = std::min(bottom, b.position.y);
-  }
-  const Vec2 mid{(lo + hi) / 2, (bottom + top) / 2};
-  DistributedDef dist;
-  dist.bounds = AABB{mid - Vec2{25, 25}, mid + Vec2{25, 25}};
-  dist.tilesX = dist.tilesY = 2;
+  const DistributedDef dist = FourTilesAround(PyramidMiddle(bodies), 25);
   DistributedWorld dw(SoftStepDef(s), dist, MPI_COMM_WORLD);
   dw.Load(bodies);
   const int settle = 60, steps = 3600;

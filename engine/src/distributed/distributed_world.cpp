@@ -384,6 +384,8 @@ struct DistributedWorld::Impl {
   void PatchLocal(Real dt);
   void FindContacts(Real dt);
   void PostVelocities(int tag);
+  void PostShadowRound(int tag, size_t recordSize);
+  void CompleteShadowRound(const char* what);
   void ExchangeStates(std::span<SolverBody> states, std::span<const uint8_t> inRows);
   void CompleteVelocities(bool counts);
   void SplitRows();
@@ -1285,39 +1287,56 @@ void DistributedWorld::Impl::PostVelocities(int tag) {
   ClearOut();
   const std::vector<int32_t>& count = solve.Counts();
   const std::vector<BodyVelocity>& pseudo = solve.Pseudo();
-  const size_t n = neighbours.size();
-  requests.assign(2 * n, MPI_REQUEST_NULL);
-  for (size_t k = 0; k < n; ++k) {
+  for (size_t k = 0; k < neighbours.size(); ++k) {
     for (int o : sentShadows[k]) {
       const int i = ownedLocal[size_t(o)];
       Put(out[k], VelocityRecord{local.vel[size_t(i)], pseudo[size_t(i)], count[size_t(i)]});
     }
-    in[k].resize(receivedShadows[k].size() * sizeof(VelocityRecord));
-    MPI_Irecv(in[k].data(), static_cast<int>(in[k].size()), MPI_BYTE, neighbours[k], tag, comm, &requests[n + k]);
-    MPI_Isend(out[k].data(), static_cast<int>(out[k].size()), MPI_BYTE, neighbours[k], tag, comm, &requests[k]);
-    stats.bytesSent += static_cast<int64_t>(out[k].size());
   }
+  PostShadowRound(tag, sizeof(VelocityRecord));
 }
 
 void DistributedWorld::Impl::CompleteVelocities(bool counts) {
-  const auto waitFrom = std::chrono::steady_clock::now();
-  statuses.resize(requests.size());
-  MPI_Waitall(static_cast<int>(requests.size()), requests.data(), statuses.data());
-  stats.waitMs += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - waitFrom).count();
-  ++stats.rounds;
+  CompleteShadowRound("velocity");
   std::vector<int32_t>& count = solve.Counts();
   std::vector<BodyVelocity>& pseudo = solve.Pseudo();
-  const size_t n = neighbours.size();
-  for (size_t k = 0; k < n; ++k) {
-    int got = 0;
-    MPI_Get_count(&statuses[n + k], MPI_BYTE, &got);
-    if (size_t(got) != in[k].size()) throw std::logic_error("DistributedWorld: a velocity message does not match the shadows");
+  for (size_t k = 0; k < neighbours.size(); ++k) {
     size_t at = 0;
     for (int i : receivedShadows[k]) {
       const VelocityRecord v = Take<VelocityRecord>(in[k], at);
       local.vel[size_t(i)] = v.vel;
       pseudo[size_t(i)] = v.pseudo;
       if (counts) count[size_t(i)] = v.count;
+    }
+  }
+}
+
+// A round of one record per shadow (the solvers' exchanges): out[k], packed by the caller, goes to
+// neighbours[k]; in[k] is sized for its shadows here, so it is received directly, with no probe.
+void DistributedWorld::Impl::PostShadowRound(int tag, size_t recordSize) {
+  const size_t n = neighbours.size();
+  requests.assign(2 * n, MPI_REQUEST_NULL);
+  for (size_t k = 0; k < n; ++k) {
+    in[k].resize(receivedShadows[k].size() * recordSize);
+    MPI_Irecv(in[k].data(), static_cast<int>(in[k].size()), MPI_BYTE, neighbours[k], tag, comm, &requests[n + k]);
+    MPI_Isend(out[k].data(), static_cast<int>(out[k].size()), MPI_BYTE, neighbours[k], tag, comm, &requests[k]);
+    stats.bytesSent += static_cast<int64_t>(out[k].size());
+  }
+}
+
+// Waits for the round (timed as wait) and checks that every message holds one record per shadow.
+void DistributedWorld::Impl::CompleteShadowRound(const char* what) {
+  const auto waitFrom = std::chrono::steady_clock::now();
+  statuses.resize(requests.size());
+  MPI_Waitall(static_cast<int>(requests.size()), requests.data(), statuses.data());
+  stats.waitMs += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - waitFrom).count();
+  ++stats.rounds;
+  const size_t n = neighbours.size();
+  for (size_t k = 0; k < n; ++k) {
+    int got = 0;
+    MPI_Get_count(&statuses[n + k], MPI_BYTE, &got);
+    if (size_t(got) != in[k].size()) {
+      throw std::logic_error(std::string("DistributedWorld: a ") + what + " message does not match the shadows");
     }
   }
 }
@@ -1334,28 +1353,15 @@ void DistributedWorld::Impl::ExchangeStates(std::span<SolverBody> states, std::s
   };
   static_assert(std::is_trivially_copyable_v<StateRecord>);
   ClearOut();
-  const size_t n = neighbours.size();
-  requests.assign(2 * n, MPI_REQUEST_NULL);
-  for (size_t k = 0; k < n; ++k) {
+  for (size_t k = 0; k < neighbours.size(); ++k) {
     for (int o : sentShadows[k]) {
       const size_t i = size_t(ownedLocal[size_t(o)]);
       Put(out[k], inRows[i] ? StateRecord{states[i], 1} : StateRecord{SolverBody{}, 0});
     }
-    in[k].resize(receivedShadows[k].size() * sizeof(StateRecord));
-    MPI_Irecv(in[k].data(), static_cast<int>(in[k].size()), MPI_BYTE, neighbours[k], 5, comm, &requests[n + k]);
-    MPI_Isend(out[k].data(), static_cast<int>(out[k].size()), MPI_BYTE, neighbours[k], 5, comm, &requests[k]);
-    stats.bytesSent += static_cast<int64_t>(out[k].size());
   }
-  const auto waitFrom = std::chrono::steady_clock::now();
-  statuses.resize(requests.size());
-  MPI_Waitall(static_cast<int>(requests.size()), requests.data(), statuses.data());
-  const auto waited = std::chrono::steady_clock::now();
-  stats.waitMs += std::chrono::duration<double, std::milli>(waited - waitFrom).count();
-  ++stats.rounds;
-  for (size_t k = 0; k < n; ++k) {
-    int got = 0;
-    MPI_Get_count(&statuses[n + k], MPI_BYTE, &got);
-    if (size_t(got) != in[k].size()) throw std::logic_error("DistributedWorld: a state message does not match the shadows");
+  PostShadowRound(5, sizeof(StateRecord));
+  CompleteShadowRound("state");
+  for (size_t k = 0; k < neighbours.size(); ++k) {
     size_t at = 0;
     for (int i : receivedShadows[k]) {
       const StateRecord r = Take<StateRecord>(in[k], at);
