@@ -87,10 +87,11 @@ class SoftStepSolver final : public Solver {
   bool JointColoringKept() const override { return jointColoringKept_; }
   void Step(StepContext& ctx) override;
 
-  /// A call between the passes of every sub-step, on the calling thread: after the soft solve
-  /// and after the relax passes, with the bodies' solver states (by dense body index; a body
-  /// holds one only where inRows is set). The distributed world (quadrant::mpi) replaces its
-  /// shadows' states there with their owners'; nothing else sets it.
+  /// A call between passes, on the calling thread, with the bodies' solver states (by dense body
+  /// index; a body holds one only where inRows is set): in every sub-step after the warm start
+  /// and after the soft solve, after the last sub-step's relax passes, and before Box2D-style
+  /// bounces. The distributed world (quadrant::mpi) replaces its shadows' states there with their
+  /// owners'; nothing else sets it.
   using StateExchange = std::function<void(std::span<SolverBody> states, std::span<const uint8_t> inRows)>;
   void SetStateExchange(StateExchange exchange) { exchange_ = std::move(exchange); }
 
