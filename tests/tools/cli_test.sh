@@ -151,7 +151,7 @@ program_parsers() {
   expect_help quadrant_validate --out --cases --random --seed --seeds --runs
   expect_help quadrant_figure13 OUT.csv bodies steps
   expect_help quadrant_icount --scene --count --steps --seed --engine --info
-  expect_help quadrant_distributed --scene --count --per-rank --steps --warmup --tiles --iterations --threads --world --owners
+  expect_help quadrant_distributed --scene --count --per-rank --steps --warmup --tiles --solver --iterations --threads --world --owners
   expect_help quadrant_queries
   expect_help quadrant_task_overhead
 
