@@ -175,9 +175,11 @@ struct DistributedWorld::Impl {
   std::vector<int> ownedTile;  // owned index -> the tile its centre was in when the step began
   std::vector<int> neighbours;  // ascending ranks
   std::vector<int> neighbourSlot;  // rank -> index in neighbours, -1 if not a neighbour
-  // By tile: 1 if this rank owns every tile within two of it (5 x 5). A body whose centre is in
-  // such a tile is a shadow nowhere: its box widened by the reach stays within one tile of the
-  // centre (Step checks 2 x reach <= a tile), the second tile is a margin for rounding.
+  // By tile: 2 if this rank owns every tile within two of it (5 x 5), 1 if every tile within one
+  // (3 x 3), else 0. A body's box widened by the reach stays within 2 x reach of its centre (Step
+  // checks 2 x reach <= a tile), so a body in a tile of depth 2 is a shadow nowhere, and one in a
+  // tile of depth 1 neither while 2 x reach <= 0.99 tile (the 1 % a margin for rounding). At 2
+  // ranks x 16004 circles the second rule halves the bodies SendShadows looks at.
   std::vector<uint8_t> deepTile;
   // ownBefore[(x) + (y) * (tilesX + 1)]: how many tiles of this rank lie in [0, x) x [0, y) (a 2D
   // prefix sum), so that whether a rectangle of tiles is all this rank's is four reads
@@ -487,15 +489,17 @@ void DistributedWorld::Impl::FindNeighbours() {
     }
   }
   deepTile.assign(size_t(tiles), 0);
-  for (int t = 0; t < tiles; ++t) {
-    const int tx = t % dist.tilesX, ty = t / dist.tilesX;
-    bool deep = true;
-    for (int y = std::max(ty - 2, 0); deep && y <= std::min(ty + 2, dist.tilesY - 1); ++y) {
-      for (int x = std::max(tx - 2, 0); deep && x <= std::min(tx + 2, dist.tilesX - 1); ++x) {
-        deep = tileOwner[size_t(x + y * dist.tilesX)] == rank;
+  const auto ownWithin = [&](int tx, int ty, int d) {
+    for (int y = std::max(ty - d, 0); y <= std::min(ty + d, dist.tilesY - 1); ++y) {
+      for (int x = std::max(tx - d, 0); x <= std::min(tx + d, dist.tilesX - 1); ++x) {
+        if (tileOwner[size_t(x + y * dist.tilesX)] != rank) return false;
       }
     }
-    deepTile[size_t(t)] = deep ? 1 : 0;
+    return true;
+  };
+  for (int t = 0; t < tiles; ++t) {
+    const int tx = t % dist.tilesX, ty = t / dist.tilesX;
+    deepTile[size_t(t)] = ownWithin(tx, ty, 2) ? 2 : ownWithin(tx, ty, 1) ? 1 : 0;
   }
   const size_t w1 = size_t(dist.tilesX) + 1;
   ownBefore.assign(w1 * (size_t(dist.tilesY) + 1), 0);
@@ -962,8 +966,9 @@ void DistributedWorld::Impl::SendShadows(Real reach, Real) {
   std::vector<int> targets;
   // One rank, or no neighbour: nobody to send to.
   const size_t count = neighbours.empty() ? 0 : OwnedCount();
+  const uint8_t deepEnough = 2 * double(reach) <= 0.99 * std::min(double(tileW), double(tileH)) ? 1 : 2;
   for (size_t o = 0; o < count; ++o) {
-    if (deepTile[size_t(ownedTile[o])]) continue;
+    if (deepTile[size_t(ownedTile[o])] >= deepEnough) continue;
     const AABB box = ownedBoxes[o];
     const int x0 = TileX(box.lower.x - reach), x1 = TileX(box.upper.x + reach);
     const int y0 = TileY(box.lower.y - reach), y1 = TileY(box.upper.y + reach);
