@@ -173,6 +173,8 @@ struct DistributedWorld::Impl {
   std::vector<int64_t> tileCost;  // this rank's work per tile in the last step (load balance)
   int64_t stepCount = 0;
   std::vector<int> ownedTile;  // owned index -> the tile its centre was in when the step began
+  std::vector<double> haloReach;  // per block of the halo pass: the farthest reach
+  std::vector<uint8_t> haloLost;  // per block: a body left its neighbourhood of tiles
   std::vector<int> neighbours;  // ascending ranks
   std::vector<int> neighbourSlot;  // rank -> index in neighbours, -1 if not a neighbour
   // By tile: 2 if this rank owns every tile within two of it (5 x 5), 1 if every tile within one
@@ -688,32 +690,48 @@ void DistributedWorld::Step(Real dt) {
   // The halo: the farthest any moving body's box reaches from its centre this step, over all
   // ranks (a max is exact in any order), and whether any body left its neighbourhood of tiles.
   // Each owned body's box and tile are kept for the rest of the step; read from the local arrays
-  // while they map the owned list (layoutValid), else from the records.
-  double local[2] = {0, 0};
+  // while they map the owned list (layoutValid), else from the records. In parallel over the
+  // rank's threads: on one thread this pass was 0.22 ms of a 1.1 ms step (16004 circles) and
+  // 2.5 of 6.9 ms at 2 threads (64004 circles), where the World boxes its bodies in parallel.
+  w.run->BeginStep();  // as World::Step: wake the pool's workers, or run alone on a busy machine
   const size_t ownedCount = w.OwnedCount();
   w.ownedBoxes.resize(ownedCount);
   w.ownedTile.resize(ownedCount);
-  for (size_t o = 0; o < ownedCount; ++o) {
-    Vec2 c;
-    AABB box;
-    if (w.layoutValid) {
-      // The local rows hold the newest state whenever the layout is valid (SyncOwned only copies
-      // them to the records); the box goes to the row too, which BuildLocal keeps if it can.
-      const int i = w.ownedLocal[o];
-      c = w.local.center[size_t(i)];
-      box = w.local.aabb[size_t(i)] = BroadPhaseBox(w.local, i, w.def, dt);
-    } else {
-      c = w.owned[o].center;
-      box = w.BoxOf(w.owned[o], dt);
+  const int blocks = w.run->Workers();
+  w.haloReach.assign(size_t(blocks), 0);
+  w.haloLost.assign(size_t(blocks), 0);
+  w.run->For(Stage::kBroadPhase, static_cast<int>(ownedCount), w.run->MinItems(), [&w, dt](int begin, int end, int block) {
+    double most = 0;
+    uint8_t lost = 0;
+    for (size_t o = size_t(begin); o < size_t(end); ++o) {
+      Vec2 c;
+      AABB box;
+      if (w.layoutValid) {
+        // The local rows hold the newest state whenever the layout is valid (SyncOwned only copies
+        // them to the records); the box goes to the row too, which BuildLocal keeps if it can.
+        const int i = w.ownedLocal[o];
+        c = w.local.center[size_t(i)];
+        box = w.local.aabb[size_t(i)] = BroadPhaseBox(w.local, i, w.def, dt);
+      } else {
+        c = w.owned[o].center;
+        box = w.BoxOf(w.owned[o], dt);
+      }
+      w.ownedBoxes[o] = box;
+      const double reach = std::max({double(c.x - box.lower.x), double(box.upper.x - c.x), double(c.y - box.lower.y),
+                                     double(box.upper.y - c.y)});
+      most = std::max(most, reach);
+      const int t = w.TileX(c.x) + w.TileY(c.y) * w.dist.tilesX;
+      w.ownedTile[o] = t;
+      const int owner = w.tileOwner[size_t(t)];
+      if (owner != w.rank && w.neighbourSlot[size_t(owner)] < 0) lost = 1;
     }
-    w.ownedBoxes[o] = box;
-    const double reach = std::max({double(c.x - box.lower.x), double(box.upper.x - c.x), double(c.y - box.lower.y),
-                                   double(box.upper.y - c.y)});
-    local[0] = std::max(local[0], reach);
-    const int t = w.TileX(c.x) + w.TileY(c.y) * w.dist.tilesX;
-    w.ownedTile[o] = t;
-    const int owner = w.tileOwner[size_t(t)];
-    if (owner != w.rank && w.neighbourSlot[size_t(owner)] < 0) local[1] = 1;
+    w.haloReach[size_t(block)] = std::max(w.haloReach[size_t(block)], most);
+    w.haloLost[size_t(block)] |= lost;
+  });
+  double local[2] = {0, 0};
+  for (int b = 0; b < blocks; ++b) {
+    local[0] = std::max(local[0], w.haloReach[size_t(b)]);
+    if (w.haloLost[size_t(b)]) local[1] = 1;
   }
   double global[2] = {0, 0};
   {
