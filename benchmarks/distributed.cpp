@@ -1,14 +1,17 @@
 // quadrant_distributed: one distributed run under mpirun, for tools/quadrant bench --ranks.
 //
 //   mpirun -np R quadrant_distributed --scene circle_stress|many_pyramids|pyramid --count N [--per-rank] [--steps S]
-//          [--warmup W] [--tiles T] [--solver soft_step|jacobi] [--iterations K] [--threads N] [--world]
+//          [--warmup W] [--tiles T] [--solver soft_step|jacobi] [--iterations K] [--threads N] [--world] [--independent]
 //
 // Rank 0 prints one JSON object (a run of distributed.json): ms per step (the slowest rank's wall
 // time over the measured steps), neighbour rounds per step, payload bytes sent per step (all
 // ranks), bytes per shadow body, shadow fraction (shadows / bodies), imbalance (max / mean over the
 // ranks of owned bodies plus their contacts, averaged over the steps; a work measure, not a time),
 // the state hash, and peak resident memory summed over the ranks (and per body); oversubscribed
-// when ranks x threads exceed the cores. With --world,
+// when ranks x threads exceed the cores. With --independent (and --per-rank), every rank steps its
+// own one-rank world on the one-rank scene at the same time: the time R such processes take side
+// by side, the weak-scaling ceiling of the machine itself (shared caches, memory, clocks), with no
+// rank waiting for another. With --world,
 // also world_ms_per_step: the single-process World with its default engine (the quadrant adapter's
 // mapping of the scene, --threads threads) on the same bodies, timed the same way on rank 0 after
 // the distributed run. For the pyramid, apex_drift_m: how far its apex moved from its pose after
@@ -65,7 +68,7 @@ int main(int argc, char** argv) {
   MPI_Comm_size(MPI_COMM_WORLD, &size);
   std::string sceneName = "circle_stress";
   int count = 16000, steps = 100, warmup = 10, tiles = 0, iterations = 8, threads = 1;
-  bool perRank = false, compareWorld = false;
+  bool perRank = false, compareWorld = false, independent = false;
   std::string solverName = "soft_step";  // the engine's default (WorldDef::solver)
   std::string ownersPath;  // --owners FILE: every body's position, radius and owner rank as CSV
   cli::Parser parser("quadrant_distributed",
@@ -86,6 +89,9 @@ int main(int argc, char** argv) {
               "rank (its default budget)");
   parser.Int("--iterations", &iterations, 1, 1000, "velocity iterations (jacobi)");
   parser.Int("--threads", &threads, 1, 64, "threads inside each rank (WorldDef::threadCount; also the World's with --world)");
+  parser.Flag("--independent", &independent,
+              "with --per-rank: each rank steps its own one-rank world (MPI_COMM_SELF) at the same time; the "
+              "machine's ceiling for weak scaling (no rank waits for another)");
   parser.Flag("--world", &compareWorld, "also time the World's default engine on the same scene (world_ms_per_step)");
   parser.String("--owners", &ownersPath, "FILE", "write every body's position, radius and owner rank as CSV");
   parser.Quiet(rank != 0);  // every rank parses the same arguments; rank 0 speaks for them
@@ -95,12 +101,22 @@ int main(int argc, char** argv) {
   });
   parser.Parse(argc, argv);
   int code = 0;
+  if (independent && (!perRank || compareWorld || !ownersPath.empty() || sceneName == "pyramid")) {
+    if (rank == 0) {
+      std::fprintf(stderr, "quadrant_distributed: --independent needs --per-rank (circle_stress, many_pyramids), without --world or --owners\n");
+    }
+    MPI_Finalize();
+    return 2;
+  }
+  // The ranks the scene is sized for and split over: one each with --independent.
+  const int worldRanks = independent ? 1 : size;
+  MPI_Comm worldComm = independent ? MPI_COMM_SELF : MPI_COMM_WORLD;
   try {
     scene::Scene s;
     DistributedDef dist;
     if (sceneName == "circle_stress") {
       scene::StressParams p;
-      p.count = perRank ? count * size : count;
+      p.count = perRank ? count * worldRanks : count;
       s = scene::MakeStressScene(p);
       dist.bounds = s.bounds;
       // Tiles of about 14 m (a circle reaches 0.51 m from its centre): at 64000 bodies 32 x 32.
@@ -108,7 +124,7 @@ int main(int argc, char** argv) {
     } else if (sceneName == "many_pyramids") {
       // The dense scene for weak scaling: Box2D 3's many_pyramids (base-10 pyramids on shelves),
       // `count` boxes (per rank with --per-rank). Tiles about a pyramid's cell (11 m) across.
-      s = scene::MakeManyPyramids(perRank ? count * size : count);
+      s = scene::MakeManyPyramids(perRank ? count * worldRanks : count);
       dist.bounds = s.bounds;
       if (tiles == 0) tiles = std::clamp(int((s.bounds.upper.x - s.bounds.lower.x) / 11), 2, 64);
     } else {
@@ -141,7 +157,7 @@ int main(int argc, char** argv) {
       def.effects = s.effects;
     }
     const std::vector<BodyDef> bodies = ToBodyDefs(s);
-    DistributedWorld dw(def, dist, MPI_COMM_WORLD);
+    DistributedWorld dw(def, dist, worldComm);
     dw.Load(bodies);
     for (int i = 0; i < warmup; ++i) dw.Step(s.timeStep);
     // The pyramid's stability (the hard cases' measure, from the pose after the warm-up, which
@@ -257,17 +273,20 @@ int main(int argc, char** argv) {
         std::snprintf(world + used, sizeof world - used, ", \"apex_drift_m\": %.5f", apexDrift);
       }
       const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
+      // Bodies stepped in all (the independent worlds' together).
+      const double allBodies = double(bodies.size()) * (independent ? size : 1);
       std::printf(
-          "{\"scene\": \"%s\", \"solver\": \"%s\", \"ranks\": %d, \"bodies\": %zu, \"steps\": %d, \"warmup\": %d, \"tiles\": %d, "
-          "\"iterations\": %d, \"threads\": %d, \"weak\": %s, \"ms_per_step\": %.4f, \"rounds_per_step\": %d, \"bytes_per_step\": %.1f, "
+          "{\"scene\": \"%s\", \"solver\": \"%s\", \"ranks\": %d, \"bodies\": %.0f, \"steps\": %d, \"warmup\": %d, \"tiles\": %d, "
+          "\"iterations\": %d, \"threads\": %d, \"weak\": %s, \"independent\": %s, \"ms_per_step\": %.4f, \"rounds_per_step\": %d, \"bytes_per_step\": %.1f, "
           "\"bytes_per_boundary_body\": %.1f, \"shadow_fraction\": %.5f, \"imbalance\": %.4f, "
           "\"state_hash\": \"%016llx\", \"oversubscribed\": %s, \"cores\": %u, \"peak_rss_mb\": %.1f, "
           "\"rss_bytes_per_body\": %.0f, \"stage_ms\": {%s}%s}\n",
-          sceneName.c_str(), solverName.c_str(), size, bodies.size(), steps, warmup, tiles, iterations, threads, perRank ? "true" : "false",
+          sceneName.c_str(), solverName.c_str(), size, allBodies, steps, warmup, tiles, iterations, threads, perRank ? "true" : "false",
+          independent ? "true" : "false",
           1000.0 * slowest / steps, rounds, bytes / steps, shadows > 0 ? bytes / shadows : 0.0,
-          shadows / steps / double(bodies.size()), imbalance / steps, (unsigned long long)hash,
+          shadows / steps / allBodies, imbalance / steps, (unsigned long long)hash,
           unsigned(size * threads) > cores ? "true" : "false", cores, rssTotalKb / 1024.0,
-          1024.0 * double(rssTotalKb) / double(bodies.size()), profile.c_str(), world);
+          1024.0 * double(rssTotalKb) / allBodies, profile.c_str(), world);
     }
   } catch (const Error& e) {
     std::fprintf(stderr, "quadrant_distributed: rank %d: error: %s\n", rank, e.what());

@@ -9,7 +9,9 @@ distributed.json: {"context": {...}, "runs": [{"scene", "ranks", "bodies", "ms_p
 distributed.md: one table per solver and kind of run (weak scaling, strong scaling per scene)
 with the weak-scaling efficiency (1-rank ms / R-rank ms at equal bodies per rank) and the
 strong-scaling speed-up, the pyramid's apex drift where measured, and under each a per-stage
-profile of the step; oversubscribed rows (more ranks than cores) are marked. With the jacobi
+profile of the step; runs with "independent" (R one-rank worlds side by side, no rank waiting for
+another) give the weak-scaling tables' machine ceiling (1-rank ms / their ms) and how much of it
+the distributed run keeps; oversubscribed rows (more ranks than cores) are marked. With the jacobi
 solver, rows whose state hash differs from the 1-rank run of the same scene and size are flagged
 (they must not exist); soft_step's hashes depend on the rank count by design.
 """
@@ -49,7 +51,14 @@ def main():
         f.write("\n")
 
     groups = {}
+    # R independent one-rank worlds side by side, by (solver, scene, R): the machine's ceiling.
+    alone = {}
     for r in runs:
+        if r.get("independent"):
+            alone[(r.get("solver", "jacobi"), r["scene"], r["ranks"])] = r
+    for r in runs:
+        if r.get("independent"):
+            continue
         # Strong-scaling runs of one scene at different sizes (the 1,000,000-body run beside the
         # 64000-body series) are separate series: their hashes and times are not comparable.
         weak = bool(r.get("weak"))
@@ -62,7 +71,10 @@ def main():
            "on one rank they are the World's); `jacobi`, the deterministic option: the same state hashes on any rank count, "
            "equal to the single-process World's with the same solver. "
            "`*`: more ranks than cores (oversubscribed). Imbalance: max / mean over the ranks of owned bodies plus their contacts (a work count). "
-           "Apex drift: the pyramid's apex from its pose after the warm-up (1 s) to the end of the run, the largest of samples every 0.5 s.\n"]
+           "Apex drift: the pyramid's apex from its pose after the warm-up (1 s) to the end of the run, the largest of samples every 0.5 s. "
+           "Ceiling (weak scaling): the 1-rank time over that of as many independent one-rank processes side by side "
+           "(`quadrant_distributed --independent`: the same work per process, nobody waits), what the machine's shared "
+           "caches, memory and clocks leave; of ceiling: the efficiency over the ceiling.\n"]
     order = lambda g: (g[0][0] != "soft_step", g[0][1] != "weak", g[0][2], g[0][3])
     for (solver, kind, scene, _), rows in sorted(groups.items(), key=order):
         rows.sort(key=lambda r: r["ranks"])
@@ -70,14 +82,18 @@ def main():
         if kind == "weak":
             out.append(f"\n## {solver}: weak scaling, {scene}, {base['bodies'] // base['ranks']} bodies per rank\n")
             out.append("| ranks | bodies | ms/step | efficiency | rounds/step | bytes/step | bytes/boundary body | shadow fraction | imbalance | peak MB (all ranks) | state hash |")
+            ceiling = any((solver, scene, r["ranks"]) in alone for r in rows)
         else:
             budget = f"{base['iterations']} iterations" if solver == "jacobi" else "default budget"
             out.append(f"\n## {solver}: strong scaling, {scene}, {base['bodies']} bodies, {budget}\n")
             out.append("| ranks | bodies | ms/step | speed-up | rounds/step | bytes/step | bytes/boundary body | shadow fraction | imbalance | peak MB (all ranks) | state hash |")
+            ceiling = False
         drift = any("apex_drift_m" in r for r in rows)
         if drift:
             out[-1] += " apex drift (m) |"
-        out.append("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|" + ("---:|" if drift else ""))
+        if ceiling:
+            out[-1] += " independent ms/step | ceiling | of ceiling |"
+        out.append("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|" + ("---:|" if drift else "") + ("---:|" * 3 if ceiling else ""))
         for r in rows:
             ratio = base["ms_per_step"] / r["ms_per_step"] if r["ms_per_step"] > 0 else 0.0
             ranks = f"{r['ranks']}{'*' if r.get('oversubscribed') else ''}"
@@ -88,6 +104,13 @@ def main():
                     f"{r['imbalance']:.3f} | {r.get('peak_rss_mb', 0):.0f} | `{r['state_hash']}`{same} |")
             if drift:
                 line += f" {r['apex_drift_m']:.4f} |" if "apex_drift_m" in r else " |"
+            if ceiling:
+                a = alone.get((solver, scene, r["ranks"]))
+                if a and a["ms_per_step"] > 0 and r["ms_per_step"] > 0:
+                    line += (f" {a['ms_per_step']:.2f} | {100 * base['ms_per_step'] / a['ms_per_step']:.0f} % | "
+                             f"{100 * a['ms_per_step'] / r['ms_per_step']:.0f} % |")
+                else:
+                    line += " | | |"
             out.append(line)
         # One rank against the single-process World's default engine on the same scene (the run
         # with --world): issue #30 asks for at most 1.5x.
@@ -123,7 +146,7 @@ def plot(groups, args):
     import matplotlib.pyplot as plt
     fig, ax = plt.subplots(figsize=(7, 4.5))
     for (solver, kind, scene, _), rows in sorted(groups.items(), key=lambda g: (g[0][0] != "soft_step", g[0][1] != "weak", g[0][2], g[0][3])):
-        rows = sorted(rows, key=lambda r: r["ranks"])
+        rows = sorted(rows, key=lambda r: r["ranks"])  # the independent runs are in the table only
         if len(rows) < 2:
             continue  # a single point (the 1,000,000-body run) is in the table
         size = f"{rows[0]['bodies'] // rows[0]['ranks']} per rank" if kind == "weak" else f"{rows[0]['bodies']} bodies"

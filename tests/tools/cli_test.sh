@@ -151,7 +151,7 @@ program_parsers() {
   expect_help quadrant_validate --out --cases --random --seed --seeds --runs
   expect_help quadrant_figure13 OUT.csv bodies steps
   expect_help quadrant_icount --scene --count --steps --seed --engine --info
-  expect_help quadrant_distributed --scene --count --per-rank --steps --warmup --tiles --solver --iterations --threads --world --owners
+  expect_help quadrant_distributed --scene --count --per-rank --steps --warmup --tiles --solver --iterations --threads --world --owners --independent
   expect_help quadrant_queries
   expect_help quadrant_task_overhead
 
@@ -182,6 +182,7 @@ program_parsers() {
   expect_unknown quadrant_accuracy "unknown option '--nope'" --nope 1
   expect_unknown quadrant_validate "unknown option '--nope'" --nope
   expect_unknown quadrant_distributed "unknown option '--nope'" --nope
+  expect_unknown quadrant_distributed "--independent needs --per-rank" --independent
   expect_unknown quadrant_bench "unknown option '--frob'" --frob
   # (not expect_refusal: the flag's own name has the "benchmark_" that it takes for internal text)
   local status=0
