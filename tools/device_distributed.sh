@@ -3,8 +3,9 @@
 # 1-16 ranks (with R independent one-rank worlds beside each, the machine's ceiling) and ranks x
 # threads on 16 cores (issue #30). tools/device_pack_mpi.sh copies it to .device/distributed.sh;
 # run from the project root after .device/scaling.sh, carrying .device. Writes
-# $OUT/distributed.jsonl (quadrant_distributed's JSON, one run a line, with "mpi_threads") and
-# appends its progress to $OUT/log.txt; `tools/quadrant` reads the runs like bench --ranks's.
+# $OUT/distributed.jsonl (quadrant_distributed's JSON, one run a line, each with its ranks and threads) and
+# appends its progress to $OUT/log.txt. The report: tools/distributed_report.py distributed.jsonl
+# --machine M --commit C --json distributed.json --md distributed.md (as for bench --ranks).
 set -u
 D=$(pwd)/.device
 export LD_LIBRARY_PATH=$D/lib

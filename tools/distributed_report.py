@@ -77,7 +77,7 @@ def main():
            "caches, memory and clocks leave; of ceiling: the efficiency over the ceiling.\n"]
     order = lambda g: (g[0][0] != "soft_step", g[0][1] != "weak", g[0][2], g[0][3])
     for (solver, kind, scene, _), rows in sorted(groups.items(), key=order):
-        rows.sort(key=lambda r: r["ranks"])
+        rows.sort(key=lambda r: (r["ranks"], -r.get("threads", 1)))
         base = rows[0]
         if kind == "weak":
             out.append(f"\n## {solver}: weak scaling, {scene}, {base['bodies'] // base['ranks']} bodies per rank\n")
@@ -89,16 +89,24 @@ def main():
             out.append("| ranks | bodies | ms/step | speed-up | rounds/step | bytes/step | bytes/boundary body | shadow fraction | imbalance | peak MB (all ranks) | state hash |")
             ceiling = False
         drift = any("apex_drift_m" in r for r in rows)
+        # Ranks x threads (the lent 16-core machine's runs, tools/device_distributed.sh): a column
+        # for the threads inside each rank wherever a row has more than one.
+        threaded = any(r.get("threads", 1) > 1 for r in rows)
+        if threaded:
+            out[-1] = out[-1].replace("| ranks |", "| ranks | threads |", 1)
         if drift:
             out[-1] += " apex drift (m) |"
         if ceiling:
             out[-1] += " independent ms/step | ceiling | of ceiling |"
-        out.append("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|" + ("---:|" if drift else "") + ("---:|" * 3 if ceiling else ""))
+        out.append("|---:|" + ("---:|" if threaded else "") + "---:|---:|---:|---:|---:|---:|---:|---:|---|"
+                   + ("---:|" if drift else "") + ("---:|" * 3 if ceiling else ""))
         for r in rows:
             ratio = base["ms_per_step"] / r["ms_per_step"] if r["ms_per_step"] > 0 else 0.0
             ranks = f"{r['ranks']}{'*' if r.get('oversubscribed') else ''}"
             figure = f"{100 * ratio:.0f} %" if kind == "weak" else f"{ratio:.2f}"
             same = "" if kind == "weak" or solver != "jacobi" or r["state_hash"] == base["state_hash"] else " (differs!)"
+            if threaded:
+                ranks += f" | {r.get('threads', 1)}"
             line = (f"| {ranks} | {r['bodies']} | {r['ms_per_step']:.2f} | {figure} | {r['rounds_per_step']} | "
                     f"{r['bytes_per_step']:.0f} | {r['bytes_per_boundary_body']:.0f} | {r['shadow_fraction']:.4f} | "
                     f"{r['imbalance']:.3f} | {r.get('peak_rss_mb', 0):.0f} | `{r['state_hash']}`{same} |")
