@@ -13,11 +13,53 @@ profile of the step; runs with "independent" (R one-rank worlds side by side, no
 another) give the weak-scaling tables' machine ceiling (1-rank ms / their ms) and how much of it
 the distributed run keeps; oversubscribed rows (more ranks than cores) are marked. With the jacobi
 solver, rows whose state hash differs from the 1-rank run of the same scene and size are flagged
-(they must not exist); soft_step's hashes depend on the rank count by design.
+(they must not exist); soft_step's hashes depend on the rank count by design. Repeated runs of
+one configuration ("repetition": bench --ranks --repetitions) make one row: the median run (the
+lower middle for an even count), its range, and efficiencies and ratios as the medians of each
+repetition's own (1-rank and R-rank runs of the same repetition).
 """
 import argparse
 import json
+import statistics
 import sys
+
+
+def collapse(runs):
+    """One row per configuration: the run of median ms per step, with "repetitions", "ms_range"
+    and "ms_by_repetition" (repetition -> ms); with --world, "world_ratio", the median of the
+    runs' own ms / world ms."""
+    by = {}
+    for r in runs:
+        key = (r.get("solver", "jacobi"), bool(r.get("weak")), r["scene"], r["bodies"], r["ranks"],
+               r.get("threads", 1), bool(r.get("independent")))
+        by.setdefault(key, []).append(r)
+    rows = []
+    for rs in by.values():
+        rs = sorted(rs, key=lambda r: r["ms_per_step"])
+        row = dict(rs[(len(rs) - 1) // 2])
+        row["repetitions"] = len(rs)
+        row["ms_range"] = [rs[0]["ms_per_step"], rs[-1]["ms_per_step"]]
+        row["ms_by_repetition"] = {r["repetition"]: r["ms_per_step"] for r in rs if "repetition" in r}
+        ratios = [r["ms_per_step"] / r["world_ms_per_step"] for r in rs if r.get("world_ms_per_step", 0) > 0]
+        if ratios:
+            row["world_ratio"] = statistics.median(ratios)
+            row["world_ms_per_step"] = statistics.median(r["world_ms_per_step"] for r in rs if r.get("world_ms_per_step", 0) > 0)
+        rows.append(row)
+    return rows
+
+
+def paired(a, b):
+    """The median over the repetitions both rows have of a's ms / b's ms (a time ratio)."""
+    common = sorted(set(a["ms_by_repetition"]) & set(b["ms_by_repetition"]))
+    if not common:
+        return a["ms_per_step"] / b["ms_per_step"] if b["ms_per_step"] > 0 else 0.0
+    return statistics.median(a["ms_by_repetition"][i] / b["ms_by_repetition"][i] for i in common
+                             if b["ms_by_repetition"][i] > 0)
+
+
+def ms_cell(r):
+    lo, hi = r["ms_range"]
+    return f"{r['ms_per_step']:.2f}" + (f" ({lo:.2f}-{hi:.2f})" if r["repetitions"] > 1 else "")
 
 
 def main():
@@ -53,6 +95,8 @@ def main():
     groups = {}
     # R independent one-rank worlds side by side, by (solver, scene, R): the machine's ceiling.
     alone = {}
+    runs = collapse(runs)
+    repeated = max(r["repetitions"] for r in runs) > 1
     for r in runs:
         if r.get("independent"):
             alone[(r.get("solver", "jacobi"), r["scene"], r["ranks"])] = r
@@ -74,7 +118,10 @@ def main():
            "Apex drift: the pyramid's apex from its pose after the warm-up (1 s) to the end of the run, the largest of samples every 0.5 s. "
            "Ceiling (weak scaling): the 1-rank time over that of as many independent one-rank processes side by side "
            "(`quadrant_distributed --independent`: the same work per process, nobody waits), what the machine's shared "
-           "caches, memory and clocks leave; of ceiling: the efficiency over the ceiling.\n"]
+           "caches, memory and clocks leave; of ceiling: the efficiency over the ceiling."
+           + (f" Every configuration ran {max(r['repetitions'] for r in runs)} times, the rank counts in turn: ms/step is the median "
+              "(range in brackets); efficiencies, speed-ups, ceilings and ratios are medians of each repetition's own."
+              if repeated else "") + "\n"]
     order = lambda g: (g[0][0] != "soft_step", g[0][1] != "weak", g[0][2], g[0][3])
     for (solver, kind, scene, _), rows in sorted(groups.items(), key=order):
         rows.sort(key=lambda r: (r["ranks"], -r.get("threads", 1)))
@@ -98,16 +145,16 @@ def main():
             out[-1] += " apex drift (m) |"
         if ceiling:
             out[-1] += " independent ms/step | ceiling | of ceiling |"
-        out.append("|---:|" + ("---:|" if threaded else "") + "---:|---:|---:|---:|---:|---:|---:|---:|---|"
+        out.append("|---:|" + ("---:|" if threaded else "") + "---:|" * 9 + "---|"
                    + ("---:|" if drift else "") + ("---:|" * 3 if ceiling else ""))
         for r in rows:
-            ratio = base["ms_per_step"] / r["ms_per_step"] if r["ms_per_step"] > 0 else 0.0
+            ratio = paired(base, r)
             ranks = f"{r['ranks']}{'*' if r.get('oversubscribed') else ''}"
             figure = f"{100 * ratio:.0f} %" if kind == "weak" else f"{ratio:.2f}"
             same = "" if kind == "weak" or solver != "jacobi" or r["state_hash"] == base["state_hash"] else " (differs!)"
             if threaded:
                 ranks += f" | {r.get('threads', 1)}"
-            line = (f"| {ranks} | {r['bodies']} | {r['ms_per_step']:.2f} | {figure} | {r['rounds_per_step']} | "
+            line = (f"| {ranks} | {r['bodies']} | {ms_cell(r)} | {figure} | {r['rounds_per_step']} | "
                     f"{r['bytes_per_step']:.0f} | {r['bytes_per_boundary_body']:.0f} | {r['shadow_fraction']:.4f} | "
                     f"{r['imbalance']:.3f} | {r.get('peak_rss_mb', 0):.0f} | `{r['state_hash']}`{same} |")
             if drift:
@@ -115,8 +162,8 @@ def main():
             if ceiling:
                 a = alone.get((solver, scene, r["ranks"]))
                 if a and a["ms_per_step"] > 0 and r["ms_per_step"] > 0:
-                    line += (f" {a['ms_per_step']:.2f} | {100 * base['ms_per_step'] / a['ms_per_step']:.0f} % | "
-                             f"{100 * a['ms_per_step'] / r['ms_per_step']:.0f} % |")
+                    line += (f" {ms_cell(a)} | {100 * paired(base, a):.0f} % | "
+                             f"{100 * paired(a, r):.0f} % |")
                 else:
                     line += " | | |"
             out.append(line)
@@ -126,7 +173,8 @@ def main():
             if "world_ms_per_step" in r and r["world_ms_per_step"] > 0:
                 out.append(f"\nOne rank against `World` (its default engine, soft_step, one thread, the same bodies and "
                            f"steps, timed after the distributed run): {r['ms_per_step']:.2f} ms against "
-                           f"{r['world_ms_per_step']:.2f} ms a step, {r['ms_per_step'] / r['world_ms_per_step']:.2f}x.")
+                           f"{r['world_ms_per_step']:.2f} ms a step, {r.get('world_ratio', r['ms_per_step'] / r['world_ms_per_step']):.2f}x"
+                           + (" (medians)." if r["repetitions"] > 1 else "."))
         # Where the step went, stage by stage (DistributedStats): the slowest rank's ms a step
         # (the mean over the ranks in brackets where they differ). wait is part of the rounds'
         # stages (migrate, shadows, exchange), not a stage of its own.

@@ -65,7 +65,8 @@ expect_refusal "exclude each other" "$DRIVER" bench --baseline --compare --out "
 # bench --ranks (the distributed runs): its own options only, rank counts in [1, 64].
 expect_refusal "--ranks '0'" "$DRIVER" bench --ranks 0 --out "$OUT"
 expect_refusal "--ranks '1,,2'" "$DRIVER" bench --ranks 1,,2 --out "$OUT"
-expect_refusal "only --steps, --out and --record" "$DRIVER" bench --ranks 1,2 --threads 2 --out "$OUT"
+expect_refusal "only --steps, --repetitions, --out and --record" "$DRIVER" bench --ranks 1,2 --threads 2 --out "$OUT"
+expect_refusal "--repetitions '0'" "$DRIVER" bench --ranks 1 --repetitions 0 --out "$OUT"
 expect_refusal "--steps '0'" "$DRIVER" bench --ranks 1 --steps 0 --out "$OUT"
 expect_refusal "unknown command 'benhc'" "$DRIVER" benhc
 expect_refusal "unknown engine 'nosuchengine'" "$DRIVER" hardcases --peers nosuchengine --out "$OUT"
