@@ -1,5 +1,6 @@
 // quadrant_accuracy: what accuracy costs in time (issue 6). Sweeps solver settings of Quadrant
-// (thesis; pgs with 1..32 velocity iterations; soft_step with 1..8 sub-steps), Box2D 2.4 with
+// (thesis; pgs with 1..32 velocity iterations; soft_step with 1..8 sub-steps; jacobi, the
+// distributed world's deterministic solver, with 8..64 iterations), Box2D 2.4 with
 // 1..32 velocity iterations, and Bullet and Chipmunk at their 8-iteration defaults over piles
 // (vertical stack, base-20 pyramid, mass ratios 100 and 400, and issue #13's 30-box stack and
 // 1000:1 boxes on small supports and on one slab) and the thesis's stress scenes
@@ -80,6 +81,10 @@ std::vector<Setting> AllSettings() {
   }
   for (int sub : {1, 2, 4, 8}) {
     s.push_back(QuadrantSetting("soft_step+sub" + std::to_string(sub), "soft_step", "sub" + std::to_string(sub)));
+  }
+  // What the distributed world's bit-identical option costs against soft_step (issue #30).
+  for (int it : {8, 16, 32, 64}) {
+    s.push_back(QuadrantSetting("jacobi+it" + std::to_string(it), "jacobi", "it" + std::to_string(it), it));
   }
   for (int it : {1, 2, 4, 8, 16, 32}) {
     const std::string n = std::to_string(it);

@@ -60,7 +60,7 @@ def label(run):
 def short(run):
     """A compact plot label."""
     text = (run.get("id") or run["setting"]).replace("quadrant:", "").replace("soft_step+sub", "soft")
-    text = text.replace("pgs+it", "pgs").replace("box2d:it", "b2d").replace("chipmunk", "chip")
+    text = text.replace("pgs+it", "pgs").replace("jacobi+it", "jac").replace("box2d:it", "b2d").replace("chipmunk", "chip")
     return text + ("-dbl" if run.get("precision", "float") != "float" else "")
 
 
@@ -298,7 +298,8 @@ def report_markdown(data, out, note=""):
                  "binary run after the float sweep, so it is not interleaved with the others.\n")
     lines.append("**Settings**: `quadrant:thesis` (the thesis's one-impulse solver), `quadrant:pgs+itN` (sequential "
                  "impulses, N velocity iterations, 3 position iterations), `quadrant:soft_step+subN` (N sub-steps, "
-                 "soft contacts, relax), `box2d:itN` (Box2D 2.4.1, N velocity and 3 position iterations), `bullet` "
+                 "soft contacts, relax), `quadrant:jacobi+itN` (the distributed world's deterministic solver: Jacobi "
+                 "with mass splitting and split impulses, N iterations), `box2d:itN` (Box2D 2.4.1, N velocity and 3 position iterations), `bullet` "
                  "and `chipmunk` at the scenes' 8 iterations. Piles are built with each engine's material mixing, "
                  "so every engine simulates the same friction.\n")
     lines.append("**Errors** (all from the scene API's read-back, never from an engine's own report):\n")
