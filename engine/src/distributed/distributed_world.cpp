@@ -691,8 +691,9 @@ void DistributedWorld::Step(Real dt) {
   // ranks (a max is exact in any order), and whether any body left its neighbourhood of tiles.
   // Each owned body's box and tile are kept for the rest of the step; read from the local arrays
   // while they map the owned list (layoutValid), else from the records. In parallel over the
-  // rank's threads: on one thread this pass was 0.22 ms of a 1.1 ms step (16004 circles) and
-  // 2.5 of 6.9 ms at 2 threads (64004 circles), where the World boxes its bodies in parallel.
+  // rank's threads, as the World boxes its bodies: on one thread this pass is 0.22 ms of a 1.1 ms
+  // step (16004 circles); one rank x 2 threads on 64004 circles went from 5.2 to 3.5 ms a step
+  // with it (medians of five interleaved pairs, docs/notes/distributed.md).
   w.run->BeginStep();  // as World::Step: wake the pool's workers, or run alone on a busy machine
   const size_t ownedCount = w.OwnedCount();
   w.ownedBoxes.resize(ownedCount);
