@@ -1,5 +1,6 @@
 #!/bin/bash
-# The distributed world on the lent 16-core machine, in one go (about 2 minutes): weak scaling at
+# The distributed world on the lent 16-core machine, in one go (about 2.5 minutes): the pool's
+# cost per stage at 1-16 threads (quadrant_task_overhead -> $OUT/task_overhead.json), weak scaling at
 # 1-16 ranks (with R independent one-rank worlds beside each, the machine's ceiling) and ranks x
 # threads on 16 cores (issue #30). tools/device_pack_mpi.sh copies it to .device/distributed.sh;
 # run from the project root after .device/scaling.sh, carrying .device. Writes
@@ -24,6 +25,12 @@ run() {  # RANKS THREADS ARGS...: one quadrant_distributed run, each rank on THR
   echo "== rc $? $(date -u +%T)" >> "$O/log.txt"
 }
 : > "$J"
+# First, the pool's cost per parallel-for and per stage of a region at 1-16 threads, against
+# OpenMP (quadrant_task_overhead; about 20 s): what a barrier costs on real cores (issue #25).
+echo "== task_overhead $(date -u +%T) load $(cut -d' ' -f1-3 /proc/loadavg)" >> "$O/log.txt"
+timeout 120 "$D/quadrant_task_overhead" --benchmark_out="$O/task_overhead.json" --benchmark_out_format=json \
+  --benchmark_repetitions=3 --benchmark_report_aggregates_only=true >> "$O/log.txt" 2>&1
+echo "== rc $? $(date -u +%T)" >> "$O/log.txt"
 for scene in "circle_stress --count 16000" "many_pyramids --count 2750"; do
   for r in 1 2 4 8 16; do
     if [ "$r" -eq 1 ]; then

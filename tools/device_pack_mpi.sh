@@ -2,7 +2,7 @@
 # The distributed world's runs for the lent 16-core machine (issue #30: MPI x threads on real
 # cores). Run after ../shared/device/pack.sh, from the project root:
 #   tools/quadrant build release && ../shared/device/pack.sh && tools/device_pack_mpi.sh
-# Adds to .device/: quadrant_distributed; Open MPI's launcher, daemon, components and help text
+# Adds to .device/: quadrant_distributed and quadrant_task_overhead; Open MPI's launcher, daemon, components and help text
 # under .device/mpi/ (the lent machine has no Open MPI; OPAL_PREFIX relocates it there); every
 # shared library these need outside glibc into .device/lib/; and distributed.sh, the runs
 # themselves (tools/device_distributed.sh). About 20 MB more; the lent machine then runs
@@ -25,6 +25,10 @@ bindir=$(path bindir)
 m=.device/mpi
 rm -rf "$m" && mkdir -p "$m/bin" "$m${pkglibdir#"$prefix"}" "$m${pkgdatadir#"$prefix"}"
 cp "$bin" .device/quadrant_distributed
+# The pool's cost per call and per stage at 1-16 threads (distributed.sh runs it first).
+overhead=$(dirname "$bin")/quadrant_task_overhead
+[ -x "$overhead" ] || die "$overhead is not an executable (build the release preset first)"
+cp "$overhead" .device/quadrant_task_overhead
 cp -L "$bindir/orterun" "$bindir/orted" "$m/bin/"
 ln -s orterun "$m/bin/mpirun"
 cp -L "$pkglibdir"/*.so "$m${pkglibdir#"$prefix"}/"
@@ -40,7 +44,7 @@ if [ -n "$pmix" ]; then
   [ -d "$pmix/share/pmix" ] && mkdir -p "$m/pmix/share" && cp -rL "$pmix/share/pmix" "$m/pmix/share/"
 fi
 # Every library the binaries and components resolve outside glibc's own set.
-for f in "$bin" "$m"/bin/orterun "$m"/bin/orted "$m${pkglibdir#"$prefix"}"/*.so ${pmix:+"$m"/pmix/lib/pmix/*.so}; do
+for f in "$bin" "$overhead" "$m"/bin/orterun "$m"/bin/orted "$m${pkglibdir#"$prefix"}"/*.so ${pmix:+"$m"/pmix/lib/pmix/*.so}; do
   ldd "$f" | awk '/=> \//{print $3}'
 done | sort -u | while read -r lib; do
   case "$(basename "$lib")" in libc.so*|libm.so*|ld-linux*|libpthread*|libdl.so*|librt.so*) ;; *) cp -Ln "$lib" .device/lib/ ;; esac
