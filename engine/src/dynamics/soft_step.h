@@ -104,7 +104,7 @@ class SoftStepSolver final : public Solver {
   template <bool kRotation, bool kFriction>
   void PrepareContacts(StepContext& ctx, const StepPlan& step, double& integrateMs);
   template <bool kRotation, bool kFriction>
-  void SolveContacts(StepContext& ctx, const StepPlan& step, double& integrateMs);
+  void SolveContacts(StepContext& ctx, const StepPlan& step);
   template <bool kRotation, bool kFriction>
   void SubStep(StepContext& ctx, const StepPlan& step, int sub, const SoftSolveParams& prm,
                const SoftSolveParams& lastPrm);

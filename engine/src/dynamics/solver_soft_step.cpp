@@ -105,11 +105,11 @@ void SoftStepSolver::Run(StepContext& ctx) {
   // 64000 circles, 1274 contacts: the whole rows' part alone was 1.05 ms beside 0.34 ms of free
   // bodies; the scaling model's 8 / 16 threads went from 3.23x / 3.98x to 3.78x / 4.75x, the 2
   // threads measured here within the noise (0.96, eleven interleaved pairs), the same bits.
-  auto rows = [&] { SolveContacts<kRotation, kFriction>(ctx, step, integrateMs); };
+  auto rows = [&] { SolveContacts<kRotation, kFriction>(ctx, step); };
   constexpr int kRowCost = 16;
   const int count = bodies.Count();
   PrepareContacts<kRotation, kFriction>(ctx, step, integrateMs);
-  // Box2D's position pass snapshots every body (SolveContacts): not beside the free bodies' pass.
+  // Box2D's position pass snapshots every body (PrepareContacts): not beside the free bodies' pass.
   // The state exchange calls MPI between passes: on the calling thread, so not beside.
   if (!def.box2dPositionSolve && !exchange_ && int64_t(kRowCost) * (step.m + int64_t(jointRows_.size())) <= count) {
     run.Beside(Stage::kSolve, rows, count, run.MinItems(), [&](int b, int e) { MoveFreeBodies(bodies, def, ctx.dt, b, e); });
@@ -168,11 +168,10 @@ void SoftStepSolver::PrepareContacts(StepContext& ctx, const StepPlan& step, dou
 // Second half: the sub-steps, then the bounce shifts, the position pass and the impulses for the
 // warm start.
 template <bool kRotation, bool kFriction>
-void SoftStepSolver::SolveContacts(StepContext& ctx, const StepPlan& step, double& integrateMs) {
+void SoftStepSolver::SolveContacts(StepContext& ctx, const StepPlan& step) {
   const WorldDef& def = *ctx.def;
   StageRunner& run = *ctx.run;
   const int m = step.m;
-  (void)integrateMs;
   // With Box2D's position pass the rows push nothing out (Box2D 2.4.1's velocity rows carry no
   // position bias): overlap is the pass's alone.
   const SoftSolveParams prm{step.invH, def.contactPushMaxDepth, def.box2dPositionSolve ? Real(0) : def.contactPushMaxVelocity};
