@@ -160,9 +160,10 @@ TEST(Box2dPosition, WorldWithBox2dPositionPassPushesAnOverlapOut) {
 }
 
 TEST(Box2dPosition, SoftStepWithTheBox2dPassIsTheSameOnAnyThreadCount) {
-  // The pass runs serially in colour order after the sub-steps, and the rows' part then does not
-  // run beside the free bodies' pass: a pile of 60 boxes gives the same bits on 1, 2 and 4 threads.
-  auto run = [](int threads) {
+  // The pass runs serially in colour order after the sub-steps and the free bodies' pass: a pile
+  // of 60 boxes gives the same bits on 1, 2 and 4 threads, alone (the rows' part split across the
+  // threads) and with 4000 free circles beside it (the rows' part on one thread beside them).
+  auto run = [](int threads, int freeCircles) {
     WorldDef def;
     def.box2dPositionSolve = true;
     def.threadCount = threads;
@@ -171,12 +172,22 @@ TEST(Box2dPosition, SoftStepWithTheBox2dPassIsTheSameOnAnyThreadCount) {
     for (int i = 0; i < 60; ++i) {
       AddBox(world, Vec2{Real(-6 + (i % 12) * 1.02f + 0.1f * (i / 12)), Real(1.2f + (i / 12) * 1.05f)}, Real(0.05f * (i % 5)));
     }
+    for (int i = 0; i < freeCircles; ++i) {  // far from the pile and from each other
+      BodyDef c;
+      c.type = BodyType::kDynamic;
+      c.shape.type = ShapeType::kCircle;
+      c.shape.circle.radius = 0.4f;
+      c.position = Vec2{Real(100 + 2 * (i % 80)), Real(10 + 2 * (i / 80))};
+      world.CreateBody(c);
+    }
     for (int i = 0; i < 120; ++i) world.Step(1.0f / 60);
     return world.StateHash();
   };
-  const uint64_t one = run(1);
-  EXPECT_EQ(run(2), one);
-  EXPECT_EQ(run(4), one);
+  for (int freeCircles : {0, 4000}) {
+    const uint64_t one = run(1, freeCircles);
+    EXPECT_EQ(run(2, freeCircles), one) << freeCircles << " free circles";
+    EXPECT_EQ(run(4, freeCircles), one) << freeCircles << " free circles";
+  }
 }
 
 }  // namespace
