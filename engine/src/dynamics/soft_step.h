@@ -110,9 +110,9 @@ class SoftStepSolver final : public Solver {
                const SoftSolveParams& lastPrm);
   template <bool kRotation, bool kFriction>
   void RelaxPasses(StageRunner& run, const WorldDef& def, bool simd, const SoftSolveParams& firstPrm,
-                   const SoftSolveParams& prm, bool storeLast);
+                   const SoftSolveParams& prm, bool storeLast, bool foldWarm);
   template <bool kRotation, bool kFriction, RelaxBias kRelax, bool kStore = false>
-  void RelaxPass(StageRunner& run, bool simd, const SoftSolveParams& prm);
+  void RelaxPass(StageRunner& run, bool simd, const SoftSolveParams& prm, bool foldWarm = false);
   void StoreLaneImpulses(const SoftRowGroup& g, int begin, int end);
   template <bool kRotation>
   void CorrectStatePositions(StageRunner& run, const WorldDef& def, bool simd);
@@ -181,7 +181,8 @@ class SoftStepSolver final : public Solver {
   // The bodies' solver states (soft_step_state.cpp).
   void LoadFixedStates(StageRunner& run, const Bodies& bodies, bool sleep);
   void LoadStates(StageRunner& run, const Bodies& bodies);
-  void IntegrateStateVelocities(StageRunner& run, const Bodies& bodies, const WorldDef& def, Real h, Real dampDt);
+  void IntegrateStateVelocities(StageRunner& run, const Bodies& bodies, const WorldDef& def, Real h, Real dampDt,
+                                bool addWarm);
   void IntegrateStatePositions(StageRunner& run, const Bodies& bodies, const WorldDef& def, Real h, Real stepDt);
   void MoveFreeBodies(Bodies& bodies, const WorldDef& def, Real dt, int b, int e);
   void StoreRowStates(StageRunner& run, Bodies& bodies, const WorldDef& def);
@@ -307,6 +308,10 @@ class SoftStepSolver final : public Solver {
   uint8_t overLimit_ = 0;
   Real collisionShare_ = 1;  // a sub-step's share of the step's collision impulses (Run says why)
   std::vector<SolverBody> states_;
+  // The next sub-step's warm start, added up per body by this sub-step's last relax pass (v and w
+  // only; zero between sub-steps and steps): SubStep says why. foldWarm_: this step does so.
+  std::vector<SolverBody> warmNext_;
+  bool foldWarm_ = false;
   std::vector<SoftRowGroup> groups_;
   bool gravityScaled_ = false;  // StepContext::gravityScaled: gravity per body, times its scale
   bool vex_ = false;  // the rows eight-wide with AVX, the integration four-wide in AVX's encoding

@@ -282,6 +282,7 @@ bool MoveFourVex(Bodies& bodies, const FreeMotion& fm, int i, int mask) { return
 void SoftStepSolver::LoadFixedStates(StageRunner& run, const Bodies& bodies, bool sleep) {
   const int count = bodies.Count();
   states_.resize(count);
+  warmNext_.resize(count);  // new ones zero, the others zeroed by the sub-steps that used them
   inRows_.resize(count + kFlagPad);  // padded: the scans below read several flags at a time
   run.Dynamic(Stage::kIntegrate, count, run.MinItems(), kBodyGrain, [&](int b, int e) {
     graph_.ClearColors(b, e);
@@ -349,13 +350,24 @@ void SoftStepSolver::LoadStates(StageRunner& run, const Bodies& bodies) {
 // (dampDt, 0 in the later sub-steps) with the step's factor 1 / (1 + dt c), the law every solver
 // and the scene description share (per sub-step the factor over a step was 1 / (1 + h c)^n:
 // 0.3 % more speed left after 60 steps at c = 0.7).
-void SoftStepSolver::IntegrateStateVelocities(StageRunner& run, const Bodies& bodies, const WorldDef& def, Real h, Real dampDt) {
+//
+// addWarm: then each body's warm start as the relax pass before added it up (warmNext_, SubStep),
+// after gravity and damping, as the warm start came after them; the sum is zeroed for the next.
+void SoftStepSolver::IntegrateStateVelocities(StageRunner& run, const Bodies& bodies, const WorldDef& def, Real h, Real dampDt,
+                                              bool addWarm) {
   const Effects& fx = def.effects;
   const bool damp = fx.damping && dampDt > 0;
-  if (!fx.gravity && !damp) return;
+  if (!fx.gravity && !damp && !addWarm) return;
   const Vec2 dv = fx.gravity ? h * def.gravity : Vec2{};
+  SolverBody* warm = warmNext_.data();
+  auto addWarmTo = [warm](SolverBody& st, int i) __attribute__((always_inline)) {
+    st.v += warm[i].v;
+    st.w += warm[i].w;
+    warm[i].v = {};
+    warm[i].w = 0;
+  };
   if (gravityScaled_) {  // gravity times each body's scale (WorldDef gravity on, some scale not 1)
-    BodyPass(run, [this, &bodies, dv, damp, dampDt](int b, int e, int) {
+    BodyPass(run, [this, &bodies, dv, damp, dampDt, addWarm, addWarmTo](int b, int e, int) {
       for (int k = b; k < e; ++k) {
         const int i = active_[k];
         if (bodies.inv[i].invMass == 0) continue;
@@ -366,15 +378,30 @@ void SoftStepSolver::IntegrateStateVelocities(StageRunner& run, const Bodies& bo
           st.v = (Real(1) / (Real(1) + dampDt * bodies.linearDamping[i])) * st.v;
           st.w *= Real(1) / (Real(1) + dampDt * bodies.angularDamping[i]);
         }
+        if (addWarm) addWarmTo(st, i);
       }
     });
     return;
   }
 #if QUADRANT_SOFT_SIMD
   // Gravity alone: one four-wide add per body of (dv.x, dv.y, -0, -0), which leaves w and the
-  // pad word exactly as they are (x + -0 is x for every x, signed zeros included).
+  // pad word exactly as they are (x + -0 is x for every x, signed zeros included); then the warm
+  // start's (v, w, 0), whose pad word is zero (Scatter writes it so).
   if (!damp && def.softSimd) {
     const __m128 add = _mm_set_ps(-0.0f, -0.0f, dv.y, dv.x);
+    if (addWarm) {
+      BodyPass(run, [this, &bodies, add, warm](int b, int e, int) {
+        for (int k = b; k < e; ++k) {
+          const int i = active_[k];
+          if (bodies.inv[i].invMass == 0) continue;
+          float* v = &states_[i].v.x;
+          float* sum = &warm[i].v.x;
+          _mm_storeu_ps(v, _mm_add_ps(_mm_add_ps(_mm_loadu_ps(v), add), _mm_loadu_ps(sum)));
+          _mm_storeu_ps(sum, _mm_setzero_ps());
+        }
+      });
+      return;
+    }
     BodyPass(run, [this, &bodies, add](int b, int e, int) {
       for (int k = b; k < e; ++k) {
         const int i = active_[k];
@@ -386,7 +413,7 @@ void SoftStepSolver::IntegrateStateVelocities(StageRunner& run, const Bodies& bo
     return;
   }
 #endif
-  BodyPass(run, [this, &bodies, dv, damp, dampDt](int b, int e, int) {
+  BodyPass(run, [this, &bodies, dv, damp, dampDt, addWarm, addWarmTo](int b, int e, int) {
     for (int k = b; k < e; ++k) {
       const int i = active_[k];
       if (bodies.inv[i].invMass == 0) continue;
@@ -396,6 +423,7 @@ void SoftStepSolver::IntegrateStateVelocities(StageRunner& run, const Bodies& bo
         st.v = (Real(1) / (Real(1) + dampDt * bodies.linearDamping[i])) * st.v;
         st.w *= Real(1) / (Real(1) + dampDt * bodies.angularDamping[i]);
       }
+      if (addWarm) addWarmTo(st, i);
     }
   });
 }
