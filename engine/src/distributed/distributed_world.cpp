@@ -1272,7 +1272,8 @@ void DistributedWorld::Impl::FindContacts(Real dt) {
   if (rankSolver && def.contactRecycleDistance > 0 && def.effects.warmStarting) {
     lastContacts.clear();
     if (stats.layoutKept) lastContacts.swap(contacts);
-    recycleFirst.assign(size_t(count), -1);
+    // Stale entries stay: the pair loop takes one only where it starts its body's run.
+    if (recycleFirst.size() < size_t(count)) recycleFirst.resize(size_t(count), -1);
     for (size_t i = 0; i < lastContacts.size(); ++i) {
       if (i == 0 || lastContacts[i - 1].a != lastContacts[i].a) recycleFirst[size_t(lastContacts[i].a)] = int32_t(i);
     }

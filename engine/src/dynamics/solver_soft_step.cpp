@@ -407,13 +407,17 @@ void SoftStepSolver::EndRegion(StageRunner& run) {
 }
 
 // The stages of a pass over the rows: one per colour, except that consecutive colours of at most
-// one chunk each (kColorGrain rows) share one stage of one chunk, run on one thread in colour
-// order (the same order of row solves, so the same bits, without a barrier between them). The
-// greedy colouring leaves a few such small colours at the end (the base-100 pyramid: four colours
-// of about 2500 rows, then 45 and 12). The overflow colour is one chunk of its own, row by row.
+// kSmallRows rows each share one stage of one chunk, run on one thread in colour order (the same
+// order of row solves, so the same bits, without a barrier between them). The greedy colouring
+// leaves a few such small colours at the end (the base-100 pyramid: four colours of about 2500
+// rows, then 20-160 and 10-45, as it settles). kSmallRows: 256 rows are about 1.5 us of one
+// thread's work (the pyramid's colour of 2500 rows: 14 us), a quarter of a barrier's fitted cost
+// (6 us, tools/scaling.py), so two such colours in one chunk beat two stages at any thread count.
+// The overflow colour is one chunk of its own, row by row.
 void SoftStepSolver::PlanPassStages() {
   passStages_.clear();
   constexpr int kGrain = ConstraintGraph::kColorGrain / kGroupRows;
+  constexpr int kSmallRows = 256, kSmall = kSmallRows / kGroupRows;
   bool lastSmall = false;
   for (int color = 0; color <= ConstraintGraph::kColors; ++color) {
     const int begin = groupStart_[color], count = groupStart_[color + 1] - begin;
@@ -423,7 +427,7 @@ void SoftStepSolver::PlanPassStages() {
       lastSmall = false;
       continue;
     }
-    const bool small = count <= kGrain;
+    const bool small = count <= kSmall;
     if (small && lastSmall) {
       StagePart& last = passStages_.back();
       last.count += count;

@@ -209,7 +209,7 @@ inline AABB SweptBox(const ShapeDef& s, const Transform& xf, const BodyVelocity&
 struct RecycleSource {
   const Contact* contacts = nullptr;
   int count = 0;
-  const int32_t* first = nullptr;
+  const int32_t* first = nullptr;  ///< per body: its first contact as body a, where that contact starts a's run
   Real distance = 0;  ///< WorldDef::contactRecycleDistance (> 0)
 };
 
