@@ -368,6 +368,7 @@ struct DistributedWorld::Impl {
     b.linearDamping[i] = r.linearDamping;
     b.angularDamping[i] = r.angularDamping;
     b.shape[i] = r.shape;
+    b.boxShape[i] = BoxShapeOf(r.shape);
     b.boundRadius[i] = r.boundRadius;
     b.dynamic[i] = r.type == BodyType::kDynamic ? 1 : 0;
     b.slot[i] = r.id;

@@ -418,6 +418,7 @@ int AppendBody(Bodies& b, const BodyDef& def, const WorldDef& worldDef, uint32_t
   b.linearDamping[i] = def.linearDamping;
   b.angularDamping[i] = def.angularDamping;
   b.shape[i] = shape;
+  b.boxShape[i] = BoxShapeOf(shape);
   b.boundRadius[i] = boundRadius;
   b.aabb[i] = {};
   b.dynamic[i] = dynamic ? 1 : 0;
