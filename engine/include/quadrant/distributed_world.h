@@ -3,8 +3,9 @@
 // needs MPI.
 //
 // Decomposition (after pe / waLBerla): the scene bounds are cut into a fixed grid of tiles, dealt
-// to the ranks in contiguous runs of Morton (Z) order (at 2x2 tiles and 4 ranks: the thesis's
-// four quadrants). A moving body belongs to the rank whose tile holds its centre of mass; static
+// to the ranks in contiguous runs of a bisection order (the longer side halved, recursively: on
+// a power-of-two square grid Morton (Z) order; at 2x2 tiles and 4 ranks the thesis's four
+// quadrants; at 2 ranks two halves whatever the grid). A moving body belongs to the rank whose tile holds its centre of mass; static
 // bodies are known to every rank. The step's phases are described above DistributedWorld.
 //
 // Solvers (WorldDef::solver):
@@ -144,7 +145,7 @@ class DistributedWorld {
   void Step(Real dt);
 
   /// Collective: deals the tiles again by the last step's work per tile (each owned body and each
-  /// of its contacts, booked to the tile its centre was in), in Morton order, contiguous runs of
+  /// of its contacts, booked to the tile its centre was in), in bisection order, contiguous runs of
   /// about equal work, and moves every body whose tile changed owner (with its warm-start
   /// entries). With kJacobi the states stay the same bits: the arithmetic does not depend on the
   /// partition (with kSoftStep it does).
