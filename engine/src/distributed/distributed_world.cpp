@@ -69,6 +69,24 @@ struct Record {
 };
 static_assert(std::is_trivially_copyable_v<Record>);
 
+// A shadow message (round 2) is a run of entries in the owner's id order, each a header and then
+// a Record (a body the receiver did not hold as this neighbour's shadow last step, or any body
+// when the layouts start again) or only what a step changes: a body's mass, shape, filter and
+// damping are the same every step (no setter reaches a distributed world's bodies), so a shadow
+// sent again carries its pose and velocity (36 of 268 bytes in float builds). At 2 ranks x 16004
+// circles about 100 shadows a rank, nearly all sent again each step: making their records read
+// about 14 arrays at a random row each, and writing them about 20 (docs/notes/distributed.md).
+struct ShadowHeader {
+  uint32_t id;
+  uint32_t full;  // 1: a Record follows; 0: a ShadowState
+};
+struct ShadowState {
+  Transform xf;
+  Vec2 center;
+  BodyVelocity vel;
+};
+static_assert(std::is_trivially_copyable_v<ShadowHeader> && std::is_trivially_copyable_v<ShadowState>);
+
 // A warm-start entry keyed by the pair of body ids (ContactCache keys by dense index, which in a
 // World without destroyed bodies is the same order).
 struct CacheEntry {
@@ -244,6 +262,19 @@ struct DistributedWorld::Impl {
   std::vector<std::vector<int>> sentShadows;      // per neighbour: owned indices sent, in order
   std::vector<std::vector<int>> sentRows;         // per neighbour: their local rows (this step's layout)
   std::vector<std::vector<int>> receivedShadows;  // per neighbour: local indices, in order
+  // Per neighbour: the ids sent last step (SendShadows: which shadows go as a ShadowState), and
+  // this step's (sentIds).
+  std::vector<std::vector<uint32_t>> prevSentIds, sentIds;
+  // BuildLocal: this step's shadow entries per neighbour, parsed (id, whether a Record follows,
+  // where its payload starts in in[k]).
+  struct ShadowEntry {
+    uint32_t id;
+    bool full;
+    size_t at;
+  };
+  std::vector<std::vector<ShadowEntry>> shadowIn;
+  std::vector<int> shadowKeptRow;  // PatchLocal: per entry of a neighbour, its kept row (-1: new)
+  std::vector<size_t> prevCursor;  // SendShadows: per neighbour, a cursor in prevSentIds
   std::vector<std::vector<char>> out, in;
   std::vector<CandidatePair> pairs, ownPairs;
   std::vector<MPI_Request> requests;              // PostVelocities: sends, then receives
@@ -416,6 +447,23 @@ struct DistributedWorld::Impl {
   void SendShadows(Real reach, Real dt);
   void BuildLocal(Real dt);
   void PatchLocal(Real dt);
+  // Writes a shadow entry of neighbour k into row i (a Record: the whole row; a ShadowState: pose
+  // and velocity, the rest of the row is the body's already) and its box.
+  void WriteShadow(size_t k, const ShadowEntry& e, int i, Real dt) {
+    size_t at = e.at;
+    if (e.full) {
+      const Record r = Take<Record>(in[k], at);
+      if (r.id != e.id) throw std::logic_error("DistributedWorld: a shadow record under another id");
+      SetRow(local, i, r);
+      local.aabb[size_t(i)] = BoxOf(r, dt);
+    } else {
+      const ShadowState st = Take<ShadowState>(in[k], at);
+      local.xf[size_t(i)] = st.xf;
+      local.center[size_t(i)] = st.center;
+      local.vel[size_t(i)] = st.vel;
+      local.aabb[size_t(i)] = BroadPhaseBox(local, i, def, dt);  // BoxOf's arithmetic (no bullets here)
+    }
+  }
   void FindContacts(Real dt);
   void PostVelocities(int tag);
   void PostShadowRound(int tag, size_t recordSize);
@@ -549,6 +597,9 @@ void DistributedWorld::Impl::FindNeighbours() {
   in.assign(nb, {});
   sentShadows.assign(nb, {});
   receivedShadows.assign(nb, {});
+  prevSentIds.assign(nb, {});
+  sentIds.assign(nb, {});
+  shadowIn.assign(nb, {});
   stats.neighbours = static_cast<int>(nb);
   layoutValid = false;  // the neighbours' message slots start again
 }
@@ -1054,6 +1105,8 @@ void DistributedWorld::Impl::SendShadows(Real reach, Real) {
   ClearOut();
   for (auto& s : sentShadows) s.clear();
   std::vector<int> targets;
+  prevCursor.assign(neighbours.size(), 0);
+  for (auto& ids : sentIds) ids.clear();
   // One rank, or no neighbour: nobody to send to (edgeOwned is empty). Otherwise the owned
   // bodies in tiles of depth under 2 (from the halo pass, renumbered by Migrate), in owned order.
   const uint8_t deepEnough = 2 * double(reach) <= 0.99 * std::min(double(tileW), double(tileH)) ? 1 : 2;
@@ -1074,14 +1127,44 @@ void DistributedWorld::Impl::SendShadows(Real reach, Real) {
     std::sort(targets.begin(), targets.end());
     targets.erase(std::unique(targets.begin(), targets.end()), targets.end());
     if (targets.empty()) continue;
-    const Record r = OwnedRecord(o);
+    const uint32_t id = OwnedId(o);
+    bool haveRecord = false;
+    Record r;
     for (int t : targets) {
       const int k = neighbourSlot[size_t(t)];
       if (k < 0) throw std::logic_error("DistributedWorld: a shadow for a rank that is not a neighbour");
-      Put(out[size_t(k)], r);
+      // Sent to k last step (both lists ascend: a cursor per neighbour), and k kept its layout.
+      const std::vector<uint32_t>& prev = prevSentIds[size_t(k)];
+      size_t& c = prevCursor[size_t(k)];
+      while (c < prev.size() && prev[c] < id) ++c;
+      const bool again = layoutValid && c < prev.size() && prev[c] == id;
+      std::vector<char>& m = out[size_t(k)];
+      Put(m, ShadowHeader{id, again ? 0u : 1u});
+      if (again) {
+        ShadowState st;
+        std::memset(static_cast<void*>(&st), 0, sizeof st);
+        const int i = ownedLocal[o];
+        if (ownedStale && i >= 0) {
+          st.xf = local.xf[size_t(i)];
+          st.center = local.center[size_t(i)];
+          st.vel = local.vel[size_t(i)];
+        } else {
+          const Record whole = OwnedRecord(o);
+          st.xf = whole.xf;
+          st.center = whole.center;
+          st.vel = whole.vel;
+        }
+        Put(m, st);
+      } else {
+        if (!haveRecord) r = OwnedRecord(o);
+        haveRecord = true;
+        Put(m, r);
+      }
       sentShadows[size_t(k)].push_back(static_cast<int>(o));
+      sentIds[size_t(k)].push_back(id);
     }
   }
+  prevSentIds.swap(sentIds);  // this step's, for the next
   Round(2);
 }
 
@@ -1092,23 +1175,30 @@ void DistributedWorld::Impl::SendShadows(Real reach, Real) {
 // moving bodies' boxes are written (on one rank, with 16004 circles, rebuilding cost about 1 ms
 // a step).
 void DistributedWorld::Impl::BuildLocal(Real dt) {
+  // The shadow messages' entries (SendShadows' format).
+  for (size_t k = 0; k < neighbours.size(); ++k) {
+    std::vector<ShadowEntry>& entries = shadowIn[k];
+    entries.clear();
+    size_t at = 0;
+    while (at < in[k].size()) {
+      const ShadowHeader h = Take<ShadowHeader>(in[k], at);
+      entries.push_back({h.id, h.full != 0, at});
+      at += h.full ? sizeof(Record) : sizeof(ShadowState);
+      if (at > in[k].size()) throw std::logic_error("DistributedWorld: a shadow message is cut short");
+    }
+  }
   bool same = layoutValid && !ownedChanged;
   for (size_t k = 0; same && k < neighbours.size(); ++k) {
-    same = in[k].size() == receivedShadows[k].size() * sizeof(Record);
-    for (size_t j = 0, at = 0; same && j < receivedShadows[k].size(); ++j, at += sizeof(Record)) {
-      uint32_t id;
-      std::memcpy(&id, in[k].data() + at + offsetof(Record, id), sizeof id);
-      same = id == local.slot[size_t(receivedShadows[k][j])];
+    same = shadowIn[k].size() == receivedShadows[k].size();
+    for (size_t j = 0; same && j < receivedShadows[k].size(); ++j) {
+      same = shadowIn[k][j].id == local.slot[size_t(receivedShadows[k][j])];
     }
   }
   if (same) {
     size_t count = 0;
     for (size_t k = 0; k < neighbours.size(); ++k) {
-      size_t at = 0;
-      for (int i : receivedShadows[k]) {
-        const Record r = Take<Record>(in[k], at);
-        SetRow(local, i, r);
-        local.aabb[size_t(i)] = BoxOf(r, dt);
+      for (size_t j = 0; j < receivedShadows[k].size(); ++j) {
+        WriteShadow(k, shadowIn[k][j], receivedShadows[k][j], dt);
       }
       count += receivedShadows[k].size();
     }
@@ -1132,8 +1222,11 @@ void DistributedWorld::Impl::BuildLocal(Real dt) {
   for (size_t i = 0; i < owned.size(); ++i) sources.push_back({owned[i].id, 1, int(i), -1});
   runEnds.push_back(sources.size());
   for (size_t k = 0; k < neighbours.size(); ++k) {
-    size_t at = 0;
-    while (at < in[k].size()) {
+    for (const ShadowEntry& e : shadowIn[k]) {
+      // Every layout starts again on every rank at once (tiles dealt, a scene or checkpoint
+      // loaded), and then every shadow is sent whole.
+      if (!e.full) throw std::logic_error("DistributedWorld: a shadow state where its record was needed");
+      size_t at = e.at;
       shadows.push_back(Take<Record>(in[k], at));
       sources.push_back({shadows.back().id, 2, int(shadows.size() - 1), int(k)});
     }
@@ -1209,8 +1302,30 @@ void DistributedWorld::Impl::PatchLocal(Real dt) {
   // the owned list once: every pass over all rows cost about 8 instructions a row, 1.0M of a
   // 2-rank circle-stress step's instructions before.
   const size_t before = size_t(local.Count());
-  // Freed: last step's shadows' rows and the rows of the bodies that left (Migrate).
-  for (const auto& rows : receivedShadows) freedRows.insert(freedRows.end(), rows.begin(), rows.end());
+  // Freed: the rows of the bodies that left (Migrate) and of last step's shadows that came whole
+  // or not at all; a shadow sent again as a ShadowState keeps its row (it holds the body's
+  // constant data). Both lists are in id order.
+  size_t shadowCount = 0, newShadows = 0;
+  shadowKeptRow.clear();
+  for (size_t k = 0; k < neighbours.size(); ++k) {
+    const std::vector<int>& old = receivedShadows[k];
+    size_t j = 0;
+    for (const ShadowEntry& e : shadowIn[k]) {
+      int row = -1;
+      if (!e.full) {
+        while (j < old.size() && local.slot[size_t(old[j])] < e.id) freedRows.push_back(old[j++]);
+        if (j == old.size() || local.slot[size_t(old[j])] != e.id) {
+          throw std::logic_error("DistributedWorld: a shadow state for a body not held");
+        }
+        row = old[j++];
+      } else {
+        ++newShadows;
+      }
+      shadowKeptRow.push_back(row);
+    }
+    while (j < old.size()) freedRows.push_back(old[j++]);
+    shadowCount += shadowIn[k].size();
+  }
   std::sort(freedRows.begin(), freedRows.end());
   keepRow.assign(before, 1);
   const auto uncount = [this](size_t i) {
@@ -1224,12 +1339,7 @@ void DistributedWorld::Impl::PatchLocal(Real dt) {
   size_t arriving = 0;
   for (int i : ownedLocal) arriving += i < 0 ? 1 : 0;
   const size_t kept = before - freedRows.size();
-  size_t shadowCount = 0;
-  for (size_t k = 0; k < neighbours.size(); ++k) {
-    if (in[k].size() % sizeof(Record) != 0) throw std::logic_error("DistributedWorld: a shadow message is cut short");
-    shadowCount += in[k].size() / sizeof(Record);
-  }
-  const size_t n = kept + arriving + shadowCount;
+  const size_t n = kept + arriving + newShadows;
   // Free rows below n, ascending; kept rows at or above n move into the first of them.
   freeRows.clear();
   for (int i : freedRows) {
@@ -1256,10 +1366,8 @@ void DistributedWorld::Impl::PatchLocal(Real dt) {
       if (heldByKept(r.id)) throw std::logic_error("DistributedWorld: a body held twice");
     }
     for (size_t k = 0; k < neighbours.size(); ++k) {
-      for (size_t at = 0; at + sizeof(Record) <= in[k].size(); at += sizeof(Record)) {
-        uint32_t id;
-        std::memcpy(&id, in[k].data() + at + offsetof(Record, id), sizeof id);
-        if (heldByKept(id)) throw std::logic_error("DistributedWorld: a body held twice");
+      for (const ShadowEntry& e : shadowIn[k]) {
+        if (e.full && heldByKept(e.id)) throw std::logic_error("DistributedWorld: a body held twice");
       }
     }
   }
@@ -1288,14 +1396,16 @@ void DistributedWorld::Impl::PatchLocal(Real dt) {
     }
     localOwned[size_t(i)] = 1;
   }
-  for (size_t k = 0; k < neighbours.size(); ++k) {
+  for (size_t k = 0, e = 0; k < neighbours.size(); ++k) {
     receivedShadows[k].clear();
-    size_t at = 0;
-    while (at < in[k].size()) {
-      const Record r = Take<Record>(in[k], at);
-      const int row = freeRows[nextFree++];
-      SetRow(local, row, r);
-      local.aabb[size_t(row)] = BoxOf(r, dt);
+    for (const ShadowEntry& entry : shadowIn[k]) {
+      int row = shadowKeptRow[e++];
+      if (row < 0) {
+        row = freeRows[nextFree++];
+      } else if (size_t(row) >= n) {
+        row = MovedTo(row);
+      }
+      WriteShadow(k, entry, row, dt);
       receivedShadows[k].push_back(row);
     }
   }
@@ -1387,6 +1497,18 @@ void DistributedWorld::Impl::FindContacts(Real dt) {
   if (rankSolver && def.contactRecycleDistance > 0 && def.effects.warmStarting) {
     lastContacts.clear();
     if (stats.layoutKept) lastContacts.swap(contacts);
+    // The pair loop looks for a pair within its body a's run by ascending row b. Rows out of id
+    // order (a patch since the last rebuild), the runs, in id order, are put in row order (each a
+    // few contacts): else whether a pair is recycled depended on how the rows lay.
+    if (!rowsInIdOrder) {
+      for (size_t from = 0, to = 0; from < lastContacts.size(); from = to) {
+        to = from + 1;
+        while (to < lastContacts.size() && lastContacts[to].a == lastContacts[from].a) ++to;
+        for (size_t i = from + 1; i < to; ++i) {
+          for (size_t j = i; j > from && lastContacts[j - 1].b > lastContacts[j].b; --j) std::swap(lastContacts[j - 1], lastContacts[j]);
+        }
+      }
+    }
     // Stale entries stay: the pair loop takes one only where it starts its body's run.
     if (recycleFirst.size() < size_t(count)) recycleFirst.resize(size_t(count), -1);
     for (size_t i = 0; i < lastContacts.size(); ++i) {
