@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 #include <mpi.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <functional>
@@ -424,6 +425,36 @@ TEST(Distributed, RebalanceClumpedSceneKeepsHashes) {
   if (Rank() == 0) {
     std::printf("[ info ] clumped 800, %d ranks: imbalance %.3f at step 1, %.3f at step 60, %d rebalances\n", Size(), first,
                 last, rebalances);
+  }
+}
+
+// The tiles are dealt in bisection order: on a 6 x 6 grid (not a power of two, where Morton
+// order's runs are an L and a corner) 2 ranks get the lower and upper halves and 4 the quadrants;
+// on 4 x 4 it is Morton order (4 ranks: 2 x 2 quadrants). On any rank count the counts differ by
+// at most one (a run may be two pieces, as a run of Morton order may: 6 x 6 tiles at 3 ranks).
+TEST(Distributed, TilesDealtInBisectionOrder) {
+  WorldDef def;
+  for (const int side : {6, 4, 7}) {
+    DistributedDef dist;
+    dist.tilesX = dist.tilesY = side;
+    const DistributedWorld dw(def, dist, MPI_COMM_WORLD);
+    const std::vector<int> owner = dw.TileOwners();
+    ASSERT_EQ(owner.size(), size_t(side * side));
+    const int half = side / 2;
+    for (int ty = 0; ty < side; ++ty) {
+      for (int tx = 0; tx < side; ++tx) {
+        const int o = owner[size_t(tx + ty * side)];
+        if (side % 2 == 0 && Size() == 2) {
+          EXPECT_EQ(o, ty < half ? 0 : 1) << side << " tiles, tile " << tx << "," << ty;
+        }
+        if (side % 2 == 0 && Size() == 4) {
+          EXPECT_EQ(o, (ty < half ? 0 : 2) + (tx < half ? 0 : 1)) << side << " tiles, tile " << tx << "," << ty;
+        }
+      }
+    }
+    std::vector<int> count(size_t(Size()), 0);
+    for (int o : owner) ++count[size_t(o)];
+    EXPECT_LE(*std::max_element(count.begin(), count.end()) - *std::min_element(count.begin(), count.end()), 1);
   }
 }
 
