@@ -1336,8 +1336,7 @@ void DistributedWorld::Impl::PatchLocal(Real dt) {
     keepRow[size_t(i)] = 0;
     uncount(size_t(i));
   }
-  size_t arriving = 0;
-  for (int i : ownedLocal) arriving += i < 0 ? 1 : 0;
+  const size_t arriving = arrivals.size();  // Migrate marked each in ownedLocal (-1 - its index)
   const size_t kept = before - freedRows.size();
   const size_t n = kept + arriving + newShadows;
   // Free rows below n, ascending; kept rows at or above n move into the first of them.
