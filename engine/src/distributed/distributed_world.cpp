@@ -20,7 +20,10 @@
 // boundary, or the shadows change, nearly every step: rebuilding made the step 2.5-2.8 ms, and
 // any pass over every body every step shows (the owned list's merge, 85 instructions a body, and
 // the patch's passes over every row were 2.4M of a 15.3M-instruction step): the patch, the
-// merge and the shadows' pass visit what changed, and 2 ranks take 1.7-2.2 ms.
+// merge and the shadows' pass visit what changed, the tiles are dealt in bisection order (at 2
+// ranks two halves; Morton order gave a corner and an L, a 45 % longer boundary), and a shadow
+// sent again carries only its pose and velocity: 2 ranks take 1.1-1.2 ms, 86-90 % of one rank's
+// speed; what is left is mostly the ranks waiting for each other at the step's 13 meetings.
 // On a dense scene the gap was the Jacobi solve itself (many_pyramids, 2757 boxes: 85 % of the
 // step, one rank 3x the World at 8 iterations, which do not hold the pyramids); the soft step
 // per rank (kSoftStep: the World's solver on the local arrays, shadows' states from their owners
