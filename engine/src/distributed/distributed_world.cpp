@@ -289,7 +289,11 @@ struct DistributedWorld::Impl {
   std::vector<Contact> lastContacts;  // kSoftStep: last step's, for recycling (FindContacts)
   std::vector<int32_t> recycleFirst;  // row -> its first contact as body a in lastContacts, or -1
   RecycleSource recycleSource;
-  std::vector<AABB> ownedBoxes;              // owned index -> this step's broad-phase box
+  // Owned index -> this step's broad-phase box, only while the layout is not valid (the boxes come
+  // from the records and the rebuild takes them); with a valid layout a body's box is its row's
+  // (local.aabb, written by the halo pass) and an arrival's is made from its record: carrying the
+  // boxes through Migrate's merge was 256 KB copied a step at 16004 circles.
+  std::vector<AABB> ownedBoxes;
   std::vector<int> leavingIndex;             // Migrate: owned indices that leave (from the halo pass)
   std::vector<int> edgeNext, arrivalEdge;    // Migrate: edgeOwned renumbered for the new owned list
   std::vector<size_t> arrivalAt;             // Migrate: per arrival, the owned index it goes before
@@ -338,6 +342,12 @@ struct DistributedWorld::Impl {
   std::vector<uint64_t> countsAll;           // CheckCounts: every rank's count, checksum and work
 
   size_t OwnedCount() const { return ownedStale ? ownedLocal.size() : owned.size(); }
+  // This step's box of owned body o, between the halo pass and BuildLocal (see ownedBoxes).
+  AABB OwnedBox(size_t o, Real dt) const {
+    if (!layoutValid) return ownedBoxes[o];
+    const int i = ownedLocal[o];
+    return i >= 0 ? local.aabb[size_t(i)] : BoxOf(arrivals[size_t(-1 - i)], dt);
+  }
   uint32_t OwnedId(size_t o) const {
     if (!ownedStale) return owned[o].id;
     const int i = ownedLocal[o];
@@ -776,7 +786,7 @@ void DistributedWorld::Step(Real dt) {
   // with it (medians of five interleaved pairs, docs/notes/distributed.md).
   w.run->BeginStep();  // as World::Step: wake the pool's workers, or run alone on a busy machine
   const size_t ownedCount = w.OwnedCount();
-  w.ownedBoxes.resize(ownedCount);
+  if (!w.layoutValid) w.ownedBoxes.resize(ownedCount);
   w.ownedTile.resize(ownedCount);
   const int blocks = w.run->Workers();
   w.haloReach.assign(size_t(blocks), 0);
@@ -811,7 +821,7 @@ void DistributedWorld::Step(Real dt) {
         c = w.owned[o].center;
         box = w.BoxOf(w.owned[o], dt);
       }
-      w.ownedBoxes[o] = box;
+      if (!w.layoutValid) w.ownedBoxes[o] = box;
       const double reach = std::max({double(c.x - box.lower.x), double(box.upper.x - c.x), double(c.y - box.lower.y),
                                      double(box.upper.y - c.y)});
       most = std::max(most, reach);
@@ -858,7 +868,7 @@ void DistributedWorld::Step(Real dt) {
   Require(global[1] == 0, "DistributedWorld::Step: a body moved past the tiles next to its own in one step");
   lap(w.stats.haloMs);
 
-  w.Migrate(dt);  // keeps ownedBoxes and ownedTile in step with the owned list
+  w.Migrate(dt);  // keeps ownedTile (and ownedBoxes, if in use) in step with the owned list
   lap(w.stats.migrateMs);
   w.SendShadows(Real(global[0]), dt);
   lap(w.stats.shadowsMs);
@@ -1030,7 +1040,7 @@ void DistributedWorld::Impl::Migrate(Real dt) {
     const size_t newCount = count - leavingIndex.size() + arrivals.size();
     if (records) ownedNext.resize(newCount);
     ownedLocalNext.resize(newCount);
-    ownedBoxesNext.resize(newCount);
+    if (!carry) ownedBoxesNext.resize(newCount);
     ownedTileNext.resize(newCount);
     size_t w = 0;
     const auto copyRun = [&](size_t from, size_t to) {
@@ -1041,7 +1051,9 @@ void DistributedWorld::Impl::Migrate(Real dt) {
       } else {
         std::fill(ownedLocalNext.begin() + std::ptrdiff_t(w), ownedLocalNext.begin() + std::ptrdiff_t(w + to - from), -1);
       }
-      std::copy(ownedBoxes.begin() + std::ptrdiff_t(from), ownedBoxes.begin() + std::ptrdiff_t(to), ownedBoxesNext.begin() + std::ptrdiff_t(w));
+      if (!carry) {
+        std::copy(ownedBoxes.begin() + std::ptrdiff_t(from), ownedBoxes.begin() + std::ptrdiff_t(to), ownedBoxesNext.begin() + std::ptrdiff_t(w));
+      }
       std::copy(ownedTile.begin() + std::ptrdiff_t(from), ownedTile.begin() + std::ptrdiff_t(to), ownedTileNext.begin() + std::ptrdiff_t(w));
       w += to - from;
     };
@@ -1056,7 +1068,7 @@ void DistributedWorld::Impl::Migrate(Real dt) {
         const Record& r = arrivals[a];
         if (records) ownedNext[w] = r;
         ownedLocalNext[w] = -1 - static_cast<int>(a);
-        ownedBoxesNext[w] = BoxOf(r, dt);
+        if (!carry) ownedBoxesNext[w] = BoxOf(r, dt);
         ownedTileNext[w] = TileX(r.center.x) + TileY(r.center.y) * dist.tilesX;
         if (deepTile[size_t(ownedTileNext[w])] < 2) arrivalEdge.push_back(static_cast<int>(w));
         ++w;
@@ -1085,7 +1097,7 @@ void DistributedWorld::Impl::Migrate(Real dt) {
     std::merge(edgeNext.begin(), edgeNext.end(), arrivalEdge.begin(), arrivalEdge.end(), edgeOwned.begin());
     if (records) owned.swap(ownedNext);
     ownedLocal.swap(ownedLocalNext);
-    ownedBoxes.swap(ownedBoxesNext);
+    if (!carry) ownedBoxes.swap(ownedBoxesNext);
     ownedTile.swap(ownedTileNext);
     ownedChanged = true;
   }
@@ -1104,7 +1116,7 @@ void DistributedWorld::Impl::Migrate(Real dt) {
 // Round 2: every owned body goes as a shadow to each other rank owning a tile that its box,
 // widened by the global reach, overlaps. An owned body of that rank has its centre in such a tile
 // and its box within `reach` of it, so every pair with one of its bodies is found there.
-void DistributedWorld::Impl::SendShadows(Real reach, Real) {
+void DistributedWorld::Impl::SendShadows(Real reach, Real dt) {
   ClearOut();
   for (auto& s : sentShadows) s.clear();
   std::vector<int> targets;
@@ -1116,7 +1128,7 @@ void DistributedWorld::Impl::SendShadows(Real reach, Real) {
   for (const int edge : edgeOwned) {
     const size_t o = size_t(edge);
     if (deepTile[size_t(ownedTile[o])] >= deepEnough) continue;
-    const AABB box = ownedBoxes[o];
+    const AABB box = OwnedBox(o, dt);
     const int x0 = TileX(box.lower.x - reach), x1 = TileX(box.upper.x + reach);
     const int y0 = TileY(box.lower.y - reach), y1 = TileY(box.upper.y + reach);
     if (OwnAll(x0, x1, y0, y1)) continue;  // most bodies near the boundary: no owner to gather
@@ -1393,7 +1405,7 @@ void DistributedWorld::Impl::PatchLocal(Real dt) {
       const Record r = OwnedRecord(o);
       const int row = freeRows[nextFree++];
       SetRow(local, row, r);
-      local.aabb[size_t(row)] = ownedBoxes[o];
+      local.aabb[size_t(row)] = BoxOf(r, dt);
       i = row;
     }
     localOwned[size_t(i)] = 1;
