@@ -22,8 +22,9 @@
 // the patch's passes over every row were 2.4M of a 15.3M-instruction step): the patch, the
 // merge and the shadows' pass visit what changed, the tiles are dealt in bisection order (at 2
 // ranks two halves; Morton order gave a corner and an L, a 45 % longer boundary), and a shadow
-// sent again carries only its pose and velocity: 2 ranks take 1.1-1.2 ms, 86-90 % of one rank's
-// speed; what is left is mostly the ranks waiting for each other at the step's 13 meetings.
+// sent again carries only its pose and velocity: 2 ranks take 1.1-1.3 ms, 79-88 % of one rank's
+// speed in the sets measured on this noisy VM; what is left is mostly the ranks waiting for each
+// other at the step's 13 meetings.
 // On a dense scene the gap was the Jacobi solve itself (many_pyramids, 2757 boxes: 85 % of the
 // step, one rank 3x the World at 8 iterations, which do not hold the pyramids); the soft step
 // per rank (kSoftStep: the World's solver on the local arrays, shadows' states from their owners
@@ -211,8 +212,8 @@ struct DistributedWorld::Impl {
   // owned order), only with neighbours: the owned bodies whose tile is another rank's (they
   // leave) and those in a tile of depth under 2 (deepTile: the only ones that may be a shadow
   // elsewhere). Migrate and SendShadows walk these lists, not the owned list: at 2 ranks x 16004
-  // circles 13 % of the bodies are in such tiles, and the two passes over all of them were
-  // 0.03-0.05 ms of a 1.3 ms step.
+  // circles (Morton's L then) a quarter of the bodies were in such tiles, and with the lists the
+  // migrate and shadows stages went from 0.035 and 0.079 to 0.028 and 0.063 ms a step.
   std::vector<std::vector<int>> haloLeaving, haloEdge;  // sized to the block (never shrunk: no refill)
   std::vector<size_t> haloLeavingCount, haloEdgeCount;  // per block: how many of each list are set
   std::vector<int> edgeOwned;  // owned indices of bodies in tiles of depth under 2, ascending
@@ -1650,7 +1651,7 @@ void DistributedWorld::Impl::ExchangeStates(std::span<SolverBody> states, std::s
   };
   static_assert(std::is_trivially_copyable_v<StateRecord>);
   // Packed in place (9 rounds a step of about 150 records each at 2 ranks x 16004 circles: a
-  // resize per record was most of this function's time).
+  // resize per record was about half of this function's time).
   for (size_t k = 0; k < neighbours.size(); ++k) {
     out[k].resize(sentRows[k].size() * sizeof(StateRecord));
     char* to = out[k].data();
