@@ -279,6 +279,7 @@ struct DistributedWorld::Impl {
   std::vector<std::vector<ShadowEntry>> shadowIn;
   std::vector<int> shadowKeptRow;  // PatchLocal: per entry of a neighbour, its kept row (-1: new)
   std::vector<size_t> prevCursor;  // SendShadows: per neighbour, a cursor in prevSentIds
+  std::vector<int> shadowTargets;  // SendShadows: the ranks one body goes to (kept for its capacity)
   std::vector<std::vector<char>> out, in;
   std::vector<CandidatePair> pairs, ownPairs;
   std::vector<MPI_Request> requests;              // PostVelocities: sends, then receives
@@ -1120,7 +1121,7 @@ void DistributedWorld::Impl::Migrate(Real dt) {
 void DistributedWorld::Impl::SendShadows(Real reach, Real dt) {
   ClearOut();
   for (auto& s : sentShadows) s.clear();
-  std::vector<int> targets;
+  std::vector<int>& targets = shadowTargets;
   prevCursor.assign(neighbours.size(), 0);
   for (auto& ids : sentIds) ids.clear();
   // One rank, or no neighbour: nobody to send to (edgeOwned is empty). Otherwise the owned
@@ -1586,8 +1587,7 @@ void DistributedWorld::Impl::PostVelocities(int tag) {
   const std::vector<int32_t>& count = solve.Counts();
   const std::vector<BodyVelocity>& pseudo = solve.Pseudo();
   for (size_t k = 0; k < neighbours.size(); ++k) {
-    for (int o : sentShadows[k]) {
-      const int i = ownedLocal[size_t(o)];
+    for (const int i : sentRows[k]) {
       Put(out[k], VelocityRecord{local.vel[size_t(i)], pseudo[size_t(i)], count[size_t(i)]});
     }
   }
