@@ -332,6 +332,44 @@ TEST(DistributedSoftStep, SameBitsOnAnyThreadCountAndEveryRun) {
   }
 }
 
+// Between the soft step's passes only a boundary body's velocity travels, unless a pass moved
+// bodies through their rows (the Box2D-style bounces): a shadow integrates its motion (dp, dq)
+// from the velocities its owner sent, which must give the owner's bits. With
+// QUADRANT_CHECK_SHADOW_MOTION every round sends the whole state and the ranks count the shadows
+// whose motion differs (the step throws on every rank if one does): elastic circles with both
+// restitution models, 4 x 4 tiles, and the base-10 pyramid across four tiles.
+TEST(DistributedSoftStep, ShadowsIntegrateTheirOwnersMotion) {
+  setenv("QUADRANT_CHECK_SHADOW_MOTION", "1", 1);
+  struct Unset {
+    ~Unset() { unsetenv("QUADRANT_CHECK_SHADOW_MOTION"); }
+  } unset;
+  scene::StressParams p;
+  p.count = 1000;
+  const scene::Scene stress = scene::MakeStressScene(p);
+  for (const RestitutionPolicy policy : {RestitutionPolicy::kCollisions, RestitutionPolicy::kBox2d}) {
+    WorldDef def = SoftStepDef(stress);
+    def.restitution = policy;
+    DistributedDef dist;
+    dist.bounds = stress.bounds;
+    dist.tilesX = dist.tilesY = 4;
+    DistributedWorld dw(def, dist, MPI_COMM_WORLD);
+    dw.Load(ToBodyDefs(stress));
+    int shadows = 0;
+    for (int step = 0; step < 150; ++step) {
+      ASSERT_NO_THROW(dw.Step(stress.timeStep)) << "restitution policy " << int(policy) << ", step " << step;
+      shadows += dw.GetStats().shadowBodies;
+    }
+    if (Size() > 1) {
+      EXPECT_GT(shadows, 0);
+    }
+  }
+  const scene::Scene pyramid = scene::MakePyramid(10);
+  const std::vector<BodyDef> bodies = ToBodyDefs(pyramid);
+  DistributedWorld dw(SoftStepDef(pyramid), FourTilesAround(PyramidMiddle(bodies), 15), MPI_COMM_WORLD);
+  dw.Load(bodies);
+  for (int step = 0; step < 120; ++step) ASSERT_NO_THROW(dw.Step(pyramid.timeStep)) << "pyramid, step " << step;
+}
+
 // On one rank the per-rank solver is the World's soft step on the same bodies: the same bits
 // (the rows are in id order there, the contacts in the World's order, and the manifolds are
 // recycled as the World recycles them).

@@ -246,6 +246,10 @@ struct DistributedWorld::Impl {
   std::unique_ptr<SoftStepSolver> rankSolver;
   Profile rankProfile;
   double exchangeInSolveMs = 0;  // this step's ExchangeStates time (inside the soft step)
+  // QUADRANT_CHECK_SHADOW_MOTION set: every round sends whole states, and where only the
+  // velocities had to travel a shadow's dp and dq must already be its owner's bits (the tests).
+  bool checkShadowMotion = std::getenv("QUADRANT_CHECK_SHADOW_MOTION") != nullptr;
+  uint64_t motionMismatches = 0;  // shadows whose dp or dq differed (checkShadowMotion)
   std::vector<int32_t> contactCount;  // per local row: contacts this step (the tiles' work)
   DistributedStats stats;
 
@@ -341,7 +345,7 @@ struct DistributedWorld::Impl {
   std::vector<int32_t> rowOfId;
   bool rowOfIdValid = false;
   uint32_t idBound = 0;  // every row's id is below it (while rowOfIdValid)
-  std::vector<uint64_t> countsAll;           // CheckCounts: every rank's count, checksum and work
+  std::vector<uint64_t> countsAll;           // CheckCounts: every rank's count, checksum, work and motion mismatches
 
   size_t OwnedCount() const { return ownedStale ? ownedLocal.size() : owned.size(); }
   // This step's box of owned body o, between the halo pass and BuildLocal (see ownedBoxes).
@@ -483,7 +487,9 @@ struct DistributedWorld::Impl {
   void PostVelocities(int tag);
   void PostShadowRound(int tag, size_t recordSize);
   void CompleteShadowRound(const char* what);
-  void ExchangeStates(std::span<SolverBody> states, std::span<const uint8_t> inRows);
+  void ExchangeStates(std::span<SolverBody> states, std::span<const uint8_t> inRows, bool rowsMoved);
+  template <bool kWhole>
+  void ExchangeStateRecords(std::span<SolverBody> states, std::span<const uint8_t> inRows, bool sameMotion);
   void CompleteVelocities(bool counts);
   void SplitRows();
   void StoreCache();
@@ -532,8 +538,8 @@ DistributedWorld::DistributedWorld(const WorldDef& def, const DistributedDef& di
   w.broadPhase = MakeBroadPhase(def.broadPhase, def.quadTreeMaxDepth);
   if (def.solver == SolverType::kSoftStep) {
     w.rankSolver = std::make_unique<SoftStepSolver>();
-    w.rankSolver->SetStateExchange([&w](std::span<SolverBody> states, std::span<const uint8_t> inRows) {
-      if (!w.neighbours.empty()) w.ExchangeStates(states, inRows);
+    w.rankSolver->SetStateExchange([&w](std::span<SolverBody> states, std::span<const uint8_t> inRows, bool rowsMoved) {
+      if (!w.neighbours.empty()) w.ExchangeStates(states, inRows, rowsMoved);
     });
   }
 }
@@ -1640,24 +1646,52 @@ void DistributedWorld::Impl::CompleteShadowRound(const char* what) {
 }
 
 // The soft step's round (kSoftStep), after each pass of a sub-step: every owned body that is a
-// shadow elsewhere sends its solver state (velocity and the sub-steps' motion so far), which
-// replaces the shadow's there; a shadow's own state holds only this rank's rows. A body in no
-// row here has no state: it sends a mark and the other side keeps its own.
-void DistributedWorld::Impl::ExchangeStates(std::span<SolverBody> states, std::span<const uint8_t> inRows) {
+// shadow elsewhere sends its solver state, which replaces the shadow's there; a shadow's own state
+// holds only this rank's rows. A body in no row here has no state: it sends a mark and the other
+// side keeps its own. Only the velocity travels (16 bytes) unless a pass moved bodies through
+// their rows since the last round (rowsMoved: the bounces): the sub-steps' motion so far (dp, dq)
+// is then the same bits on both sides, as both integrate it from the same velocities. At 2 x 16004
+// circles the 150 whole states (36 bytes each) were 5.4 KB, past Open MPI's 4 KB eager limit for
+// shared memory: 3.2 us a round for both directions against 0.9 us below it (9 rounds a step).
+void DistributedWorld::Impl::ExchangeStates(std::span<SolverBody> states, std::span<const uint8_t> inRows, bool rowsMoved) {
   const auto from = std::chrono::steady_clock::now();
-  struct StateRecord {
+  if (rowsMoved || checkShadowMotion) {
+    ExchangeStateRecords<true>(states, inRows, checkShadowMotion && !rowsMoved);
+  } else {
+    ExchangeStateRecords<false>(states, inRows, false);
+  }
+  exchangeInSolveMs += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - from).count();
+}
+
+template <bool kWhole>
+void DistributedWorld::Impl::ExchangeStateRecords(std::span<SolverBody> states, std::span<const uint8_t> inRows, bool sameMotion) {
+  struct WholeState {
     SolverBody state;
     int32_t held;
   };
+  struct VelocityState {
+    Vec2 v;
+    Real w;
+    int32_t held;
+  };
+  using StateRecord = std::conditional_t<kWhole, WholeState, VelocityState>;
   static_assert(std::is_trivially_copyable_v<StateRecord>);
-  // Packed in place (9 rounds a step of about 150 records each at 2 ranks x 16004 circles: a
-  // resize per record was about half of this function's time).
+  // Packed in place (a resize per record was about half of this function's time).
   for (size_t k = 0; k < neighbours.size(); ++k) {
     out[k].resize(sentRows[k].size() * sizeof(StateRecord));
     char* to = out[k].data();
     for (const int row : sentRows[k]) {
       const size_t i = size_t(row);
-      const StateRecord r = inRows[i] ? StateRecord{states[i], 1} : StateRecord{SolverBody{}, 0};
+      StateRecord r{};
+      r.held = inRows[i] ? 1 : 0;
+      if constexpr (kWhole) {
+        if (r.held) r.state = states[i];
+      } else {
+        if (r.held) {
+          r.v = states[i].v;
+          r.w = states[i].w;
+        }
+      }
       std::memcpy(to, &r, sizeof r);
       to += sizeof r;
     }
@@ -1670,10 +1704,19 @@ void DistributedWorld::Impl::ExchangeStates(std::span<SolverBody> states, std::s
       StateRecord r;
       std::memcpy(&r, from, sizeof r);
       from += sizeof r;
-      if (r.held && inRows[size_t(i)]) states[size_t(i)] = r.state;
+      if (!r.held || !inRows[size_t(i)]) continue;
+      if constexpr (kWhole) {
+        SolverBody& st = states[size_t(i)];
+        if (sameMotion && (std::memcmp(&st.dp, &r.state.dp, sizeof st.dp) != 0 || std::memcmp(&st.dq, &r.state.dq, sizeof st.dq) != 0)) {
+          ++motionMismatches;  // CheckCounts throws on every rank alike
+        }
+        st = r.state;
+      } else {
+        states[size_t(i)].v = r.v;
+        states[size_t(i)].w = r.w;
+      }
     }
   }
-  exchangeInSolveMs += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - from).count();
 }
 
 // The solve's rows split by whether they touch a shadow (whose velocity comes from its owner
@@ -1711,22 +1754,27 @@ void DistributedWorld::Impl::StoreCache() {
 }
 
 // Nothing lost, nothing duplicated: the global count of owned bodies and the sum of their mixed
-// ids (exact integer sums, modulo 2^64) against the loaded scene's.
+// ids (exact integer sums, modulo 2^64) against the loaded scene's; and, under
+// QUADRANT_CHECK_SHADOW_MOTION, no shadow whose motion moved apart from its owner's.
 void DistributedWorld::Impl::CheckCounts() {
   int64_t cost = 0;
   for (int64_t c : tileCost) cost += c;
   const size_t count = OwnedCount();
-  uint64_t mine[3] = {uint64_t(count), 0, uint64_t(cost)};
+  uint64_t mine[4] = {uint64_t(count), 0, uint64_t(cost), motionMismatches};
   for (size_t o = 0; o < count; ++o) mine[1] += MixId(OwnedId(o));
-  // One collective for the sums and the maximum (each rank's three numbers to every rank).
-  countsAll.resize(3 * size_t(size));
-  MPI_Allgather(mine, 3, MPI_UINT64_T, countsAll.data(), 3, MPI_UINT64_T, comm);
-  uint64_t global[3] = {0, 0, 0};
+  // One collective for the sums and the maximum (each rank's four numbers to every rank).
+  countsAll.resize(4 * size_t(size));
+  MPI_Allgather(mine, 4, MPI_UINT64_T, countsAll.data(), 4, MPI_UINT64_T, comm);
+  uint64_t global[4] = {0, 0, 0, 0};
   int64_t most = 0;
   for (int r = 0; r < size; ++r) {
-    for (int j = 0; j < 3; ++j) global[j] += countsAll[3 * size_t(r) + size_t(j)];
-    most = std::max(most, int64_t(countsAll[3 * size_t(r) + 2]));
+    for (int j = 0; j < 4; ++j) global[j] += countsAll[4 * size_t(r) + size_t(j)];
+    most = std::max(most, int64_t(countsAll[4 * size_t(r) + 2]));
   }
+  Require(global[3] == 0, [&] {
+    return "DistributedWorld: " + std::to_string(global[3]) +
+           " shadow state(s) moved apart from their owners' between the soft step's rounds (QUADRANT_CHECK_SHADOW_MOTION)";
+  });
   stats.imbalance = global[2] > 0 ? double(most) / (double(global[2]) / size) : 1.0;
   Require(global[0] == expectedCount && global[1] == expectedChecksum, [&] {
     return "DistributedWorld: body bookkeeping broken: " + std::to_string(global[0]) + " bodies owned, " +

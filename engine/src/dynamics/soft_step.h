@@ -91,8 +91,11 @@ class SoftStepSolver final : public Solver {
   /// index; a body holds one only where inRows is set): in every sub-step after the warm start
   /// and after the soft solve, after the last sub-step's relax passes, and before Box2D-style
   /// bounces. The distributed world (quadrant::mpi) replaces its shadows' states there with their
-  /// owners'; nothing else sets it.
-  using StateExchange = std::function<void(std::span<SolverBody> states, std::span<const uint8_t> inRows)>;
+  /// owners'; nothing else sets it. `rowsMoved`: a pass since the last call (the bounces) moved
+  /// bodies through their rows. Else only v and w can differ between a body's states on two
+  /// ranks that held the same state at the last call: dp and dq change only by the per-body
+  /// integration, which gives the same bits for the same velocity.
+  using StateExchange = std::function<void(std::span<SolverBody> states, std::span<const uint8_t> inRows, bool rowsMoved)>;
   void SetStateExchange(StateExchange exchange) { exchange_ = std::move(exchange); }
 
  private:
@@ -295,6 +298,11 @@ class SoftStepSolver final : public Solver {
 
   static constexpr int kFlagPad = 8;
   StateExchange exchange_;
+  bool rowsMoved_ = false;  // a pass moved bodies through their rows since the last exchange_
+  void Exchange() {
+    exchange_(states_, inRows_, rowsMoved_);
+    rowsMoved_ = false;
+  }
   std::vector<uint8_t> inRows_;  // per body (+ kFlagPad of padding): integrated by the sub-steps
   bool collecting_ = false;      // between BeginRegion and EndRegion
   std::vector<TaskSystem::StagePlan> regionPlan_;

@@ -48,6 +48,7 @@ void SoftStepSolver::Run(StepContext& ctx) {
   Bodies& bodies = *ctx.bodies;
   StageRunner& run = *ctx.run;
   StepPlan step;
+  rowsMoved_ = false;  // LoadStates starts every state's motion at zero
   step.n = def.softSubSteps;
   step.h = ctx.dt / Real(step.n);
   step.invH = Real(1) / step.h;
@@ -262,7 +263,7 @@ void SoftStepSolver::SubStep(StepContext& ctx, const StepPlan& step, int sub, co
   // (0.001-0.003 m so).
   if (exchange_) {
     EndRegion(run);
-    exchange_(states_, inRows_);
+    Exchange();
     BeginRegion();
   }
   JointPass([this](int b, int e) { SolveJoints(b, e, true); });
@@ -272,7 +273,7 @@ void SoftStepSolver::SubStep(StepContext& ctx, const StepPlan& step, int sub, co
   });
   if (exchange_) {
     EndRegion(run);
-    exchange_(states_, inRows_);
+    Exchange();
     BeginRegion();
   }
   // The rotation guard is per world step (ctx.dt): per sub-step it allowed n times the turn.
@@ -285,9 +286,12 @@ void SoftStepSolver::SubStep(StepContext& ctx, const StepPlan& step, int sub, co
   // and at the end (the bounce shifts and the position pass read the shadows). On every rank
   // alike: the rounds must match.
   const bool bounce = step.box2dRestitution && sub == 0;
-  if (exchange_ && (last || bounce)) exchange_(states_, inRows_);
-  if (bounce && step.m > 0) ApplyBox2dRestitution<kRotation, kFriction>(run, def, step.h);
-  if (exchange_ && bounce && last) exchange_(states_, inRows_);
+  if (exchange_ && (last || bounce)) Exchange();
+  if (bounce && step.m > 0) {
+    ApplyBox2dRestitution<kRotation, kFriction>(run, def, step.h);
+    rowsMoved_ = true;  // the bounce moves the first sub-step's positions (dp, dq)
+  }
+  if (exchange_ && bounce && last) Exchange();
 }
 
 // The sub-step's softRelaxIterations relax passes. The first one gets firstPrm (in the last
