@@ -370,6 +370,45 @@ TEST(DistributedSoftStep, ShadowsIntegrateTheirOwnersMotion) {
   for (int step = 0; step < 120; ++step) ASSERT_NO_THROW(dw.Step(pyramid.timeStep)) << "pyramid, step " << step;
 }
 
+// Where the rows lie changes no bit (OrderRows puts them back in id order between steps: over a
+// long run the patches scatter them). With QUADRANT_ORDER_ROWS every step ends with the rows
+// reordered, alternately into id order and into its reverse, against never within these steps:
+// circle stress on 4 x 4 tiles (bodies cross every step) with both solvers, and the base-10
+// pyramid across four tiles (resting boxes: the soft step recycles last step's manifolds, which
+// name their bodies by row).
+TEST(Distributed, RowsReorderedBetweenStepsChangeNoBit) {
+  scene::StressParams p;
+  p.count = 1000;
+  const scene::Scene stress = scene::MakeStressScene(p);
+  const scene::Scene pyramid = scene::MakePyramid(10);
+  DistributedDef stressTiles;
+  stressTiles.bounds = stress.bounds;
+  stressTiles.tilesX = stressTiles.tilesY = 4;
+  const std::vector<BodyDef> pyramidBodies = ToBodyDefs(pyramid);
+  struct Case {
+    const char* name;
+    const scene::Scene& scene;
+    WorldDef def;
+    DistributedDef dist;
+    int steps;
+  };
+  const Case cases[] = {{"soft_step circle stress", stress, SoftStepDef(stress), stressTiles, 200},
+                        {"jacobi circle stress", stress, JacobiDef(stress), stressTiles, 200},
+                        {"soft_step pyramid", pyramid, SoftStepDef(pyramid), FourTilesAround(PyramidMiddle(pyramidBodies), 15), 240}};
+  for (const Case& c : cases) {
+    uint64_t hashes[2] = {};
+    for (int run = 0; run < 2; ++run) {
+      if (run == 1) setenv("QUADRANT_ORDER_ROWS", "1", 1);
+      DistributedWorld dw(c.def, c.dist, MPI_COMM_WORLD);
+      unsetenv("QUADRANT_ORDER_ROWS");
+      dw.Load(ToBodyDefs(c.scene));
+      for (int step = 0; step < c.steps; ++step) dw.Step(c.scene.timeStep);
+      hashes[run] = dw.StateHash();
+    }
+    EXPECT_EQ(hashes[1], hashes[0]) << c.name << " at " << Size() << " ranks";
+  }
+}
+
 // On one rank the per-rank solver is the World's soft step on the same bodies: the same bits
 // (the rows are in id order there, the contacts in the World's order, and the manifolds are
 // recycled as the World recycles them).
