@@ -17,8 +17,8 @@
 //   from its own side), the same on any thread count and every run. Cost: 2n + 1 neighbour
 //   rounds for n sub-steps, plus 2. Measured (amd-epyc-2c; docs/distributed.md): one rank
 //   1.1-1.2x the World's step on circle stress and many_pyramids (medians); weak scaling to 2
-//   ranks 87-89 % on many_pyramids, 65-70 % on circle stress; the base-20 pyramid across four
-//   tiles holds its apex within 0.0025 m over 60 s at the default 4 sub-steps on 1-4 ranks.
+//   ranks 93-95 % on many_pyramids, 85-90 % on circle stress; the base-20 pyramid across four
+//   tiles holds its apex within 0.004 m over 60 s at the default 4 sub-steps on 1-4 ranks.
 // - kJacobi, the deterministic option: the state is bit-identical for any number of ranks and
 //   equal to a single-process World's with the same bodies and WorldDef (GatherStates and
 //   StateHash give that World's state and hash). k velocity iterations take k + 2 rounds. Its
@@ -112,7 +112,8 @@ struct BodyState {
 //      rank sees every body that can touch one of its own);
 //   3. each rank finds the contacts of its own bodies and solves them: kSoftStep, the soft step
 //      with three exchanges of the boundary bodies' solver states per sub-step (the last
-//      sub-step's third only; one more before Box2D-style bounces); kJacobi, the Jacobi solve
+//      sub-step's third only; one more before Box2D-style bounces; only the velocities travel
+//      unless the bounces moved bodies, as both sides integrate the same motion from them); kJacobi, the Jacobi solve
 //      (engine/src/dynamics/jacobi_solve.h): one exchange of the boundary bodies' velocities
 //      and contact counts after warm starting, one after every velocity iteration but the last;
 //   4. the global body count and an id checksum are compared with the loaded scene's by exact

@@ -21,10 +21,12 @@
 // any pass over every body every step shows (the owned list's merge, 85 instructions a body, and
 // the patch's passes over every row were 2.4M of a 15.3M-instruction step): the patch, the
 // merge and the shadows' pass visit what changed, the tiles are dealt in bisection order (at 2
-// ranks two halves; Morton order gave a corner and an L, a 45 % longer boundary), and a shadow
-// sent again carries only its pose and velocity: 2 ranks take 1.1-1.3 ms, 79-88 % of one rank's
-// speed in the sets measured on this noisy VM; what is left is mostly the ranks waiting for each
-// other at the step's 13 meetings.
+// ranks two halves; Morton order gave a corner and an L, a 45 % longer boundary), a shadow sent
+// again carries only its pose and velocity, the soft step's nine rounds only velocities (under
+// Open MPI's 4 KB eager limit: 1 us a round, 3 us above it), and the rows go back in id order
+// once the patches have scattered them (OrderRows): 2 ranks take 1.1-1.2 ms, 85-90 % of one
+// rank's speed in the sets measured on this noisy VM; what is left is mostly the ranks waiting
+// for each other at the step's 13 meetings (the one after the collide stage: 10-40 us a step).
 // On a dense scene the gap was the Jacobi solve itself (many_pyramids, 2757 boxes: 85 % of the
 // step, one rank 3x the World at 8 iterations, which do not hold the pyramids); the soft step
 // per rank (kSoftStep: the World's solver on the local arrays, shadows' states from their owners
