@@ -45,6 +45,7 @@
 #include <cstring>
 #include <string>
 #include <type_traits>
+#include <utility>
 
 #include "collision/broad_phase.h"
 #include "collision/contact_sort.h"
@@ -335,6 +336,7 @@ struct DistributedWorld::Impl {
   std::vector<int> freedRows;  // Migrate, PatchLocal: rows freed this step (the leavers', last step's shadows')
   std::vector<int> freeRows;                 // PatchLocal: rows to write, in the order they are taken
   std::vector<std::pair<int, int>> moves;    // PatchLocal: kept rows moved down (from, to), by from
+  bool contactsRenumbered = false;           // PatchLocal renumbered last step's contacts (recycling)
   // QUADRANT_ORDER_ROWS set (the tests): OrderRows after every step, alternately into id order and
   // into its reverse, so that every step starts from rows laid out anew.
   bool orderRowsAlways = std::getenv("QUADRANT_ORDER_ROWS") != nullptr;
@@ -1467,6 +1469,22 @@ void DistributedWorld::Impl::PatchLocal(Real dt) {
       if (rowOfId[local.slot[size_t(i)]] != i) throw std::logic_error("DistributedWorld: a body held twice");
     }
   }
+  // Last step's contacts name their bodies by row: renumbered to the patched rows, they are
+  // recycled as after a kept layout (FindContacts); those with a freed row (a body that left, a
+  // shadow not sent again or sent whole) go.
+  if (rankSolver && def.contactRecycleDistance > 0 && def.effects.warmStarting) {
+    size_t kept = 0;
+    for (size_t c = 0; c < contacts.size(); ++c) {
+      const int a = contacts[c].a, b = contacts[c].b;
+      if (!keepRow[size_t(a)] || !keepRow[size_t(b)]) continue;
+      if (kept != c) contacts[kept] = contacts[c];
+      contacts[kept].a = size_t(a) >= n ? MovedTo(a) : a;
+      contacts[kept].b = size_t(b) >= n ? MovedTo(b) : b;
+      ++kept;
+    }
+    contacts.resize(kept);
+    contactsRenumbered = true;
+  }
   freedRows.clear();
   stats.shadowBodies = static_cast<int>(shadowCount);
   stats.layoutPatched = 1;
@@ -1572,15 +1590,16 @@ void DistributedWorld::Impl::FindContacts(Real dt) {
     }
   }
   // kSoftStep recycles last step's manifolds as the World does (contactRecycleDistance: a pair
-  // that barely moved keeps its manifold), where last step's rows are this step's (layoutKept):
-  // the old contacts name bodies by row. Without it a resting base-20 pyramid's apex drifted
-  // 0.013 m in 59 s on one rank, as the World's does without it (0.0014 m with it).
-  // Otherwise the source is empty: the narrow phase still records what the next step's recycling
-  // compares with.
+  // that barely moved keeps its manifold), where last step's rows are this step's (layoutKept)
+  // or the patch renumbered the contacts to its rows: the old contacts name bodies by row.
+  // Without it a resting base-20 pyramid's apex drifted 0.013 m in 59 s on one rank, as the
+  // World's does without it (0.0014 m with it). After a rebuild the source is empty: the narrow
+  // phase still records what the next step's recycling compares with.
   const RecycleSource* recycle = nullptr;
+  const bool contactsRenumbered = std::exchange(this->contactsRenumbered, false);
   if (rankSolver && def.contactRecycleDistance > 0 && def.effects.warmStarting) {
     lastContacts.clear();
-    if (stats.layoutKept) lastContacts.swap(contacts);
+    if (stats.layoutKept || contactsRenumbered) lastContacts.swap(contacts);
     // The pair loop looks for a pair within its body a's run by ascending row b. Rows out of id
     // order (a patch since the last rebuild), the runs, in id order, are put in row order (each a
     // few contacts): else whether a pair is recycled depended on how the rows lay.
