@@ -469,8 +469,9 @@ TEST(Distributed, HeavyMigrationKeepsEveryBody) {
 }
 
 // The clumped stress scene (every body in the lower-left quarter of the box): with the tiles
-// dealt equally, one rank holds nearly all the work. Rebalancing every 10 steps re-deals the tiles
-// by work; the imbalance falls and the hashes stay the World's.
+// dealt equally, one rank would hold nearly all the work; Load deals them by the bodies in each.
+// Rebalancing every 10 steps re-deals the tiles by the work measured (bodies and contacts) while
+// the clump spreads; the imbalance stays low and the hashes stay the World's.
 TEST(Distributed, RebalanceClumpedSceneKeepsHashes) {
   scene::StressParams p;
   p.count = 800;
@@ -482,7 +483,7 @@ TEST(Distributed, RebalanceClumpedSceneKeepsHashes) {
   dist.bounds = s.bounds;
   dist.tilesX = dist.tilesY = 8;
   dist.rebalanceInterval = 10;
-  dist.rebalanceThreshold = Real(1.2);
+  dist.rebalanceThreshold = Real(1.01);  // Load dealt the tiles by their bodies: what is left triggers it
   SideBySide both(def, dist, bodies);
   double first = 0, last = 0;
   int rebalances = 0;
@@ -495,7 +496,7 @@ TEST(Distributed, RebalanceClumpedSceneKeepsHashes) {
   const uint64_t expected = both.WorldHash();
   EXPECT_EQ(both.dw.StateHash(), expected);
   if (Size() > 1) {
-    EXPECT_GT(first, 1.8);  // the clump sits in rank 0's tiles
+    EXPECT_LT(first, 1.3);  // Load shares the clump out (dealt by tiles alone, 1.8 and more: it sat in rank 0's)
     EXPECT_LT(last, 1.3);
     EXPECT_GE(rebalances, 1);
   }
