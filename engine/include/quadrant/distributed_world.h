@@ -3,9 +3,10 @@
 // needs MPI.
 //
 // Decomposition (after pe / waLBerla): the scene bounds are cut into a fixed grid of tiles, dealt
-// to the ranks in contiguous runs of a bisection order (the longer side halved, recursively: on
-// a power-of-two square grid Morton (Z) order; at 2x2 tiles and 4 ranks the thesis's four
-// quadrants; at 2 ranks two halves whatever the grid). A moving body belongs to the rank whose tile holds its centre of mass; static
+// to the ranks in contiguous runs of equal numbers of bodies (Load, ReadCheckpoint; Rebalance
+// by work) along a bisection order (the longer side cut, recursively, where the tiles' bodies
+// split evenly: with bodies spread evenly, Morton (Z) order on a power-of-two square grid; at
+// 2x2 tiles and 4 ranks the thesis's four quadrants; at 2 ranks two halves). A moving body belongs to the rank whose tile holds its centre of mass; static
 // bodies are known to every rank. The step's phases are described above DistributedWorld.
 //
 // Solvers (WorldDef::solver):
