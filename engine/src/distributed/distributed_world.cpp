@@ -1530,12 +1530,13 @@ void DistributedWorld::Impl::PatchLocal(Real dt) {
   }
   // Last step's contacts name their bodies by row: renumbered to the patched rows, they are
   // recycled as after a kept layout (FindContacts); those with a freed row (a body that left, a
-  // shadow not sent again or sent whole) go.
+  // shadow not sent again or sent whole) go, and so do one-point manifolds, which the pair loop
+  // never recycles (circle stress has only those: copying them was 5 us a step).
   if (rankSolver && def.contactRecycleDistance > 0 && def.effects.warmStarting) {
     size_t kept = 0;
     for (size_t c = 0; c < contacts.size(); ++c) {
       const int a = contacts[c].a, b = contacts[c].b;
-      if (!keepRow[size_t(a)] || !keepRow[size_t(b)]) continue;
+      if (contacts[c].manifold.pointCount != 2 || !keepRow[size_t(a)] || !keepRow[size_t(b)]) continue;
       if (kept != c) contacts[kept] = contacts[c];
       contacts[kept].a = size_t(a) >= n ? MovedTo(a) : a;
       contacts[kept].b = size_t(b) >= n ? MovedTo(b) : b;
