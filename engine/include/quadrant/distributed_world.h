@@ -18,7 +18,7 @@
 //   from its own side), the same on any thread count and every run. Cost: 2n + 1 neighbour
 //   rounds for n sub-steps, plus 2. Measured (amd-epyc-2c; docs/distributed.md): one rank
 //   1.1-1.2x the World's step on circle stress and many_pyramids (medians); weak scaling to 2
-//   ranks 93-95 % on many_pyramids, 85-90 % on circle stress; the base-20 pyramid across four
+//   ranks 91-95 % on many_pyramids, 85-90 % on circle stress; the base-20 pyramid across four
 //   tiles holds its apex within 0.004 m over 60 s at the default 4 sub-steps on 1-4 ranks.
 // - kJacobi, the deterministic option: the state is bit-identical for any number of ranks and
 //   equal to a single-process World's with the same bodies and WorldDef (GatherStates and
