@@ -228,7 +228,6 @@ struct DistributedWorld::Impl {
   Real tileW = 0, tileH = 0;
   double perTileX = 0, perTileY = 0;  // 1 / tile width and height: a body's tile by a multiplication
   std::vector<int> tileOwner;  // by tile index tx + ty * tilesX
-  std::vector<int> tileOrder;  // tile indices in bisection order (the order ranks get them in)
   std::vector<int64_t> tileCost;  // this rank's work per tile in the last step (load balance)
   int64_t stepCount = 0;
   std::vector<int> ownedTile;  // owned index -> the tile its centre was in when the step began
@@ -491,7 +490,7 @@ struct DistributedWorld::Impl {
   AABB BoxOf(const Record& r, Real dt) const { return SweptBox(r.shape, r.xf, r.vel, r.boundRadius, def, dt); }
 
   void DealTiles(const std::vector<int64_t>& cost);
-  std::pair<std::vector<int>, std::vector<int>> Deal(const std::vector<int64_t>& cost) const;
+  std::vector<int> Deal(const std::vector<int64_t>& cost) const;
   std::vector<int64_t> BodyCost(std::span<const Vec2> at) const;
   void FindNeighbours();
   void Rebalance(bool force);
@@ -587,11 +586,9 @@ DistributedWorld::DistributedWorld(const WorldDef& def, const DistributedDef& di
 // (every rank at least one tile): rank r's run ends at the first tile whose middle passes
 // (r + 1) / P of the total. Equal costs give equal numbers of tiles.
 // The tiles in bisection order weighted by cost, dealt in contiguous runs of equal cost (a rank
-// gets at least one tile): the order and every tile's owner, nothing changed.
-std::pair<std::vector<int>, std::vector<int>> DistributedWorld::Impl::Deal(const std::vector<int64_t>& cost) const {
-  std::pair<std::vector<int>, std::vector<int>> dealt;
-  std::vector<int>& order = dealt.first;
-  std::vector<int>& owner = dealt.second;
+// gets at least one tile): every tile's owner, nothing changed.
+std::vector<int> DistributedWorld::Impl::Deal(const std::vector<int64_t>& cost) const {
+  std::vector<int> order, owner;
   BisectionOrder(0, dist.tilesX, 0, dist.tilesY, dist.tilesX, cost, order);
   const int tiles = static_cast<int>(order.size());
   std::vector<int64_t> prefix(size_t(tiles) + 1, 0);
@@ -610,13 +607,11 @@ std::pair<std::vector<int>, std::vector<int>> DistributedWorld::Impl::Deal(const
     for (int i = start; i < end; ++i) owner[size_t(order[size_t(i)])] = r;
     start = end;
   }
-  return dealt;
+  return owner;
 }
 
 void DistributedWorld::Impl::DealTiles(const std::vector<int64_t>& cost) {
-  auto [order, owner] = Deal(cost);
-  tileOrder.swap(order);
-  tileOwner.swap(owner);
+  tileOwner = Deal(cost);
   FindNeighbours();
 }
 
@@ -792,7 +787,7 @@ void DistributedWorld::Load(std::span<const BodyDef> bodies) {
   for (const BodyDef& b : bodies) {
     if (b.type != BodyType::kStatic) moving.push_back(b.position);
   }
-  auto [order, tileOwner] = w.Deal(w.BodyCost(moving));
+  std::vector<int> tileOwner = w.Deal(w.BodyCost(moving));
   std::vector<Vec2>().swap(moving);
   std::vector<Record> statics, owned;
   uint64_t count = 0, checksum = 0;
@@ -824,7 +819,6 @@ void DistributedWorld::Load(std::span<const BodyDef> bodies) {
     checksum += MixId(r.id);
     if (tileOwner[size_t(w.TileX(r.center.x) + w.TileY(r.center.y) * w.dist.tilesX)] == w.rank) owned.push_back(r);
   }
-  w.tileOrder.swap(order);
   w.tileOwner.swap(tileOwner);
   w.FindNeighbours();
   w.statics.swap(statics);
@@ -2103,7 +2097,7 @@ void DistributedWorld::ReadCheckpoint(const std::string& path) {
   Require(anyBad == 0, "DistributedWorld::ReadCheckpoint: " +
                            (error.empty() ? std::string("another rank could not read the checkpoint") : error));
   // The tiles dealt by the bodies in each, as Load deals them; then this rank's bodies.
-  auto [order, tileOwner] = w.Deal(w.BodyCost(moving));
+  std::vector<int> tileOwner = w.Deal(w.BodyCost(moving));
   for (size_t at = recordsAt, i = 0; i < size_t(count) + statics.size(); ++i) {
     const Record r = Take<Record>(file, at);
     if (r.type != BodyType::kStatic && tileOwner[size_t(w.TileX(r.center.x) + w.TileY(r.center.y) * w.dist.tilesX)] == w.rank) {
@@ -2117,7 +2111,6 @@ void DistributedWorld::ReadCheckpoint(const std::string& path) {
     return !std::binary_search(ids.begin(), ids.end(), uint32_t(e.key >> 32)) &&
            !std::binary_search(ids.begin(), ids.end(), uint32_t(e.key));
   });
-  w.tileOrder.swap(order);
   w.tileOwner.swap(tileOwner);
   w.FindNeighbours();
   w.statics.swap(statics);
