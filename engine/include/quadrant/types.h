@@ -482,6 +482,9 @@ struct Counters {
   /// soft_step with joints: this step kept last step's joint colouring (the joints and which of
   /// their ends move are unchanged) instead of colouring them again.
   bool jointColoringKept = false;
+  /// soft_step: the bundles of contact islands this step's rows ran in, each on one thread through
+  /// every sub-step (0: colour by colour; bundles need 4 threads or more and a sparse scene).
+  int rowBundles = 0;
 };
 
 /// A contact as read back for validation and drawing.

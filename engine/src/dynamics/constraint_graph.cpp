@@ -49,4 +49,24 @@ void ConstraintGraph::Finish(StageRunner& run, int bodyCount, int m, bool clearL
   }
 }
 
+void ConstraintGraph::SetBundles(std::span<const int> bundleOfContact, int bundles) {
+  bundles_ = bundles;
+  const size_t stride = size_t(bundles) + 1;
+  bundleStart_.assign(size_t(kColors) * stride, 0);
+  bundleFill_.resize(size_t(bundles));
+  bundleScratch_.resize(order_.size());
+  for (int color = 0; color < kColors; ++color) {
+    const int begin = colorStart_[color], end = colorStart_[color + 1];
+    int* start = &bundleStart_[size_t(color) * stride];
+    // A counting sort of the colour's constraints by bundle, stable.
+    for (int i = begin; i < end; ++i) ++start[bundleOfContact[size_t(order_[i])] + 1];
+    start[0] = begin;
+    for (int k = 0; k < bundles; ++k) start[k + 1] += start[k];
+    if (end - begin < 2) continue;
+    std::copy(start, start + bundles, bundleFill_.begin());
+    for (int i = begin; i < end; ++i) bundleScratch_[size_t(bundleFill_[size_t(bundleOfContact[size_t(order_[i])])]++)] = order_[i];
+    std::copy(bundleScratch_.begin() + begin, bundleScratch_.begin() + end, order_.begin() + begin);
+  }
+}
+
 }  // namespace quadrant

@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <span>
 #include <utility>
 #include <vector>
 
@@ -79,6 +80,24 @@ class ConstraintGraph {
     if (begin < end) std::fill(bodyColors_.begin() + begin, bodyColors_.begin() + end, uint64_t(0));
   }
 
+  // Contact `contact`'s dynamic ends this step (Color's gather): body indices, -1 for an end
+  // that is static, kinematic or asleep.
+  std::pair<int, int> Ends(int contact) const { return ends_[size_t(contact)]; }
+  // Whether any constraint fell into the overflow colour (kColors) this step.
+  bool Overflowed() const { return colorStart_[kColors + 1] > colorStart_[kColors]; }
+
+  // Bundles: disjoint sets of constraints, no dynamic body in two of them (SoftStepSolver's
+  // bundles of contact islands). SetBundles orders each colour's constraints by bundle (stably;
+  // within a colour the order changes no bit, as no two share a dynamic body), so a bundle's
+  // constraints of one colour are [BundleBegin(color, k), BundleBegin(color, k + 1)), and
+  // ForEachColor then runs bundle by bundle. Not with an overflow colour (its constraints may
+  // share bodies and are solved in order). Until ClearBundles, which every step that does not
+  // bundle calls; the order stays (a kept colouring reuses it).
+  void SetBundles(std::span<const int> bundleOfContact, int bundles);
+  void ClearBundles() { bundles_ = 0; }
+  int Bundles() const { return bundles_; }
+  int BundleBegin(int color, int k) const { return bundleStart_[size_t(color) * size_t(bundles_ + 1) + size_t(k)]; }
+
   // The number of constraints coloured, and the contact of the k-th in colour order.
   int Count() const { return static_cast<int>(order_.size()); }
   int ContactOf(int k) const { return order_[k]; }
@@ -93,8 +112,27 @@ class ConstraintGraph {
   // iterations in one region too, the base-100 pyramid went from 71 jobs per step to 26. Chunks
   // of kColorGrain constraints are claimed dynamically. The overflow colour is one chunk (its
   // rows may share bodies: in order, on one thread).
+  //
+  // With bundles (SetBundles) the colours run bundle by bundle instead: a thread takes a bundle
+  // and walks its constraints through every colour (and repeat) alone, with no barrier between
+  // colours. The same bits: a bundle's constraints share no dynamic body with another's, and
+  // each body meets its constraints in colour order either way.
   template <class Fn>
   void ForEachColor(StageRunner& run, Fn&& fn, int repeat = 1) {
+    if (bundles_ > 0) {
+      const TaskSystem::StagePlan plan[1] = {{bundles_, 1, false}};  // a bundle a claim
+      run.Stages(Stage::kSolve, plan, 2, [&](int, int kb, int ke) {
+        for (int k = kb; k < ke; ++k) {
+          for (int r = 0; r < repeat; ++r) {
+            for (int color = 0; color < kColors; ++color) {
+              const int b = BundleBegin(color, k), e = BundleBegin(color, k + 1);
+              if (b < e) fn(b, e);
+            }
+          }
+        }
+      });
+      return;
+    }
     stagePlan_.clear();
     stageFirst_.clear();
     const int overflowBegin = colorStart_[kColors], overflow = colorStart_[kColors + 1] - overflowBegin;
@@ -121,6 +159,9 @@ class ConstraintGraph {
   std::vector<int> stageFirst_;                   // the first item of each stage
   std::vector<std::pair<int, int>> ends_;         // per contact: its dynamic bodies, -1 for others
   std::vector<int> changed_;                      // per worker: ends that differ from last step's
+  int bundles_ = 0;                               // SetBundles; 0: none
+  std::vector<int> bundleStart_;                  // per colour (below kColors), per bundle, and one past
+  std::vector<int> bundleFill_, bundleScratch_;
   int lastCount_ = -1;                            // the contacts coloured last step (-1: none yet)
   bool comparable_ = false;                       // this step has as many contacts as the last
 

@@ -9,7 +9,8 @@
 //   solver_soft_step.cpp       the step as a list of stages, and how the passes are scheduled;
 //   soft_step_rows.cpp         the contact rows, eight to a group per colour (BuildRows);
 //   soft_step_state.cpp        the solver state of the bodies: load, sub-step integration, store;
-//   soft_step_restitution.cpp  Box2D-style restitution and the bounce shifts on the states.
+//   soft_step_restitution.cpp  Box2D-style restitution and the bounce shifts on the states;
+//   soft_step_bundles.cpp      the rows of a sparse scene in bundles of contact islands.
 // The scheduling templates every part uses (ForEachGroup, BodyPass) are here, inline.
 //
 // Promises: the same bits on any thread count and any row width (one row, four with SSE2, eight
@@ -85,6 +86,7 @@ class SoftStepSolver final : public Solver {
  public:
   const char* Name() const override { return "soft_step"; }
   bool JointColoringKept() const override { return jointColoringKept_; }
+  int RowBundles() const override { return bundles_; }
   void Step(StepContext& ctx) override;
 
   /// A call between passes, on the calling thread, with the bodies' solver states (by dense body
@@ -120,6 +122,15 @@ class SoftStepSolver final : public Solver {
   template <bool kRotation>
   void CorrectStatePositions(StageRunner& run, const WorldDef& def, bool simd);
   void StoreRowImpulses(StageRunner& run);
+
+  // Bundles (soft_step_bundles.cpp): where this step's rows fall into many small contact
+  // islands, they are dealt into bundles that share no dynamic body, and each region of passes
+  // runs bundle by bundle (EndRegion) instead of colour by colour with a barrier per colour.
+  // Returns whether this step bundles (bundles_ > 0).
+  bool FormBundles(StageRunner& run, const StepContext& ctx);
+  void LayOutBundleGroups();
+  void OrderActiveByBundle();
+  void RunRegionByBundle(StageRunner& run);
 
   // The rows (soft_step_rows.cpp).
   template <bool kRotation, bool kLean>
@@ -178,6 +189,7 @@ class SoftStepSolver final : public Solver {
       regionPlan_.push_back({count, c == ConstraintGraph::kColors ? count : kJointGrain});
       regionFirst_.push_back(first);
       regionPass_.push_back(pass);
+      regionOnBodies_.push_back(0);
     }
   }
 
@@ -200,6 +212,7 @@ class SoftStepSolver final : public Solver {
   // and EndRegion runs them as one job; outside a region they run at once.
   void BeginRegion();
   void EndRegion(StageRunner& run);
+  void ClearRegion();
   void PlanPassStages();
 
   // fn(lanes, group, lane): lanes is a Real (one row: the given lane), an F4 (the four rows from
@@ -210,6 +223,12 @@ class SoftStepSolver final : public Solver {
   void ForEachGroup(StageRunner& run, bool simd, Fn&& fn) {
     if (collecting_) {
       QueueGroups(simd, std::forward<Fn>(fn));
+      return;
+    }
+    if (bundles_ > 0) {  // a region of its own, run bundle by bundle
+      BeginRegion();
+      QueueGroups(simd, std::forward<Fn>(fn));
+      EndRegion(run);
       return;
     }
     stagePlan_.clear();
@@ -260,6 +279,7 @@ class SoftStepSolver final : public Solver {
       regionPlan_.push_back({part.count, part.grain});
       regionFirst_.push_back(part.first);
       regionPass_.push_back(pass);
+      regionOnBodies_.push_back(0);
     }
   }
 
@@ -278,6 +298,7 @@ class SoftStepSolver final : public Solver {
     regionFns_.emplace_back([fn](int b, int e) { fn(b, e, 0); });
     regionPlan_.push_back({count, kBodyGrain});
     regionFirst_.push_back(0);
+    regionOnBodies_.push_back(1);
   }
 
   int ActiveCount() const { return static_cast<int>(active_.size()); }
@@ -307,6 +328,7 @@ class SoftStepSolver final : public Solver {
   bool collecting_ = false;      // between BeginRegion and EndRegion
   std::vector<TaskSystem::StagePlan> regionPlan_;
   std::vector<int> regionFirst_, regionPass_;
+  std::vector<uint8_t> regionOnBodies_;  // per region stage: over active_ (1) or over groups (0)
   std::vector<std::function<void(int, int)>> regionFns_;
   std::vector<int> active_;          // the bodies with inRows_ set, ascending
   std::vector<uint32_t> supported_;  // MarkRow: stamp_ for a supported body this step
@@ -327,6 +349,28 @@ class SoftStepSolver final : public Solver {
   const BodyInverseMass* inv_ = nullptr;  // this step's bodies'
   std::vector<RelaxBiasRows> relaxBias_;  // per group: the relax passes' speculative bias (RelaxBias)
   std::vector<int> groupStart_;           // per colour: its first group (and one past the last colour)
+  // Bundles (FormBundles): their count (0: this step does not bundle); per colour and bundle the
+  // first group (bundleGroupStart_, like ConstraintGraph::BundleBegin); per group its rows
+  // [groupRowBegin_, groupRowEnd_) in colour order; per bundle its first body in active_.
+  int bundles_ = 0;
+  std::vector<int> bundleGroupStart_, groupRowBegin_, groupRowEnd_, bundleBodyStart_;
+  // Per body, FormBundles' union-find (parent, and island at a root; -1 between steps) and the
+  // bundle of a body in rows: one record, so each end a contact names is one cache line.
+  struct BundleNode {
+    int parent = -1, island = -1, bundle = 0;
+  };
+  std::vector<BundleNode> bundleNodes_;
+  std::vector<int> islandRows_, bundleOfIsland_, bundleOfContact_;
+  std::vector<int> bundleFill_, activeScratch_;
+  // Bundled, the free bodies' pass over [0, freeCount_) runs beside the first region's bundles,
+  // in blocks the threads take after them (RunRegionByBundle), as StageRunner::Beside would.
+  std::function<void(int, int)> freePass_;
+  int freeCount_ = 0;
+  // Bundled, the sub-steps' regions are queued (EndRegion runs nothing) and run as one after the
+  // last (SolveContacts): every stage of every sub-step for a bundle, by one thread. The queued
+  // passes hold their parameters by value.
+  bool deferRegions_ = false;
+  SharedFlag kinematicInRows_;  // LoadFixedStates: a moving kinematic body is in active_ this step
   std::vector<StagePart> passStages_;     // PlanPassStages
   std::vector<TaskSystem::StagePlan> stagePlan_;  // BuildRows' and ForEachGroup's stages
   std::vector<int> stageFirst_;                   // the first group of each of those stages
@@ -387,6 +431,7 @@ class SoftStepSolver final : public Solver {
       regionPlan_.push_back({count, 1});
       regionFirst_.push_back(first);
       regionPass_.push_back(pass);
+      regionOnBodies_.push_back(0);
     }
   }
   Real jointInvH_ = 0;  // kept only with restitution (Run: lean)

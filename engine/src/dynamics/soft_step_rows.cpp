@@ -262,10 +262,14 @@ void SoftStepSolver::FillLeanGroup(const StepContext& ctx, SoftRowGroup& g, int 
 template <bool kRotation, bool kLean>
 void SoftStepSolver::BuildRows(StepContext& ctx, const Softness& soft, const Softness& staticSoft, Real massLimit) {
   StageRunner& run = *ctx.run;
-  groupStart_.assign(ConstraintGraph::kColors + 2, 0);
-  for (int k = 0; k <= ConstraintGraph::kColors; ++k) {
-    const int count = graph_.ColorBegin(k + 1) - graph_.ColorBegin(k);
-    groupStart_[k + 1] = groupStart_[k] + (count + kGroupRows - 1) / kGroupRows;
+  if (bundles_ > 0) {
+    LayOutBundleGroups();  // a bundle's groups hold its rows only
+  } else {
+    groupStart_.assign(ConstraintGraph::kColors + 2, 0);
+    for (int k = 0; k <= ConstraintGraph::kColors; ++k) {
+      const int count = graph_.ColorBegin(k + 1) - graph_.ColorBegin(k);
+      groupStart_[k + 1] = groupStart_[k] + (count + kGroupRows - 1) / kGroupRows;
+    }
   }
   groups_.resize(groupStart_[ConstraintGraph::kColors + 1]);
   relaxBias_.resize(groups_.size());
@@ -279,16 +283,17 @@ void SoftStepSolver::BuildRows(StepContext& ctx, const Softness& soft, const Sof
     {
       for (int gi = gb; gi < ge; ++gi) {
         while (groupStart_[k + 1] <= gi) ++k;
-        const int begin = groupStart_[k];
+        // The group's rows: [first, end) in colour order.
+        const int first = bundles_ > 0 ? groupRowBegin_[gi] : graph_.ColorBegin(k) + (gi - groupStart_[k]) * kGroupRows;
+        const int end = bundles_ > 0 ? groupRowEnd_[gi] : graph_.ColorBegin(k + 1);
         SoftRowGroup& g = groups_[gi];
         if constexpr (kLean && kRotation) {
-          const int first = graph_.ColorBegin(k) + (gi - begin) * kGroupRows;
-          FillLeanGroup(ctx, g, first, graph_.ColorBegin(k + 1), soft, staticSoft, massLimit);
+          FillLeanGroup(ctx, g, first, end, soft, staticSoft, massLimit);
           continue;
         }
         for (int lane = 0; lane < kGroupRows; ++lane) {
-          const int c = graph_.ColorBegin(k) + (gi - begin) * kGroupRows + lane;
-          if (c >= graph_.ColorBegin(k + 1)) {
+          const int c = first + lane;
+          if (c >= end) {
             PadLane(g, lane);
             continue;
           }

@@ -284,6 +284,8 @@ void SoftStepSolver::LoadFixedStates(StageRunner& run, const Bodies& bodies, boo
   states_.resize(count);
   warmNext_.resize(count);  // new ones zero, the others zeroed by the sub-steps that used them
   inRows_.resize(count + kFlagPad);  // padded: the scans below read several flags at a time
+  std::atomic<bool>& kinematic = kinematicInRows_.flag;
+  kinematic.store(false, std::memory_order_relaxed);
   run.Dynamic(Stage::kIntegrate, count, run.MinItems(), kBodyGrain, [&](int b, int e) {
     graph_.ClearColors(b, e);
     // Raw pointers: with the vectors' own, every store reloaded their data pointers.
@@ -302,6 +304,7 @@ void SoftStepSolver::LoadFixedStates(StageRunner& run, const Bodies& bodies, boo
         states[i] = SolverBody{vel[i].v, vel[i].w, 0, Vec2{}, Rot{}};
         // Moves(): a kinematic body is never static, so without sleep it moves.
         kinematicMoving = type[i] == BodyType::kKinematic && (!sleep || awake[i] != 0);
+        if (kinematicMoving && !kinematic.load(std::memory_order_relaxed)) kinematic.store(true, std::memory_order_relaxed);
       }
       inRows[i] = kinematicMoving;
     }
@@ -331,6 +334,7 @@ void SoftStepSolver::LoadStates(StageRunner& run, const Bodies& bodies) {
     }
   }
   active_.resize(listed);
+  if (bundles_ > 0) OrderActiveByBundle();  // each bundle's bodies together
   // Where the rows' bodies start (StoreRowStates adds their motion to it); the free bodies
   // need no snapshot (MoveFree).
   center0_.resize(count);

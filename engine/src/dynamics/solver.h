@@ -19,6 +19,7 @@ class Solver {
   virtual const char* Name() const = 0;
   /// Whether the last Step kept the joint colouring of the step before (Counters::jointColoringKept).
   virtual bool JointColoringKept() const { return false; }
+  virtual int RowBundles() const { return 0; }  // Counters::rowBundles
 };
 
 std::unique_ptr<Solver> MakeThesisSolver();

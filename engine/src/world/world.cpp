@@ -859,6 +859,7 @@ void World::Impl::RunPipeline(Real dt) {
 
   CountContacts(static_cast<int>(pairs.size()));
   counters.jointColoringKept = solver->JointColoringKept();
+  counters.rowBundles = solver->RowBundles();
 }
 
 // The pre-solve pass: what the solvers do not know of, as velocity changes before they run (so no

@@ -1,0 +1,203 @@
+// The soft step's bundles (soft_step.h): the rows of a sparse scene run bundle by bundle.
+//
+// Contract: where the rows fall into many contact islands (connected through dynamic bodies;
+// static, kinematic and sleeping bodies are only read), FormBundles deals the islands into
+// bundles of about kBundlesPerWorker a thread, orders each colour's rows by bundle
+// (ConstraintGraph::SetBundles) and lays each bundle's rows of a colour into groups of their own
+// (LayOutBundleGroups: a group never mixes bundles). Every region of passes then runs bundle by
+// bundle (RunRegionByBundle): a thread takes a bundle and walks all the region's stages for it,
+// its bodies' passes and its groups colour by colour, with no barrier between the stages. The
+// bits are the ones colour by colour gives: a bundle shares no dynamic body with another, each
+// body meets its rows in colour order and its integrations in pass order either way, and a row's
+// lane never changes its arithmetic (soft_rows.h). Only where no row needs the whole world at
+// once: no joints, no state exchange, no Box2D position pass or bounce, no overflow colour, no
+// moving kinematic body (its state is integrated by one bundle and read by any other).
+//
+// Why: on a sparse scene the rows are a small part of the step that colour by colour cost a
+// barrier per colour and pass, and beside the free bodies (StageRunner::Beside) ran on one
+// thread: 64000 circles, 1274 contacts, the lone part took 1.05 ms of a 6.2 ms step, which capped
+// the solve stage at about 1.9x at any thread count (tools/quadrant scaling: 3.29x predicted for
+// the step at 8 threads). The cost: a bundle's last group of each colour is padded (a few rows'
+// work per bundle and colour) and the islands are found on one thread (a union-find over the
+// contacts, about 10 us for 1274).
+#include <algorithm>
+
+#include "dynamics/soft_step.h"
+
+namespace quadrant {
+namespace {
+
+// Bundles per thread: enough for the threads to even out islands of different sizes, few enough
+// that the padding of each bundle's last group per colour stays small.
+constexpr int kBundlesPerWorker = 3;
+// Blocks of the free bodies' pass per thread, beside the first region's bundles; with the bundles
+// at most 4 a thread (StageChunks), so each chunk is one bundle or one block.
+constexpr int kFreeBlocksPerWorker = 1;
+// From this many threads: on 2 (a 2-core VM, seven interleaved pairs each) the bundles cost more
+// than the lone part beside the free bodies (solve stage, 64000 circles 1.18 -> 1.29 ms a step,
+// 16000 circles 0.215 -> 0.277, polygons 64000 1.77 -> 2.08, the free bodies' pass moved into
+// it): finding the islands is a serial 0.1-0.15 ms there, and two threads gain little from the
+// barriers saved. The scaling model's gain is from 4 threads on (the head of this file).
+constexpr int kMinBundleWorkers = 4;
+// The fewest rows worth a bundle of their own (a few microseconds of sub-steps).
+constexpr int kMinBundleRows = 32;
+
+}  // namespace
+
+bool SoftStepSolver::FormBundles(StageRunner& run, const StepContext& ctx) {
+  bundles_ = 0;
+  graph_.ClearBundles();
+  const int m = graph_.Count(), workers = run.Workers();
+  if (workers < kMinBundleWorkers || m < 2 * kMinBundleRows || graph_.Overflowed() ||
+      kinematicInRows_.flag.load(std::memory_order_relaxed)) {
+    return false;
+  }
+  int bundles = 0;
+  run.Serial(Stage::kSolve, [&] {
+    bundleNodes_.resize(size_t(ctx.bodies->Count()));  // parent and island -1 between steps
+    BundleNode* node = bundleNodes_.data();
+    auto find = [node](int x) {
+      while (node[x].parent != x) {
+        node[x].parent = node[node[x].parent].parent;  // path halving
+        x = node[x].parent;
+      }
+      return x;
+    };
+    for (int c = 0; c < m; ++c) {
+      const auto [a, b] = graph_.Ends(c);
+      if (a >= 0 && node[a].parent < 0) node[a].parent = a;
+      if (b >= 0 && node[b].parent < 0) node[b].parent = b;
+      if (a >= 0 && b >= 0) {
+        const int ra = find(a), rb = find(b);
+        if (ra != rb) node[std::max(ra, rb)].parent = std::min(ra, rb);
+      }
+    }
+    // Islands numbered in contact order; a contact with no dynamic end writes nothing and may go
+    // anywhere (bundle 0).
+    islandRows_.clear();
+    bundleOfContact_.resize(size_t(m));
+    for (int c = 0; c < m; ++c) {
+      const auto [a, b] = graph_.Ends(c);
+      const int x = a >= 0 ? a : b;
+      if (x < 0) {
+        bundleOfContact_[size_t(c)] = -1;
+        continue;
+      }
+      int& island = node[find(x)].island;
+      if (island < 0) {
+        island = static_cast<int>(islandRows_.size());
+        islandRows_.push_back(0);
+      }
+      ++islandRows_[size_t(island)];
+      bundleOfContact_[size_t(c)] = island;
+    }
+    // Islands dealt in order into bundles of at least `target` rows.
+    const int target = std::max(kMinBundleRows, (m + kBundlesPerWorker * workers - 1) / (kBundlesPerWorker * workers));
+    bundleOfIsland_.resize(islandRows_.size());
+    int rows = 0;
+    for (size_t i = 0; i < islandRows_.size(); ++i) {
+      bundleOfIsland_[i] = bundles;
+      rows += islandRows_[i];
+      if (rows >= target) {
+        ++bundles;
+        rows = 0;
+      }
+    }
+    bundles += rows > 0 ? 1 : 0;
+    // Each contact's and each body's bundle; the union-find back to -1 for the next step (every
+    // root is an end of some contact).
+    for (int c = 0; c < m; ++c) {
+      int& bundle = bundleOfContact_[size_t(c)];
+      bundle = bundle < 0 ? 0 : bundleOfIsland_[size_t(bundle)];
+      const auto [a, b] = graph_.Ends(c);
+      for (const int x : {a, b}) {
+        if (x >= 0) node[x] = BundleNode{-1, -1, bundle};
+      }
+    }
+  });
+  if (bundles < 2) return false;
+  run.Serial(Stage::kSolve, [&] { graph_.SetBundles(bundleOfContact_, bundles); });
+  bundles_ = bundles;
+  return true;
+}
+
+// BuildRows' layout with bundles: colour by colour as without, and within a colour bundle by
+// bundle, each bundle's rows in groups of their own (its last one padded).
+void SoftStepSolver::LayOutBundleGroups() {
+  constexpr int kColors = ConstraintGraph::kColors;
+  const size_t stride = size_t(bundles_) + 1;
+  groupStart_.assign(kColors + 2, 0);
+  bundleGroupStart_.assign(size_t(kColors) * stride, 0);
+  groupRowBegin_.clear();
+  groupRowEnd_.clear();
+  int g = 0;
+  for (int color = 0; color < kColors; ++color) {
+    groupStart_[size_t(color)] = g;
+    int* start = &bundleGroupStart_[size_t(color) * stride];
+    for (int k = 0; k < bundles_; ++k) {
+      start[k] = g;
+      const int end = graph_.BundleBegin(color, k + 1);
+      for (int r = graph_.BundleBegin(color, k); r < end; r += kGroupRows, ++g) {
+        groupRowBegin_.push_back(r);
+        groupRowEnd_.push_back(std::min(r + kGroupRows, end));
+      }
+    }
+    start[bundles_] = g;
+  }
+  groupStart_[kColors] = groupStart_[kColors + 1] = g;  // no overflow colour (FormBundles)
+}
+
+// active_ (in index order) regrouped by bundle, each bundle's bodies still in index order.
+void SoftStepSolver::OrderActiveByBundle() {
+  bundleBodyStart_.assign(size_t(bundles_) + 1, 0);
+  for (const int i : active_) ++bundleBodyStart_[size_t(bundleNodes_[size_t(i)].bundle) + 1];
+  for (int k = 0; k < bundles_; ++k) bundleBodyStart_[size_t(k) + 1] += bundleBodyStart_[size_t(k)];
+  bundleFill_.assign(bundleBodyStart_.begin(), bundleBodyStart_.end() - 1);
+  activeScratch_.resize(active_.size());
+  for (const int i : active_) activeScratch_[size_t(bundleFill_[size_t(bundleNodes_[size_t(i)].bundle)]++)] = i;
+  active_.swap(activeScratch_);
+}
+
+// The queued region (BeginRegion .. EndRegion) bundle by bundle: each stage's items that belong
+// to the bundle, in stage order. A stage over groups may span several colours (PlanPassStages
+// joins small ones): the bundle's groups of each, in colour order.
+void SoftStepSolver::RunRegionByBundle(StageRunner& run) {
+  constexpr int kColors = ConstraintGraph::kColors;
+  const int stages = static_cast<int>(regionPlan_.size());
+  if (stages == 0) return;
+  const size_t stride = size_t(bundles_) + 1;
+  // The free bodies' blocks after the bundles: the caller claims from the front, and the bundles
+  // (uneven) are better started first.
+  const int freeBlocks = freeCount_ > 0 ? std::min(kFreeBlocksPerWorker * run.Workers(), (freeCount_ + kBodyGrain - 1) / kBodyGrain) : 0;
+  // One item a claim (runs = false), as StageRunner::Beside: a thread that took several bundles
+  // at once held work the others could have run meanwhile.
+  const TaskSystem::StagePlan plan[1] = {{bundles_ + freeBlocks, 1, false}};
+  run.Stages(Stage::kSolve, plan, 2, [&](int, int kb, int ke) {
+    for (int k = kb; k < ke; ++k) {
+      if (k >= bundles_) {
+        const int b = BlockBegin(freeCount_, freeBlocks, k - bundles_), e = BlockBegin(freeCount_, freeBlocks, k - bundles_ + 1);
+        if (b < e) freePass_(b, e);
+        continue;
+      }
+      for (int s = 0; s < stages; ++s) {
+        const int first = regionFirst_[size_t(s)], end = first + regionPlan_[size_t(s)].count;
+        const std::function<void(int, int)>& fn = regionFns_[size_t(regionPass_[size_t(s)])];
+        if (regionOnBodies_[size_t(s)] != 0) {
+          const int lo = std::max(first, bundleBodyStart_[size_t(k)]), hi = std::min(end, bundleBodyStart_[size_t(k) + 1]);
+          if (lo < hi) fn(lo, hi);
+          continue;
+        }
+        int color = static_cast<int>(std::upper_bound(groupStart_.begin(), groupStart_.begin() + kColors + 1, first) -
+                                     groupStart_.begin()) - 1;
+        for (; color < kColors && groupStart_[size_t(color)] < end; ++color) {
+          const int* start = &bundleGroupStart_[size_t(color) * stride];
+          const int gb = std::max(first, start[k]), ge = std::min(end, start[k + 1]);
+          if (gb < ge) fn(gb, ge);
+        }
+      }
+    }
+  });
+  freeCount_ = 0;  // run once
+}
+
+}  // namespace quadrant

@@ -1,0 +1,124 @@
+// soft_step's bundles of contact islands (soft_step_bundles.cpp): on a sparse scene at 4 threads
+// or more the rows run bundle by bundle, each bundle through every sub-step on one thread. The
+// state must be the one colour by colour gives, bit for bit, at every thread count; and where a
+// row would need the whole world (a moving kinematic body in rows, joints) no bundle is formed.
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <random>
+
+#include "quadrant/joints.h"
+#include "quadrant/world.h"
+
+namespace quadrant {
+namespace {
+
+struct Outcome {
+  uint64_t hash = 0;
+  int bundledSteps = 0;  // steps whose Counters::rowBundles was above 0
+};
+
+enum class Extra { kNone, kKinematic, kJoint };
+
+// Sixty stacks of three boxes on the ground (the islands), with 600 circles falling from above
+// (free bodies, until they land); restitution on every fourth circle, so both the lean rows and
+// the constraint list are taken; or the elastic gas of circle stress (restitution, no gravity).
+Outcome Sparse(int threads, bool gas, Extra extra = Extra::kNone) {
+  WorldDef def;
+  def.threadCount = threads;
+  def.minParallelItems = 8;  // parallel sections split even when small
+  if (gas) {
+    def.effects.gravity = false;
+    def.effects.friction = false;
+    def.restitutionThreshold = 0;
+  }
+  World world(def);
+  BodyDef ground;
+  ground.position = {0, -0.5f};
+  ground.shape = ShapeDef::Box(200, 0.5f);
+  world.CreateBody(ground);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> unit(-1, 1);
+  if (gas) {
+    for (int i = 0; i < 1500; ++i) {
+      BodyDef b;
+      b.type = BodyType::kDynamic;
+      b.position = {Real(i % 50) * 1.1f - 27, 1 + Real(i / 50) * 1.1f};
+      b.linearVelocity = {4 * unit(rng), 4 * unit(rng)};
+      b.shape = ShapeDef::MakeCircle(0.5f);
+      b.shape.restitution = 1;
+      world.CreateBody(b);
+    }
+  } else {
+    for (int s = 0; s < 60; ++s) {
+      for (int k = 0; k < 3; ++k) {
+        BodyDef b;
+        b.type = BodyType::kDynamic;
+        b.position = {Real(s) * 3 - 90, 0.5f + Real(k)};
+        b.shape = ShapeDef::Box(0.5f, 0.5f);
+        world.CreateBody(b);
+      }
+    }
+    for (int i = 0; i < 600; ++i) {
+      BodyDef b;
+      b.type = BodyType::kDynamic;
+      b.position = {Real(i % 60) * 3 - 89.5f + 0.3f * unit(rng), 12 + Real(i / 60) * 1.2f};
+      b.shape = ShapeDef::MakeCircle(0.4f);
+      b.shape.restitution = i % 4 == 0 ? 0.5f : 0.0f;
+      world.CreateBody(b);
+    }
+  }
+  if (extra == Extra::kKinematic) {  // a moving kinematic body the rows read
+    BodyDef k;
+    k.type = BodyType::kKinematic;
+    k.position = {-85, 3.5f};
+    k.linearVelocity = {0.5f, 0};
+    k.shape = ShapeDef::Box(1, 0.25f);
+    world.CreateBody(k);
+  }
+  if (extra == Extra::kJoint) {
+    BodyDef a;
+    a.type = BodyType::kDynamic;
+    a.position = {100, 5};
+    a.shape = ShapeDef::MakeCircle(0.3f);
+    const BodyId first = world.CreateBody(a);
+    a.position = {101, 5};
+    const BodyId second = world.CreateBody(a);
+    DistanceJointDef j;
+    j.bodyA = first;
+    j.bodyB = second;
+    j.length = 1;
+    world.CreateDistanceJoint(j);
+  }
+  Outcome run;
+  for (int s = 0; s < 120; ++s) {
+    world.Step(1.0f / 60);
+    run.bundledSteps += world.GetCounters().rowBundles > 0 ? 1 : 0;
+  }
+  run.hash = world.StateHash();
+  return run;
+}
+
+TEST(SoftBundlesTest, BundledRowsGiveTheColourByColourStateAtEveryThreadCount) {
+  for (const bool gas : {false, true}) {
+    const Outcome one = Sparse(1, gas);
+    EXPECT_EQ(one.bundledSteps, 0);
+    EXPECT_EQ(Sparse(2, gas).bundledSteps, 0) << "bundles start at 4 threads";
+    for (const int threads : {4, 8}) {
+      const Outcome many = Sparse(threads, gas);
+      EXPECT_EQ(many.hash, one.hash) << (gas ? "gas" : "stacks") << " at " << threads << " threads";
+      EXPECT_GT(many.bundledSteps, 60) << (gas ? "gas" : "stacks") << " at " << threads << " threads";
+    }
+  }
+}
+
+TEST(SoftBundlesTest, NoBundlesWhereARowNeedsTheWholeWorld) {
+  for (const Extra extra : {Extra::kKinematic, Extra::kJoint}) {
+    const Outcome one = Sparse(1, false, extra), four = Sparse(4, false, extra);
+    EXPECT_EQ(four.bundledSteps, 0);
+    EXPECT_EQ(four.hash, one.hash);
+  }
+}
+
+}  // namespace
+}  // namespace quadrant
