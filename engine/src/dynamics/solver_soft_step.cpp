@@ -128,6 +128,8 @@ void SoftStepSolver::Run(StepContext& ctx) {
   // 64000 circles, 1274 contacts: the whole rows' part alone was 1.05 ms beside 0.34 ms of free
   // bodies; the scaling model's 8 / 16 threads went from 3.23x / 3.98x to 3.78x / 4.75x, the 2
   // threads measured here within the noise (0.96, eleven interleaved pairs), the same bits.
+  // From 4 threads on, a sparse scene's rows run in bundles of contact islands instead
+  // (soft_step_bundles.cpp), with the free bodies' blocks taken after the bundles.
   auto rows = [&] { SolveContacts<kRotation, kFriction>(ctx, step); };
   PrepareContacts<kRotation, kFriction>(ctx, step, integrateMs);
   // The state exchange calls MPI between passes: on the calling thread, so not beside. (Box2D's
