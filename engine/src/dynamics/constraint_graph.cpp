@@ -14,16 +14,17 @@ void ConstraintGraph::Prepare(StageRunner& run, int bodyCount, int m) {
   changed_.assign(size_t(run.Workers()), 0);
 }
 
-void ConstraintGraph::Finish(StageRunner& run, int bodyCount, int m, bool clearLater) {
+void ConstraintGraph::Finish(StageRunner& run, int bodyCount, int m, bool clearLater, const std::function<void()>* beside) {
   lastCount_ = m;
   bool same = comparable_;
   for (int changed : changed_) same = same && changed == 0;
   ++colorings_;
   if (same) {
     ++reused_;
+    if (beside != nullptr) run.Serial(Stage::kSolve, *beside);
     return;  // order_ and colorStart_ are last step's; the body masks were cleared after it
   }
-  run.Serial(Stage::kSolve, [&] {
+  auto greedy = [&] {
     int counts[kColors + 1] = {};
     for (int c = 0; c < m; ++c) {
       const auto [a, b] = ends_[c];
@@ -41,7 +42,15 @@ void ConstraintGraph::Finish(StageRunner& run, int bodyCount, int m, bool clearL
     order_.resize(m);
     fill_.assign(colorStart_.begin(), colorStart_.end() - 1);
     for (int c = 0; c < m; ++c) order_[fill_[colorOf_[c]]++] = c;
-  });
+  };
+  if (beside == nullptr) {
+    run.Serial(Stage::kSolve, greedy);
+  } else {  // two items, one a claim: the greedy pass and `beside` on two threads where there are two
+    const TaskSystem::StagePlan plan[1] = {{2, 1, false}};
+    run.Stages(Stage::kSolve, plan, 2, [&](int, int b, int e) {
+      for (int item = b; item < e; ++item) item == 0 ? greedy() : (*beside)();
+    });
+  }
   if (m > 0 && !clearLater) {  // leave the masks zeroed for the next step
     run.For(Stage::kSolve, bodyCount, run.MinItems(), [&](int begin, int end, int) {
       std::fill(bodyColors_.begin() + begin, bodyColors_.begin() + end, uint64_t(0));

@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <functional>
 #include <span>
 #include <utility>
 #include <vector>
@@ -51,8 +52,13 @@ class ConstraintGraph {
   // last step's (a pile at rest keeps its contacts, in key order), last step's colouring is this
   // step's, bit for bit, and the serial pass is skipped. The gather compares as it goes (each
   // block counts its changed entries; ends_ keeps last step's until overwritten here).
+  //
+  // beside (optional): work that needs only the gathered ends (Ends), run on another thread
+  // while the greedy pass runs on this one (or after it, where the colouring is kept or there is
+  // one worker): the soft step's islands, so their serial pass costs the step nothing more.
   template <class OnEnds>
-  void Color(StageRunner& run, const StepContext& ctx, bool clearLater, OnEnds&& onEnds) {
+  void Color(StageRunner& run, const StepContext& ctx, bool clearLater, OnEnds&& onEnds,
+             const std::function<void()>* beside = nullptr) {
     const Bodies& bodies = *ctx.bodies;
     const int m = static_cast<int>(ctx.contacts.size());
     Prepare(run, bodies.Count(), m);
@@ -68,7 +74,7 @@ class ConstraintGraph {
       }
       changed_[size_t(worker)] += changed;
     });
-    Finish(run, bodies.Count(), m, clearLater);
+    Finish(run, bodies.Count(), m, clearLater, beside);
   }
 
   // Bodies [begin, end)'s colour masks back to zero (Color's clearLater). Bodies made since the
@@ -168,7 +174,7 @@ class ConstraintGraph {
   void Prepare(StageRunner& run, int bodyCount, int m);
   // After the gather: last step's colouring kept, or the greedy pass; then the masks cleared
   // (unless clearLater).
-  void Finish(StageRunner& run, int bodyCount, int m, bool clearLater);
+  void Finish(StageRunner& run, int bodyCount, int m, bool clearLater, const std::function<void()>* beside);
 
  public:
   // How many colourings were asked for and how many reused last step's (for the tests).

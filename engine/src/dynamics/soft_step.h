@@ -126,8 +126,11 @@ class SoftStepSolver final : public Solver {
   // Bundles (soft_step_bundles.cpp): where this step's rows fall into many small contact
   // islands, they are dealt into bundles that share no dynamic body, and each region of passes
   // runs bundle by bundle (EndRegion) instead of colour by colour with a barrier per colour.
-  // Returns whether this step bundles (bundles_ > 0).
-  bool FormBundles(StageRunner& run, const StepContext& ctx);
+  // MayBundle: whether this step may (before the colouring); FindIslands beside the colouring's
+  // greedy pass (ConstraintGraph::Color's `beside`); ApplyBundles after it (bundles_ > 0 if so).
+  bool MayBundle(const StageRunner& run, const StepContext& ctx, bool box2dRestitution) const;
+  void FindIslands(const StepContext& ctx, int workers);
+  void ApplyBundles(StageRunner& run);
   void LayOutBundleGroups();
   void OrderActiveByBundle();
   void RunRegionByBundle(StageRunner& run);
@@ -349,12 +352,13 @@ class SoftStepSolver final : public Solver {
   const BodyInverseMass* inv_ = nullptr;  // this step's bodies'
   std::vector<RelaxBiasRows> relaxBias_;  // per group: the relax passes' speculative bias (RelaxBias)
   std::vector<int> groupStart_;           // per colour: its first group (and one past the last colour)
-  // Bundles (FormBundles): their count (0: this step does not bundle); per colour and bundle the
+  // Bundles (ApplyBundles): their count (0: this step does not bundle); per colour and bundle the
   // first group (bundleGroupStart_, like ConstraintGraph::BundleBegin); per group its rows
   // [groupRowBegin_, groupRowEnd_) in colour order; per bundle its first body in active_.
   int bundles_ = 0;
+  int islandBundles_ = 0;  // FindIslands' bundles, applied after the colouring
   std::vector<int> bundleGroupStart_, groupRowBegin_, groupRowEnd_, bundleBodyStart_;
-  // Per body, FormBundles' union-find (parent, and island at a root; -1 between steps) and the
+  // Per body, FindIslands' union-find (parent, and island at a root; -1 between steps) and the
   // bundle of a body in rows: one record, so each end a contact names is one cache line.
   struct BundleNode {
     int parent = -1, island = -1, bundle = 0;

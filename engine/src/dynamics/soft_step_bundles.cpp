@@ -1,25 +1,29 @@
 // The soft step's bundles (soft_step.h): the rows of a sparse scene run bundle by bundle.
 //
-// Contract: where the rows fall into many contact islands (connected through dynamic bodies;
-// static, kinematic and sleeping bodies are only read), FormBundles deals the islands into
-// bundles of about kBundlesPerWorker a thread, orders each colour's rows by bundle
-// (ConstraintGraph::SetBundles) and lays each bundle's rows of a colour into groups of their own
-// (LayOutBundleGroups: a group never mixes bundles). Every region of passes then runs bundle by
-// bundle (RunRegionByBundle): a thread takes a bundle and walks all the region's stages for it,
-// its bodies' passes and its groups colour by colour, with no barrier between the stages. The
-// bits are the ones colour by colour gives: a bundle shares no dynamic body with another, each
-// body meets its rows in colour order and its integrations in pass order either way, and a row's
-// lane never changes its arithmetic (soft_rows.h). Only where no row needs the whole world at
-// once: no joints, no state exchange, no Box2D position pass or bounce, no overflow colour, no
-// moving kinematic body (its state is integrated by one bundle and read by any other).
+// Contract: from 4 threads on, where the rows are fewer than half the bodies and fall into many
+// contact islands (connected through dynamic bodies; static, kinematic and sleeping bodies are
+// only read), FindIslands deals the islands in contact order into bundles of about
+// kBundlesPerWorker a thread, on another thread while the colouring's greedy pass runs; then
+// ApplyBundles orders each colour's rows by bundle (ConstraintGraph::SetBundles) and BuildRows
+// lays each bundle's rows of a colour into groups of their own (LayOutBundleGroups: a group never
+// mixes bundles). The sub-steps' regions run as one, bundle by bundle (RunRegionByBundle): a
+// thread takes a bundle through every stage of every sub-step, its bodies' passes and its groups
+// colour by colour, with no barrier between them; the free bodies' blocks are taken after the
+// bundles. The passes after the sub-steps run bundle by bundle too, a region each. The bits are
+// the ones colour by colour gives: a bundle shares no dynamic body with another, each body meets
+// its rows in colour order and its integrations in pass order either way, and a row's lane never
+// changes its arithmetic (soft_rows.h). Only where no row needs the whole world at once: no
+// joints, no state exchange, no Box2D position pass or bounce, no overflow colour, no moving
+// kinematic body (its state is integrated by one bundle and read by any other).
 //
-// Why: on a sparse scene the rows are a small part of the step that colour by colour cost a
-// barrier per colour and pass, and beside the free bodies (StageRunner::Beside) ran on one
-// thread: 64000 circles, 1274 contacts, the lone part took 1.05 ms of a 6.2 ms step, which capped
-// the solve stage at about 1.9x at any thread count (tools/quadrant scaling: 3.29x predicted for
-// the step at 8 threads). The cost: a bundle's last group of each colour is padded (a few rows'
-// work per bundle and colour) and the islands are found on one thread (a union-find over the
-// contacts, about 10 us for 1274).
+// Why: colour by colour a sparse scene's rows cost a barrier per colour and pass, and beside the
+// free bodies (StageRunner::Beside) they ran on one thread: 64000 circles, 1274 contacts, the lone
+// part took 1.05 ms of a 6.2 ms step, which capped the solve stage at about 1.9x at any thread
+// count (tools/quadrant scaling: 3.29x predicted for the step at 8 threads, 3.98-4.38x with
+// bundles; polygons 16000 2.63x -> 3.38-3.91x, 78 -> 30 barriers a step). The cost: a bundle's
+// last group of each colour is padded, and the islands' union-find is a serial pass over the
+// contacts (0.1-0.15 ms for 1274 on a 2-core VM, cache misses on the bodies' records), hidden
+// beside the greedy colouring, itself such a pass, where the colouring is not kept.
 #include <algorithm>
 
 #include "dynamics/soft_step.h"
@@ -44,91 +48,102 @@ constexpr int kMinBundleRows = 32;
 
 }  // namespace
 
-bool SoftStepSolver::FormBundles(StageRunner& run, const StepContext& ctx) {
-  bundles_ = 0;
-  graph_.ClearBundles();
-  const int m = graph_.Count(), workers = run.Workers();
-  if (workers < kMinBundleWorkers || m < 2 * kMinBundleRows || graph_.Overflowed() ||
-      kinematicInRows_.flag.load(std::memory_order_relaxed)) {
-    return false;
-  }
+bool SoftStepSolver::MayBundle(const StageRunner& run, const StepContext& ctx, bool box2dRestitution) const {
+  const WorldDef& def = *ctx.def;
+  const int64_t m = static_cast<int64_t>(ctx.contacts.size());
+  // Not on a pile (more rows than half the bodies): few islands there, and finding them is a
+  // serial pass over many contacts.
+  return run.Workers() >= kMinBundleWorkers && m >= 2 * kMinBundleRows && 2 * m <= ctx.bodies->Count() && !exchange_ &&
+         ctx.joints.empty() && !def.box2dPositionSolve && !box2dRestitution &&
+         !kinematicInRows_.flag.load(std::memory_order_relaxed);
+}
+
+// Only Color's gather has run: the contacts' dynamic ends (ConstraintGraph::Ends) are all it reads,
+// while the greedy pass writes the colour order beside it.
+void SoftStepSolver::FindIslands(const StepContext& ctx, int workers) {
+  const int m = static_cast<int>(ctx.contacts.size());
   int bundles = 0;
-  run.Serial(Stage::kSolve, [&] {
-    bundleNodes_.resize(size_t(ctx.bodies->Count()));  // parent and island -1 between steps
-    BundleNode* node = bundleNodes_.data();
-    auto find = [node](int x) {
-      while (node[x].parent != x) {
-        node[x].parent = node[node[x].parent].parent;  // path halving
-        x = node[x].parent;
-      }
-      return x;
-    };
-    // The ends' records a few contacts ahead: the bodies of a sparse scene's contacts lie far
-    // apart, and each record is a cache miss otherwise.
-    constexpr int kAhead = 16;
-    auto prefetch = [&](int c) {
-      if (c >= m) return;
-      const auto [a, b] = graph_.Ends(c);
-      if (a >= 0) __builtin_prefetch(&node[a], 1);
-      if (b >= 0) __builtin_prefetch(&node[b], 1);
-    };
-    for (int c = 0; c < m; ++c) {
-      prefetch(c + kAhead);
-      const auto [a, b] = graph_.Ends(c);
-      if (a >= 0 && node[a].parent < 0) node[a].parent = a;
-      if (b >= 0 && node[b].parent < 0) node[b].parent = b;
-      if (a >= 0 && b >= 0) {
-        const int ra = find(a), rb = find(b);
-        if (ra != rb) node[std::max(ra, rb)].parent = std::min(ra, rb);
-      }
+  bundleNodes_.resize(size_t(ctx.bodies->Count()));  // parent and island -1 between steps
+  BundleNode* node = bundleNodes_.data();
+  auto find = [node](int x) {
+    while (node[x].parent != x) {
+      node[x].parent = node[node[x].parent].parent;  // path halving
+      x = node[x].parent;
     }
-    // Islands numbered in contact order; a contact with no dynamic end writes nothing and may go
-    // anywhere (bundle 0).
-    islandRows_.clear();
-    bundleOfContact_.resize(size_t(m));
-    for (int c = 0; c < m; ++c) {
-      const auto [a, b] = graph_.Ends(c);
-      const int x = a >= 0 ? a : b;
-      if (x < 0) {
-        bundleOfContact_[size_t(c)] = -1;
-        continue;
-      }
-      int& island = node[find(x)].island;
-      if (island < 0) {
-        island = static_cast<int>(islandRows_.size());
-        islandRows_.push_back(0);
-      }
-      ++islandRows_[size_t(island)];
-      bundleOfContact_[size_t(c)] = island;
+    return x;
+  };
+  // The ends' records a few contacts ahead: the bodies of a sparse scene's contacts lie far
+  // apart, and each record is a cache miss otherwise.
+  constexpr int kAhead = 16;
+  auto prefetch = [&](int c) {
+    if (c >= m) return;
+    const auto [a, b] = graph_.Ends(c);
+    if (a >= 0) __builtin_prefetch(&node[a], 1);
+    if (b >= 0) __builtin_prefetch(&node[b], 1);
+  };
+  for (int c = 0; c < m; ++c) {
+    prefetch(c + kAhead);
+    const auto [a, b] = graph_.Ends(c);
+    if (a >= 0 && node[a].parent < 0) node[a].parent = a;
+    if (b >= 0 && node[b].parent < 0) node[b].parent = b;
+    if (a >= 0 && b >= 0) {
+      const int ra = find(a), rb = find(b);
+      if (ra != rb) node[std::max(ra, rb)].parent = std::min(ra, rb);
     }
-    // Islands dealt in order into bundles of at least `target` rows.
-    const int target = std::max(kMinBundleRows, (m + kBundlesPerWorker * workers - 1) / (kBundlesPerWorker * workers));
-    bundleOfIsland_.resize(islandRows_.size());
-    int rows = 0;
-    for (size_t i = 0; i < islandRows_.size(); ++i) {
-      bundleOfIsland_[i] = bundles;
-      rows += islandRows_[i];
-      if (rows >= target) {
-        ++bundles;
-        rows = 0;
-      }
+  }
+  // Islands numbered in contact order; a contact with no dynamic end writes nothing and may go
+  // anywhere (bundle 0).
+  islandRows_.clear();
+  bundleOfContact_.resize(size_t(m));
+  for (int c = 0; c < m; ++c) {
+    const auto [a, b] = graph_.Ends(c);
+    const int x = a >= 0 ? a : b;
+    if (x < 0) {
+      bundleOfContact_[size_t(c)] = -1;
+      continue;
     }
-    bundles += rows > 0 ? 1 : 0;
-    // Each contact's and each body's bundle; the union-find back to -1 for the next step (every
-    // root is an end of some contact).
-    for (int c = 0; c < m; ++c) {
-      int& bundle = bundleOfContact_[size_t(c)];
-      bundle = bundle < 0 ? 0 : bundleOfIsland_[size_t(bundle)];
-      const auto [a, b] = graph_.Ends(c);
-      for (const int x : {a, b}) {
-        if (x >= 0) node[x] = BundleNode{-1, -1, bundle};
-      }
+    int& island = node[find(x)].island;
+    if (island < 0) {
+      island = static_cast<int>(islandRows_.size());
+      islandRows_.push_back(0);
     }
-  });
-  if (bundles < 2) return false;
-  run.Serial(Stage::kSolve, [&] { graph_.SetBundles(bundleOfContact_, bundles); });
-  bundles_ = bundles;
-  return true;
+    ++islandRows_[size_t(island)];
+    bundleOfContact_[size_t(c)] = island;
+  }
+  // Islands dealt in order into bundles of at least `target` rows.
+  const int target = std::max(kMinBundleRows, (m + kBundlesPerWorker * workers - 1) / (kBundlesPerWorker * workers));
+  bundleOfIsland_.resize(islandRows_.size());
+  int rows = 0;
+  for (size_t i = 0; i < islandRows_.size(); ++i) {
+    bundleOfIsland_[i] = bundles;
+    rows += islandRows_[i];
+    if (rows >= target) {
+      ++bundles;
+      rows = 0;
+    }
+  }
+  bundles += rows > 0 ? 1 : 0;
+  // Each contact's and each body's bundle; the union-find back to -1 for the next step (every
+  // root is an end of some contact).
+  for (int c = 0; c < m; ++c) {
+    int& bundle = bundleOfContact_[size_t(c)];
+    bundle = bundle < 0 ? 0 : bundleOfIsland_[size_t(bundle)];
+    const auto [a, b] = graph_.Ends(c);
+    for (const int x : {a, b}) {
+      if (x >= 0) node[x] = BundleNode{-1, -1, bundle};
+    }
+  }
+  islandBundles_ = bundles;
+}
+
+void SoftStepSolver::ApplyBundles(StageRunner& run) {
+  bundles_ = 0;
+  if (islandBundles_ < 2 || graph_.Overflowed()) {
+    graph_.ClearBundles();
+    return;
+  }
+  run.Serial(Stage::kSolve, [&] { graph_.SetBundles(bundleOfContact_, islandBundles_); });
+  bundles_ = islandBundles_;
 }
 
 // BuildRows' layout with bundles: colour by colour as without, and within a colour bundle by
@@ -154,7 +169,7 @@ void SoftStepSolver::LayOutBundleGroups() {
     }
     start[bundles_] = g;
   }
-  groupStart_[kColors] = groupStart_[kColors + 1] = g;  // no overflow colour (FormBundles)
+  groupStart_[kColors] = groupStart_[kColors + 1] = g;  // no overflow colour (ApplyBundles)
 }
 
 // active_ (in index order) regrouped by bundle, each bundle's bodies still in index order.

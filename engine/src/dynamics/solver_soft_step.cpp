@@ -68,31 +68,33 @@ void SoftStepSolver::Run(StepContext& ctx) {
   auto ti = Clock::now();
   LoadFixedStates(run, bodies, def.effects.sleep);
   integrateMs += Ms(ti, Clock::now());
-  // 2. The colouring; its gather flags the rows' bodies (MarkRow).
+  // 2. The colouring; its gather flags the rows' bodies (MarkRow). Beside its greedy pass, a
+  // sparse scene's contact islands (soft_step_bundles.cpp).
+  step.box2dRestitution = def.effects.restitution && def.restitution == RestitutionPolicy::kBox2d;
+  const bool mayBundle = MayBundle(run, ctx, step.box2dRestitution);
+  const std::function<void()> islands = [&] { FindIslands(ctx, run.Workers()); };
+  const std::function<void()>* beside = mayBundle ? &islands : nullptr;
   const bool supported = def.softMassRatioLimit > 0;
   NextStamp(bodies.Count(), supported);
   if (supported) {
-    graph_.Color(run, ctx, /*clearLater=*/true, [this](int a, int b) { MarkRow<true>(a, b); });
+    graph_.Color(run, ctx, /*clearLater=*/true, [this](int a, int b) { MarkRow<true>(a, b); }, beside);
     // Only where last step had a contact over the limit (issue #26: Solver2D's heavy boxes on
     // pyramids, whose top boxes touch no static body, toppled them unheld).
     if (overLimit_) run.Serial(Stage::kSolve, [&] { PropagateSupport(ctx, def.softMassRatioLimit); });
     overLimit_ = 0;
   } else {
-    graph_.Color(run, ctx, /*clearLater=*/true, [this](int a, int b) { MarkRow<false>(a, b); });
+    graph_.Color(run, ctx, /*clearLater=*/true, [this](int a, int b) { MarkRow<false>(a, b); }, beside);
   }
   step.m = graph_.Count();
   // The joints' colouring; it marks their dynamic bodies as in rows, for LoadStates.
   PrepareJoints(ctx, step.h);
   jointInvH_ = step.invH;
-  step.box2dRestitution = def.effects.restitution && def.restitution == RestitutionPolicy::kBox2d;
-  // A sparse scene's rows in bundles of contact islands (soft_step_bundles.cpp), before anything
-  // reads the colour order (FormBundles reorders each colour). Not on a pile (more rows than
-  // half the bodies): few islands there, and finding them is a serial pass over many contacts.
+  // The bundles applied before anything reads the colour order (SetBundles reorders each colour).
   constexpr int kRowCost = 16;
   const int count = bodies.Count();
   const bool sparse = int64_t(kRowCost) * (step.m + int64_t(jointRows_.size())) <= count;
-  if (2 * int64_t(step.m) <= count && !exchange_ && jointRows_.empty() && !def.box2dPositionSolve && !step.box2dRestitution) {
-    FormBundles(run, ctx);
+  if (mayBundle) {
+    ApplyBundles(run);
   } else {
     bundles_ = 0;
     graph_.ClearBundles();
