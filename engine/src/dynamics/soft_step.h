@@ -368,7 +368,12 @@ class SoftStepSolver final : public Solver {
   std::vector<int> bundleFill_, activeScratch_;
   // Bundled, the free bodies' pass over [0, freeCount_) runs beside the first region's bundles,
   // in blocks the threads take after them (RunRegionByBundle), as StageRunner::Beside would.
-  std::function<void(int, int)> freePass_;
+  // MoveFreeBodies' arguments, held as plain pointers: no allocation a step.
+  struct FreePass {
+    Bodies* bodies = nullptr;
+    const WorldDef* def = nullptr;
+    Real dt = 0;
+  } freePass_;
   int freeCount_ = 0;
   // Bundled, the sub-steps' regions are queued (EndRegion runs nothing) and run as one after the
   // last (SolveContacts): every stage of every sub-step for a bundle, by one thread. The queued

@@ -201,7 +201,7 @@ void SoftStepSolver::RunRegionByBundle(StageRunner& run) {
     for (int k = kb; k < ke; ++k) {
       if (k >= bundles_) {
         const int b = BlockBegin(freeCount_, freeBlocks, k - bundles_), e = BlockBegin(freeCount_, freeBlocks, k - bundles_ + 1);
-        if (b < e) freePass_(b, e);
+        if (b < e) MoveFreeBodies(*freePass_.bodies, *freePass_.def, freePass_.dt, b, e);
         continue;
       }
       for (int s = 0; s < stages; ++s) {

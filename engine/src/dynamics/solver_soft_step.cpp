@@ -18,6 +18,8 @@
 // 0.183 ms at 1, hence the rows' part beside the free bodies. docs/soft_step.md has the figures.
 #include <atomic>
 #include <cmath>
+#include <functional>
+#include <optional>
 
 #include "dynamics/soft_step.h"
 
@@ -72,8 +74,11 @@ void SoftStepSolver::Run(StepContext& ctx) {
   // sparse scene's contact islands (soft_step_bundles.cpp).
   step.box2dRestitution = def.effects.restitution && def.restitution == RestitutionPolicy::kBox2d;
   const bool mayBundle = MayBundle(run, ctx, step.box2dRestitution);
-  const std::function<void()> islands = [&] { FindIslands(ctx, run.Workers()); };
-  const std::function<void()>* beside = mayBundle ? &islands : nullptr;
+  // Built only where the step may bundle: its three references exceed std::function's inline
+  // buffer, so it allocates.
+  std::optional<std::function<void()>> islands;
+  if (mayBundle) islands.emplace([&] { FindIslands(ctx, run.Workers()); });
+  const std::function<void()>* beside = islands ? &*islands : nullptr;
   const bool supported = def.softMassRatioLimit > 0;
   NextStamp(bodies.Count(), supported);
   if (supported) {
@@ -139,7 +144,7 @@ void SoftStepSolver::Run(StepContext& ctx) {
   // is in the lone part.) Bundled, the rows' passes split across the threads themselves.
   auto moveFree = [&](int b, int e) { MoveFreeBodies(bodies, def, ctx.dt, b, e); };
   if (bundles_ > 0) {  // the free bodies beside the first region's bundles
-    freePass_ = moveFree;
+    freePass_ = {&bodies, &def, ctx.dt};
     freeCount_ = count;
     rows();
     if (freeCount_ > 0) run.Dynamic(Stage::kIntegrate, count, run.MinItems(), kBodyGrain, moveFree);
