@@ -79,6 +79,10 @@ KINDS = [
      "and busy runs whose raw rounds are not committed", None),
     ("task_overhead.txt", "quadrant_task_overhead's output: one parallel-for's cost per system "
      "and thread count", None),
+    ("task_overhead.json", "the pool's and OpenMP's cost per parallel-for and per stage at 1-16 "
+     "threads (quadrant_task_overhead's Google Benchmark JSON)", None),
+    ("machine.txt", "the machine's nproc / lscpu / uptime at the run (the lent machine's own "
+     "description; tools/device_results.py copies it)", "bench.json"),
     ("history.csv", "per-benchmark medians of every `tools/quadrant bench --record` run "
      "(tools/history.py); date and commit of its last record", None),
     ("history.png", "the history's plot (tools/history.py)", "history.csv"),
