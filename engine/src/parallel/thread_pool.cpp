@@ -11,11 +11,12 @@
 // count), and the thread that finishes a stage's last chunk publishes the next. Each running
 // thread has a lane of every stage's chunks (ClaimFromLanes): it runs its own lane's first, then
 // takes from the back of others', so the same thread runs the same chunks stage after stage and
-// their data stays in its cache. On the lent 16-core VM the one shared claim range had given
-// this only to two threads: 4 threads stepped the pyramid 5050 in 1.63 ms against 1.74 on 2
-// (narrow phase, no barrier inside, 0.179 against 0.191 ms). Stages whose chunks differ by design
-// (StageRunner::Beside's lone part) are claimed from the word itself, caller and even workers
-// from the front, odd workers from the back. Idle threads
+// their data stays in its cache (one shared claim range gave that only to two threads). On the
+// lent 16-core VM, against the shared range, three interleaved pairs: the solve stage of the
+// pyramid 5050 at 4 / 8 / 16 threads 1.23 / 1.01 / 1.12 -> 1.16 / 0.87 / 0.87 ms, of
+// many_pyramids 22000 5.47 / 3.40 / 2.62 -> 4.96 / 3.00 / 2.08 ms. Stages whose chunks differ by
+// design (StageRunner::Beside's lone part) are claimed from the word itself, the caller and even
+// workers from the front, odd workers from the back. Idle threads
 // spin up to kMaxSpinMicros, then sleep on a futex. A step's start (Prepare) wakes them, and
 // after the caller was away longer than a spin (a game loop's sleep) it first keeps them off its
 // own core (SteerSleepers): on the 2-core VMs the kernel put a woken worker on the caller's core
@@ -839,10 +840,9 @@ class ThreadPool final : public TaskSystem {
   // the front of its own lane (half of what is left in a region's runs, else one chunk), then
   // from the back of the others' (half, or one). So in every stage and pass of a step thread i
   // runs the same chunks, whose rows and bodies stay in its core's cache, unless another ran out
-  // of work first. The one claim word gave that only to two threads (front and back): on the
-  // lent 16-core machine the pyramid 5050 stepped at 1.74 ms on 2 threads and 1.63 on 4, its
-  // narrow phase (no barrier inside) 0.191 and 0.179 ms: at 4 threads and more the chunks moved
-  // between cores every stage. A lane's word is the stage's stamp (the claim word's tag and
+  // of work first. The one claim word gave that only to two threads (front and back); from 4 on
+  // the chunks moved between cores from stage to stage (the head comment has the gain). A
+  // lane's word is the stage's stamp (the claim word's tag and
   // stage), front and back; the first thread to touch a lane in a stage opens it (CAS from the
   // older stamp to the stage's range), so a stage's publication writes no lane. Only chunk
   // counts from the claim word are read before a claim, never the job's fields.
