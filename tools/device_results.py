@@ -7,6 +7,8 @@ Usage (Debian's /usr/bin/python3, which sees python3-matplotlib):
 
     /usr/bin/python3 tools/device_results.py DIR --machine NAME [--out results/NAME]
                      [--comparisons [--title TITLE] [--script RUN.sh]] [--no-index]
+    /usr/bin/python3 tools/device_results.py DIR --machine NAME --ab BASE_TAG HEAD_TAG
+                     [--out results/NAME] [--title TITLE] [--script RUN.sh] [--no-index]
 
 Contract. DIR holds one device call's outputs: Google Benchmark JSON files of quadrant_bench
 (one per run, "sets"), their .log files, machine.txt (nproc, lscpu, uptime) and optionally
@@ -32,8 +34,24 @@ in DIR, cell by cell; a frame loop's set against the back-to-back figures; the p
 poolstats_*.log; the commands (--script: the lines of the run script that made the sets). All
 figures come from the files; rerun it on a second device call's DIR with another --title.
 
+--ab BASE_TAG HEAD_TAG (interleaved pairs): writes only a section of OUT/comparisons.md (appended,
+or replaced by its title; bench.json, speedup.md and the plots stay as they are). DIR's sets named
+<group>_<BASE_TAG>_<N>.json and <group>_<HEAD_TAG>_<N>.json are pairs (pair N of group: the base
+set, then the head set, run back to back); one commit per tag. One table per group, a row per
+scene/engine/count/threads: base and head ms per step (median over the pairs of each set's
+median), the median of the per-pair head/base ratios and each pair's, the solve stage's ms
+(stage_solve_ms medians) base -> head, and whether the state hashes (labels) are one between base
+and head and the same as at the row's fewest threads. Besides: the machine (machine.txt, against
+the one in OUT), the sets' dates and the order within each pair, the base's 1-thread medians
+against OUT/bench.json's (an earlier call: another VM instance may run at another speed, so only
+the ratios within one call compare), the head's frame loops (context frame_rate) against its
+back-to-back medians over the pairs, the pool counters of the head's poolstats_*.log, the
+commands (--script lines and each set's context) and DIR's other sets, named as left out. The
+default title: "<cores> cores, <head> against <base>: interleaved pairs (<day>)".
+
 Refuses (one line on stderr, exit 2, nothing written) when DIR holds no quadrant_bench JSON, the
-head's sets name more than one CPU or core count, or OUT already holds JSON of another machine.
+head's sets name more than one CPU or core count, or OUT already holds JSON of another machine;
+with --ab also when no pair is found, the tags are equal or a tag's sets name two commits.
 """
 
 import argparse
@@ -505,6 +523,253 @@ def write_comparisons(path, machine, section):
         f.write(text)
 
 
+# ---- --ab: interleaved pairs ---------------------------------------------------------------
+
+
+def ab_pairs(sets, base_tag, head_tag):
+    """({group: [(pair, base set, head set)]} by pair number, groups in the order they ran;
+    [(file, reason)] of the tagged sets without a partner)."""
+    rx = re.compile(rf"^(?P<group>.+)_(?P<tag>{re.escape(base_tag)}|{re.escape(head_tag)})_(?P<pair>\d+)$")
+    found = collections.defaultdict(dict)
+    for s in sets:
+        m = rx.match(s.stem)
+        if m:
+            found[(m.group("group"), int(m.group("pair")))][m.group("tag")] = s
+    groups, unpaired = {}, []
+    for (g, p), d in sorted(found.items(), key=lambda kv: min(s.date for s in kv[1].values())):
+        if base_tag in d and head_tag in d:
+            groups.setdefault(g, []).append((p, d[base_tag], d[head_tag]))
+        else:
+            for s in d.values():
+                unpaired.append((s.name, f"no {head_tag if base_tag in d else base_tag} set of pair {p}"))
+    for g in groups:
+        groups[g].sort(key=lambda x: x[0])
+    return groups, unpaired
+
+
+def set_medians(s, field=None):
+    """{key: median over the set's per-repetition rows} of ms_per_step (or of the counter field)."""
+    values = collections.defaultdict(list)
+    for k, r in s.iterations():
+        v = gbench_json.ms_per_step(r) if field is None else r.get(field)
+        if isinstance(v, (int, float)):
+            values[k].append(float(v))
+    return {k: statistics.median(v) for k, v in values.items()}
+
+
+def set_labels(s):
+    out = collections.defaultdict(set)
+    for k, r in s.iterations():
+        if r.get("label"):
+            out[k].add(str(r["label"]))
+    return out
+
+
+def fmt_ratio(v):
+    return "-" if v is None else f"{v:.2f}"
+
+
+def ab_check(sets, groups, base_tag, head_tag):
+    """The base and head commits; refuses when there is no pair or a tag names two commits."""
+    if not groups:
+        raise Refusal(f"no pair of sets named <group>_{base_tag}_<N>.json and <group>_{head_tag}_<N>.json")
+    commits = {}
+    for i, tag in ((1, base_tag), (2, head_tag)):
+        cs = sorted({pair[i].commit for g in groups.values() for pair in g})
+        if len(cs) > 1:
+            raise Refusal(f"the {tag} sets name more than one commit: " + ", ".join(cs))
+        commits[tag] = cs[0]
+    paired = [s for g in groups.values() for pair in g for s in pair[1:]]
+    cpus = {(str(s.context.get("cpu_model")), str(s.context.get("num_cpus"))) for s in paired}
+    if len(cpus) > 1:
+        raise Refusal("the sets name more than one machine: " + ", ".join(f"{m} ({n} cpus)" for m, n in sorted(cpus)))
+    return commits[base_tag], commits[head_tag]
+
+
+def ab_section(directory, sets, base_tag, head_tag, title, script, first_bench=None, out=None):
+    """The Markdown lines of an interleaved A/B section: every <group>_<BASE>_<N> set against
+    <group>_<HEAD>_<N>, the head's frame loops and pool counters."""
+    groups, unpaired = ab_pairs(sets, base_tag, head_tag)
+    base, head = ab_check(sets, groups, base_tag, head_tag)
+    paired = [s for g in groups.values() for pair in g for s in pair[1:]]
+    frames = [s for s in sets if s not in paired and s.commit == head and s.frame_rate()]
+    stats = [s for s in sets if s not in paired and s.commit == head and s.pool_stats()]
+    stats_stems = {s.stem for s in stats}
+    pools = [p for p in pool_rows(directory) if p[0][:-len(".log")] in stats_stems]
+    used = sorted(paired + frames + stats, key=lambda s: (s.date, s.name))
+    others = [s.name for s in sets if s not in used]
+
+    dates = sorted(s.date for s in used if s.date)
+    span = (f"{dates[0][:10]} {dates[0][11:16]}-{dates[-1][11:16]} UTC (the start dates in the contexts of the "
+            "sets below)" if dates else "unknown")
+    order_ok = all(b.date < h.date for g in groups.values() for _, b, h in g)
+    n_pairs = sorted({len(g) for g in groups.values()})
+    facts = machine_facts(directory)
+    if out and os.path.isfile(os.path.join(out, "machine.txt")):
+        where = ("the same description as the machine.txt beside this file" if machine_facts(out) == facts
+                 else "NOT the description of the machine.txt beside this file: " + machine_facts(out))
+    else:
+        where = "no machine.txt beside this file to compare"
+    lines = [f"## {title}", "",
+             f"Machine: {facts} (machine.txt of this call, not committed; {where}). Date: {span}. Commits: base {base} (files `*_{base_tag}_N.json`), "
+             f"head {head} (files `*_{head_tag}_N.json`). Interleaved pairs: for N = 1, 2, ... the pair's base "
+             f"set ran, then at once its head set (" + ("base first in every pair, by the contexts' dates"
+                                                          if order_ok else "NOT base first in every pair: see the dates below")
+             + f"); {'/'.join(map(str, n_pairs))} pairs per group; each set holds one repetition per benchmark, "
+             "so a drift of the machine falls on both sides of a pair. Figures: ms per timed step (the rows' "
+             "ms_per_step); base ms and head ms: median over the pairs; ratio = head / base (below 1: the head is "
+             "faster), median of the per-pair ratios, then each pair's in pair order; solve: the stage_solve_ms "
+             "counter (ms per step in the solve stage), medians over the pairs, base -> head. State hash: the "
+             "rows' label; 'base = head' when every base and head set of the row has the one label, 'across "
+             "threads' when that label is the one of the row's fewest threads.", ""]
+
+    # Against the earlier call's bench.json: the same machine kind, another VM instance?
+    if first_bench:
+        first_rows = first_bench.get("benchmarks", [])
+        first_ctx = first_bench.get("context", {})
+        first = ms_medians(rows=first_rows)
+        base_med = {}
+        for g in groups.values():
+            for k in dict.fromkeys(k for _, b, _ in g for k in set_medians(b)):
+                vals = [set_medians(b).get(k) for _, b, _ in g]
+                vals = [v for v in vals if v is not None]
+                if vals:
+                    base_med.setdefault(k, statistics.median(vals))
+        ones = sorted(k for k in base_med if k[3] == 1 and k in first)
+        if ones:
+            ratios = [base_med[k] / first[k][0] for k in ones]
+            verdict = ("this call's VM instance ran slower than the earlier call's at every one of them"
+                       if all(r > 1 for r in ratios) else
+                       "this call's VM instance ran faster than the earlier call's at every one of them"
+                       if all(r < 1 for r in ratios) else "the two calls' VM instances differ, one way or the other")
+            same = "the same commit" if str(first_ctx.get("commit")) == base else f"commit {first_ctx.get('commit')}"
+            lines += [f"Against the earlier call (bench.json beside this file: {same}, "
+                      f"{str(first_ctx.get('date', '?'))[:16].replace('T', ' ')} UTC), 1 thread, this call's base "
+                      "median against bench.json's: " + "; ".join(
+                          f"{key_name(k)} {fmt_ms(base_med[k])} against {fmt_ms(first[k][0])} ms "
+                          f"(x{base_med[k] / first[k][0]:.2f})" for k in ones) +
+                      f". So {verdict}: absolute ms are not comparable across the two calls, only the ratios "
+                      "within this call.", ""]
+
+    head_back = {}
+    for g, pairs in groups.items():
+        bm = [set_medians(b) for _, b, _ in pairs]
+        hm = [set_medians(h) for _, _, h in pairs]
+        bs = [set_medians(b, "stage_solve_ms") for _, b, _ in pairs]
+        hs = [set_medians(h, "stage_solve_ms") for _, _, h in pairs]
+        bl = [set_labels(b) for _, b, _ in pairs]
+        hl = [set_labels(h) for _, _, h in pairs]
+        keys = list(dict.fromkeys(k for m in bm + hm for k in m))
+        scene_order = list(dict.fromkeys(k[0] for k in keys))
+        keys.sort(key=lambda k: (scene_order.index(k[0]), k[1], k[2], k[3]))
+        files = f"{g}_{base_tag}_N.json, {g}_{head_tag}_N.json, N = " + ", ".join(str(p) for p, _, _ in pairs)
+        lines += [f"### `{g}`: {files}", "",
+                  "| benchmark | threads | base ms | head ms | head/base (median) | per pair | solve ms base -> head "
+                  "| hash base = head | across threads |",
+                  "|---|---:|---:|---:|---:|---:|---:|---|---|"]
+
+        def med(ms, k):
+            vals = [m[k] for m in ms if k in m]
+            return statistics.median(vals) if vals else None
+
+        def one_label(k):
+            labels = set().union(*(d.get(k, set()) for d in bl + hl))
+            return next(iter(labels)) if len(labels) == 1 else None
+        for k in keys:
+            b, h = med(bm, k), med(hm, k)
+            if h is not None:
+                head_back[k] = (h, len([m for m in hm if k in m]))
+            per = [m_h[k] / m_b[k] if k in m_h and k in m_b else None for m_b, m_h in zip(bm, hm)]
+            got = [r for r in per if r is not None]
+            solve = f"{fmt_ms(med(bs, k))} -> {fmt_ms(med(hs, k))}" if med(bs, k) is not None else "-"
+            lab = one_label(k)
+            if lab:
+                eq = f"yes `{lab[:8]}`"
+            else:
+                bset = set().union(*(d.get(k, set()) for d in bl))
+                hset = set().union(*(d.get(k, set()) for d in hl))
+                eq = ("no: base " + "/".join(f"`{x[:8]}`" for x in sorted(bset)) + ", head " +
+                      "/".join(f"`{x[:8]}`" for x in sorted(hset)))
+            fewest = min(t for (s_, e_, n_, t) in keys if (s_, e_, n_) == k[:3])
+            ref = one_label(k[:3] + (fewest,))
+            across = (("ref" if lab else "-") if k[3] == fewest else
+                      "yes" if lab and lab == ref else "no" if lab and ref else "-")
+            lines.append(f"| {key_name(k)} | {k[3]} | {fmt_ms(b)} | {fmt_ms(h)} | "
+                         f"{fmt_ratio(statistics.median(got) if got else None)} | "
+                         + " / ".join(fmt_ratio(r) for r in per) + f" | {solve} | {eq} | {across} |")
+        lines.append("")
+
+    # The head's frame loops against its back-to-back medians over the pairs.
+    for s in frames:
+        fm = ms_medians(sets=[s])
+        late = collections.defaultdict(list)
+        for k, r in s.iterations():
+            if isinstance(r.get("late_frames"), (int, float)):
+                late[k].append(r["late_frames"])
+        lines += [f"### {s.context.get('frame_rate')} Hz frame loop of {head} (`{s.name}`) against its "
+                  "back-to-back steps", "",
+                  f"The frame loop sleeps to the next frame boundary after every step (`--frame-rate "
+                  f"{s.context.get('frame_rate')}`, repetitions {'/'.join(map(str, s.repetitions()))}); only the "
+                  f"steps are timed. Back-to-back: {head}'s median over the pairs above (its `*_{head_tag}_N.json`). "
+                  "Ratio = frame loop / back-to-back.", ""]
+        for k3 in dict.fromkeys(k[:3] for k in fm):
+            threads = sorted(k[3] for k in fm if k[:3] == k3)
+            lines += [f"#### `{key_name(k3)}`", "", "| | " + " | ".join(f"{t}T" for t in threads) + " |",
+                      "|---|" + "---:|" * len(threads),
+                      "| frame loop | " + " | ".join(fmt_ms(fm[k3 + (t,)][0]) for t in threads) + " |",
+                      "| back-to-back | " + " | ".join(fmt_ms(head_back.get(k3 + (t,), (None,))[0])
+                                                      for t in threads) + " |",
+                      "| ratio | " + " | ".join(f"{fm[k3 + (t,)][0] / head_back[k3 + (t,)][0]:.2f}"
+                                               if k3 + (t,) in head_back else "-" for t in threads) + " |"]
+            if late:
+                lines.append("| late frames | " + " | ".join(
+                    f"{statistics.median(late[k3 + (t,)]):.0f}" if late.get(k3 + (t,)) else "-" for t in threads) + " |")
+            lines.append("")
+
+    # The head's pool counters.
+    if pools:
+        by_stem = {s.stem: s for s in stats}
+        cols = ["steps", "alone", "jobs", "serial", "marks", "marks by stall/idle/queue", "waits>1ms", "wait",
+                "parallel-job time", "life", "steers"]
+        lines += [f"### Pool counters of {head} (`QUADRANT_POOL_STATS=1`)", "",
+                  "The pool's own counters, printed when it is destroyed (poolstats_*.log; a pool line with no "
+                  "step, the first of each log, left out). 'alone': steps the caller ran without the workers; "
+                  "'marks': the pool marking itself busy (steps then run alone); times in ms. ms/step: the set's "
+                  "own row (one repetition, the counters on); back-to-back: the same benchmark's head median over "
+                  "the pairs above.", "",
+                  "| file | threads | ms/step | back-to-back | " + " | ".join(cols) + " |",
+                  "|---|---:|---:|---:|" + "---:|" * len(cols)]
+        for n, t, f in pools:
+            s = by_stem[n[:-len(".log")]]
+            own = set_medians(s)
+            ms = statistics.median(own.values()) if own else None
+            back = [head_back[k][0] for k in own if k in head_back]
+            lines.append(f"| `{n}` | {t} | {fmt_ms(ms)} | {fmt_ms(back[0] if len(back) == 1 else None)} | "
+                         + " | ".join(f[c] for c in cols) + " |")
+        lines.append("")
+
+    # Commands.
+    lines += ["### Commands", ""]
+    if script:
+        lines += [f"The run script `{script}` (not committed), run as `bash {script}` from the repository root; its "
+                  "lines that made these sets (`b NAME COMMIT BINARY ARGS` runs BINARY with ARGS and "
+                  "`--benchmark_out=NAME.json`):", "", "```sh"]
+        lines += script_lines(script, [s.stem for s in used]) or ["# (no line of the script names these sets)"]
+        lines += ["```", ""]
+    lines += ["Each set as its JSON context records it (a pair's two sets: one line when their commands agree):", ""]
+    for g, pairs in groups.items():
+        for p, b, h in pairs:
+            cmd = b.command() if b.command() == h.command() else f"{b.command()}` / `{h.command()}"
+            lines.append(f"- `{b.name}` ({b.commit}, {b.date}), `{h.name}` ({h.commit}, {h.date}): `{cmd}`")
+    for s in sorted(frames + stats, key=lambda s: (s.date, s.name)):
+        lines.append(f"- `{s.name}` ({s.commit}, {s.date}): `{s.command()}`"
+                     + (" with QUADRANT_POOL_STATS=1" if s in stats else ""))
+    lines += ["", "Not in this section: " + ("; ".join(f"{n} ({r})" for n, r in unpaired) + "; " if unpaired else "")
+              + (", ".join(f"`{n}`" for n in others if n not in {u for u, _ in unpaired}) or "nothing")
+              + ". Nothing of this call is in bench.json, speedup.md or the plots beside this file.", ""]
+    return lines
+
+
 # ---- main ----------------------------------------------------------------------------------
 
 
@@ -516,9 +781,14 @@ def main(argv):
     ap.add_argument("--comparisons", action="store_true", help="add a section to OUT/comparisons.md")
     ap.add_argument("--title", help="that section's title (default: cores, commits, date)")
     ap.add_argument("--script", help="the run script whose lines made the sets (quoted in the section)")
+    ap.add_argument("--ab", nargs=2, metavar=("BASE_TAG", "HEAD_TAG"),
+                    help="interleaved pairs <group>_BASE_TAG_<N>.json / <group>_HEAD_TAG_<N>.json: only a section "
+                         "of OUT/comparisons.md (bench.json, speedup.md and the plots untouched)")
     ap.add_argument("--no-index", action="store_true", help="do not regenerate results/README.md")
     args = ap.parse_args(argv)
     out = args.out or os.path.join(HERE, "..", "results", args.machine)
+    if args.ab:
+        return main_ab(args, out)
     try:
         sets = read_sets(args.dir)
         head = head_commit(sets)
@@ -555,6 +825,40 @@ def main(argv):
         subprocess.run([PYTHON, os.path.join(HERE, "results_index.py"), "--root", root], check=False)
     print(f"device_results: head {head}; merged {len(used)} sets ({len(data['benchmarks'])} rows); left out "
           f"{len(skipped)}; wrote " + ", ".join(written) + " and the bench report", file=sys.stderr)
+    return 0
+
+
+def main_ab(args, out):
+    """--ab: one section of OUT/comparisons.md from DIR's interleaved pairs; nothing else written."""
+    base_tag, head_tag = args.ab
+    try:
+        if base_tag == head_tag:
+            raise Refusal(f"--ab {base_tag} {head_tag}: the two tags must differ")
+        sets = read_sets(args.dir)
+        groups, _ = ab_pairs(sets, base_tag, head_tag)
+        base, head = ab_check(sets, groups, base_tag, head_tag)
+        paired = [s for g in groups.values() for pair in g for s in pair[1:]]
+        check_out(out, args.machine, paired[0].context.get("num_cpus"))
+        first = None
+        bench = os.path.join(out, "bench.json")
+        if os.path.isfile(bench):
+            with open(bench, encoding="utf-8") as f:
+                first = json.load(f)
+        cores = paired[0].context.get("cores") or paired[0].context.get("num_cpus")
+        day = min(s.date for s in paired)[:10]
+        title = args.title or f"{cores} cores, {head} against {base}: interleaved pairs ({day})"
+        section = ab_section(args.dir, sets, base_tag, head_tag, title, args.script, first, out)
+    except (Refusal, OSError, ValueError) as e:
+        print(f"device_results: {e}", file=sys.stderr)
+        return 2
+    os.makedirs(out, exist_ok=True)
+    path = os.path.join(out, "comparisons.md")
+    write_comparisons(path, args.machine, section)
+    root = results_root(out)
+    if root and not args.no_index:
+        subprocess.run([PYTHON, os.path.join(HERE, "results_index.py"), "--root", root], check=False)
+    print(f"device_results: --ab {base}/{head}: {len(paired) // 2} pairs in {len(groups)} groups; wrote {path}",
+          file=sys.stderr)
     return 0
 
 
