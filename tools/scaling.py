@@ -230,8 +230,42 @@ def one_thread_us(trace):
     return total, model_steps(t1["steps"], 1, Params.free())
 
 
-def reference_of(scene, count):
-    ref = REFERENCE_16C.get((scene, count))
+def reference_from_json(path):
+    """A measured reference from a quadrant_bench Google Benchmark JSON (a 16-core run committed
+    under results/<machine>/bench.json): per (scene, count), the default engine's (`quadrant`)
+    median ms per step at each thread count; the cases measured at one thread."""
+    try:
+        with open(path, encoding="utf-8") as f:
+            data = json.load(f)
+    except (OSError, ValueError) as e:
+        raise TraceError(f"--reference {path}: {e}")
+    if not isinstance(data, dict) or not isinstance(data.get("benchmarks"), list):
+        raise TraceError(f"--reference {path}: not a Google Benchmark JSON (no 'benchmarks' list)")
+    cells = {}
+    for row in data["benchmarks"]:
+        if not isinstance(row, dict) or row.get("run_type", "iteration") != "iteration":
+            continue
+        parts = str(row.get("run_name", row.get("name", ""))).split("/")
+        fields = dict(p.split(":", 1) for p in parts[2:] if ":" in p)
+        if len(parts) < 4 or parts[1] != "quadrant" or "n" not in fields or "threads" not in fields:
+            continue
+        ms = row.get("ms_per_step")
+        if not isinstance(ms, (int, float)) or not ms > 0:
+            continue
+        cells.setdefault((parts[0], int(fields["n"])), {}).setdefault(int(fields["threads"]), []).append(float(ms))
+    table = {case: {p: sorted(v)[len(v) // 2] if len(v) % 2 else (sorted(v)[len(v) // 2 - 1] + sorted(v)[len(v) // 2]) / 2
+                    for p, v in by_p.items()}
+             for case, by_p in cells.items() if 1 in by_p}
+    if not table:
+        raise TraceError(f"--reference {path}: no 'quadrant' rows measured at 1 thread")
+    context = data.get("context") if isinstance(data.get("context"), dict) else {}
+    about = (f"The measured reference is {path} (machine {context.get('machine', 'unknown')}, commit "
+             f"{context.get('commit', 'unknown')}): the default engine's medians.")
+    return table, about
+
+
+def reference_of(scene, count, table=None):
+    ref = (REFERENCE_16C if table is None else table).get((scene, count))
     if ref is None:
         return None
     one = ref[1]
@@ -244,12 +278,14 @@ class Case:
     """One recorded case ready to model: its steps per thread count, its 1-thread time and the
     scale that puts it on the reference's time (1 without a reference)."""
 
-    def __init__(self, trace, use_reference=True):
+    def __init__(self, trace, use_reference=True, table=None):
         self.scene, self.count = trace["scene"], trace["count"]
         self.bodies = trace.get("bodies")
         self.warmup, self.repeats = trace.get("warmup"), trace.get("repeats")
         self.reduce = trace.get("reduce", "median")
-        self.ref = reference_of(self.scene, self.count) if use_reference else None
+        self.ref = reference_of(self.scene, self.count, table) if use_reference else None
+        # The misfire cells are the issue's table's (5cbc117); a measured JSON has none marked.
+        self.misfires = MISFIRES.get((self.scene, self.count), ()) if table is None else ()
         self.recorded_total, self.t1_model = one_thread_us(trace)
         self.by_p = {t["threads"]: t["steps"] for t in trace["traces"]}
         self.nsteps = len(self.by_p[1])
@@ -271,7 +307,7 @@ class Case:
 
     def measured_speedup(self, p):
         """The reference's speed-up at p, or None (no reference, or a misfire cell)."""
-        if not self.ref or p not in self.ref["ms"] or p in MISFIRES.get((self.scene, self.count), ()):
+        if not self.ref or p not in self.ref["ms"] or p in self.misfires:
             return None
         return self.ref["one_ms"] / self.ref["ms"][p]
 
@@ -509,8 +545,10 @@ def main(argv=None):
                     help="the caller's futex wake when a worker sleeps (default %(default)s)")
     ap.add_argument("--spin-us", type=float, default=Params().spin,
                     help="how long a waiting thread spins before it sleeps (default %(default)s)")
-    ap.add_argument("--reference", choices=["16c", "none"], default="16c",
-                    help="scale to and compare with the 16-core reference where it has the case")
+    ap.add_argument("--reference", default="16c", metavar="16c|none|JSON",
+                    help="scale to and compare with a 16-core reference where it has the case: 16c, the "
+                         "issue's table (5cbc117); JSON, a measured quadrant_bench run such as "
+                         "results/intel-xeon-16c/bench.json (its default engine's medians); none")
     ap.add_argument("--fit", metavar="SCENE:COUNT,...",
                     help="first fit --claim-us and --barrier-us (a grid) to the reference's speed-ups of "
                          "these cases (recorded or given with --trace), then model every case with them")
@@ -521,6 +559,7 @@ def main(argv=None):
             v = getattr(args, name)
             if not (v >= 0) or math.isnan(v):
                 raise TraceError(f"--{name.replace('_', '-')}: {v} is not a number >= 0")
+        reference_table, about = (None, "") if args.reference in ("16c", "none") else reference_from_json(args.reference)
         params = Params(args.handover_us, args.barrier_us, args.claim_us, args.wake_us, args.wake_call_us, args.spin_us)
         paths = list(args.trace)
         if args.record:
@@ -547,8 +586,8 @@ def main(argv=None):
             except (OSError, ValueError) as e:
                 raise TraceError(f"{path}: {e}")
             check_trace(trace, path)
-            cases.append(Case(trace, args.reference == "16c"))
-        note = ""
+            cases.append(Case(trace, args.reference != "none", reference_table))
+        note = about
         if args.fit:
             wanted = set()
             for item in args.fit.split(","):
@@ -560,7 +599,7 @@ def main(argv=None):
             if len(chosen) != len(wanted):
                 raise TraceError(f"--fit: {args.fit}: not every case was recorded or given")
             params, rms, cells = fit(chosen, threads, params)
-            note = (f"Claim and barrier costs fitted to the reference's speed-ups of {args.fit} ({cells} cells, "
+            note = (about + " " if about else "") + (f"Claim and barrier costs fitted to the reference's speed-ups of {args.fit} ({cells} cells, "
                     f"grid claim {FIT_CLAIMS} us x barrier {FIT_BARRIERS} us; rms of the log ratio "
                     f"{rms:.3f}); every other case is predicted with them.")
             print(f"scaling: fitted claim {params.claim:g} us, barrier {params.barrier:g} us (rms log ratio {rms:.3f})",

@@ -168,6 +168,49 @@ class Model(unittest.TestCase):
             self.assertIn("no 1-thread trace", r.stderr)
 
 
+    def test_measured_reference_json(self):
+        # The synthetic case measured at 36 us at 1 thread (the median of 30, 36 and 40; the peer's
+        # and the aggregate rows ignored) and 24 us at 2: the recording is scaled by 36 / 18 = 2, so
+        # 2 threads take 20 serial + 2 stages x (4 + a barrier of 1, not scaled) = 30 us, a
+        # predicted 36 / 30 = 1.2 against the measured 36 / 24 = 1.5.
+        trace = {"scene": "synthetic", "count": 1, "bodies": 1, "traces": [
+            {"threads": 1, "steps": [step(serial(10), serial(8))]},
+            {"threads": 2, "steps": [step(serial(10), region([[1, 1, 1, 1], [1, 1, 1, 1]]))]},
+        ]}
+        def row(threads, ms, engine="quadrant"):
+            return {"name": f"synthetic/{engine}/n:1/threads:{threads}", "run_type": "iteration",
+                    "run_name": f"synthetic/{engine}/n:1/threads:{threads}/iterations:1/real_time",
+                    "ms_per_step": ms}
+        bench = {"context": {"machine": "m16", "commit": "abc"}, "benchmarks": [
+            row(1, 0.030), row(1, 0.036), row(1, 0.040), row(2, 0.024),
+            row(1, 9.0, "box2d"), {"name": "x_median", "run_type": "aggregate", "ms_per_step": 1.0}]}
+        with tempfile.TemporaryDirectory() as tmp:
+            path, ref = os.path.join(tmp, "trace.json"), os.path.join(tmp, "bench.json")
+            with open(path, "w", encoding="utf-8") as f:
+                json.dump(trace, f)
+            with open(ref, "w", encoding="utf-8") as f:
+                json.dump(bench, f)
+            out = os.path.join(tmp, "out")
+            r = subprocess.run([sys.executable, os.path.join(TOOLS, "scaling.py"), "--trace", path,
+                                "--threads", "2", "--out", out, "--handover-us", "0", "--claim-us", "0",
+                                "--barrier-us", "1", "--wake-us", "0", "--wake-call-us", "0", "--reference", ref],
+                               capture_output=True, text=True, check=False)
+            self.assertEqual(r.returncode, 0, r.stderr)
+            with open(os.path.join(out, "scaling.json"), encoding="utf-8") as f:
+                case = json.load(f)["cases"][0]
+            self.assertAlmostEqual(case["one_thread_ms"], 0.036)
+            self.assertAlmostEqual(case["threads"]["2"]["speedup"], 36 / 30)
+            self.assertAlmostEqual(case["threads"]["2"]["measured_speedup"], 1.5)
+            self.assertIn("machine m16, commit abc", r.stdout)
+            # A reference that is not a bench JSON is refused (exit 2, one line).
+            with open(ref, "w", encoding="utf-8") as f:
+                f.write("[]")
+            r = subprocess.run([sys.executable, os.path.join(TOOLS, "scaling.py"), "--trace", path,
+                                "--reference", ref], capture_output=True, text=True, check=False)
+            self.assertEqual(r.returncode, 2)
+            self.assertIn("not a Google Benchmark JSON", r.stderr)
+
+
 @unittest.skipUnless(TRACE_BIN, "needs the quadrant_scaling_trace binary")
 class Recording(unittest.TestCase):
     def test_small_scene(self):
