@@ -89,7 +89,9 @@ class QuadrantAdapter final : public Adapter {
     std::vector<std::pair<std::string, double>> out = {
         {"broad_phase", totals_.broadPhase}, {"narrow_phase", totals_.narrowPhase},
         {"persistence", totals_.persistence}, {"solve", totals_.solve},
-        {"integrate", totals_.integrate},     {"total", totals_.total}};
+        {"integrate", totals_.integrate},     {"total", totals_.total},
+        // Steps on the one-thread path, and of those the ones too small to split (Profile).
+        {"steps_alone", double(totals_.aloneSteps)}, {"steps_small", double(totals_.smallSteps)}};
     // Load balance: thread CPU work and critical path per stage (see StageRunner).
     for (size_t k = 0; k < kStageCount; ++k) {
       out.push_back({std::string("work_") + kStageNames[k], totals_.balance[k].workMs});

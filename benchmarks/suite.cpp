@@ -505,6 +505,10 @@ std::string RunJob(benchmark::State& state, const Job& job) {
   for (size_t k = 0; k < stagesAfter.size() && k < stagesBefore.size(); ++k) {
     const std::string& name = stagesAfter[k].first;
     if (name.starts_with("work_") || name.starts_with("critical_")) continue;
+    if (name.starts_with("steps_")) {  // a count of steps: the share of the timed steps (alone_share, small_share)
+      state.counters[name.substr(6) + "_share"] = Counter((stagesAfter[k].second - stagesBefore[k].second) / double(job.steps));
+      continue;
+    }
     state.counters["stage_" + name + "_ms"] =
         Counter((stagesAfter[k].second - stagesBefore[k].second) / double(job.steps));
   }

@@ -519,5 +519,33 @@ TEST(ThreadPoolTest, StagesNestedInABlockRunInline) {
   for (const auto& h : hits) EXPECT_EQ(h.load(), 1);
 }
 
+TEST(ThreadPoolTest, AStepTooSmallToSplitRunsAloneWithTheSameBits) {
+  // StageRunner::BeginStep: a step whose last step's work was below minParallelItems items'
+  // worth (50 ns an item) takes the one-thread path. With minParallelItems at
+  // 10^6 (50 ms) every step of the busy scene is that small after the first, which has no last
+  // step to go by; at 8 (0.4 us) none is. Both give the one-thread bits.
+  auto run = [](int minItems, Profile& total) {
+    WorldDef def;
+    def.threadCount = 2;
+    def.solver = SolverType::kSoftStep;
+    def.minParallelItems = minItems;
+    World world(def);
+    BuildBusyScene(world);
+    for (int i = 0; i < 30; ++i) {
+      world.Step(kDt);
+      total += world.GetProfile();
+    }
+    return world.StateHash();
+  };
+  Profile small, split;
+  const uint64_t smallHash = run(1000000, small), splitHash = run(8, split);
+  EXPECT_EQ(small.smallSteps, 29);
+  EXPECT_EQ(small.aloneSteps, 29);
+  EXPECT_EQ(split.smallSteps, 0);
+  EXPECT_EQ(split.aloneSteps, 0);  // QUADRANT_POOL_ALONE=0 (test_helpers.h): the pool never runs alone
+  EXPECT_EQ(smallHash, HashAfterSteps(1, 30, SolverType::kSoftStep));
+  EXPECT_EQ(splitHash, smallHash);
+}
+
 }  // namespace
 }  // namespace quadrant

@@ -407,7 +407,9 @@ struct WorldDef {
   /// Sections with fewer items (bodies, pairs; an eighth as many constraints) run on the calling
   /// thread. A parallel-for costs about 3.4 us at 2 threads (benchmarks/task_overhead.cpp) and a
   /// body or pair about 10-20 ns, so below a few thousand items splitting does not pay. Lower it
-  /// only to exercise threading on small scenes (the tests do). >= 1.
+  /// only to exercise threading on small scenes (the tests do). A whole step whose last step's
+  /// work was below this many items at 50 ns runs on the calling thread too
+  /// (Profile::smallSteps). >= 1.
   int minParallelItems = 2048;
   int quadTreeMaxDepth = 8;             ///< quad-tree levels below the root, 1..12
   /// Reuse the broad phase's pairs while every body stays within 0.1 m of where they were found
@@ -458,11 +460,17 @@ struct Profile {
   double integrate = 0;    ///< velocities and positions
   double total = 0;        ///< the whole Step
   std::array<StageBalance, kStageCount> balance{};  ///< per stage, indexed by Stage
+  /// Steps on the one-thread path with more than one thread (a busy machine, no worker, or a
+  /// step too small to split), and of those the ones too small (the last step's work below
+  /// WorldDef::minParallelItems items' worth): 0 or 1 for one Step.
+  int aloneSteps = 0;
+  int smallSteps = 0;
 
   /// Adds another profile field by field (totals over several steps).
   Profile& operator+=(const Profile& o) {
     broadPhase += o.broadPhase, narrowPhase += o.narrowPhase, persistence += o.persistence;
     solve += o.solve, integrate += o.integrate, total += o.total;
+    aloneSteps += o.aloneSteps, smallSteps += o.smallSteps;
     for (size_t k = 0; k < kStageCount; ++k) {
       balance[k].workMs += o.balance[k].workMs;
       balance[k].criticalMs += o.balance[k].criticalMs;

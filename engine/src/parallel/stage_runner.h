@@ -52,10 +52,26 @@ class StageRunner {
   /// the two-thread partition serially cost 6 % more time than one thread on 16000 circles and
   /// 3 % on the base-100 pyramid (both pinned to one core, thread_pool.cpp).
   /// Otherwise the task system is told that a step begins (TaskSystem::Prepare: wake the workers).
+  ///
+  /// A step whose last step's work (every section's, on all threads; Reset) was too small to pay
+  /// for the hand-overs and barriers runs alone too: below minParallelItems items at 50 ns (0.1
+  /// ms at the default 2048). On the lent 16-core VM 1000 circles (0.08 ms a step) stepped at
+  /// 0.85x on 2 threads and 0.78x on 4, while 1000 polygons (0.22 ms) gained 1.25x and 1.13x;
+  /// 2000 circles (0.15 ms) gave 1.00x and 0.90x, so the limit does not grow with the threads. A
+  /// small step stays alone until its work passes 1.5 times the limit. Tests that lower
+  /// minParallelItems to exercise threading on small scenes, and recordings (StepTrace), keep
+  /// the partition.
   void BeginStep() {
-    alone_ = tasks_.WorkerCount() > 1 && tasks_.RunsAlone();
-    if (!alone_ && tasks_.WorkerCount() > 1) tasks_.Prepare();
+    const int workers = tasks_.WorkerCount();
+    small_ = workers > 1 && trace_ == nullptr && lastWorkMs_ >= 0 &&
+             lastWorkMs_ < (small_ ? 1.5 : 1.0) * SmallStepMs();
+    alone_ = workers > 1 && (small_ || tasks_.RunsAlone());
+    if (!alone_ && workers > 1) tasks_.Prepare();
+    begun_ = true;
   }
+  /// Whether this step runs alone (BeginStep), and whether because the last one was small.
+  bool Alone() const { return alone_; }
+  bool SmallStep() const { return small_; }
   /// Sections with fewer items run inline (WorldDef::minParallelItems).
   int MinItems() const { return minItems_; }
   /// The grain for items that cost about ten times a body update (a pair's manifold, a
@@ -249,7 +265,13 @@ class StageRunner {
     if (trace_) [[unlikely]] trace_->AddSerial(stage, traceMs, StepTrace::Now());
   }
 
-  void Reset() { balance_ = {}; }
+  /// Called before each step's BeginStep: keeps the finished step's work for it, then clears.
+  void Reset() {
+    double work = 0;
+    for (const StageBalance& b : balance_) work += b.workMs;
+    lastWorkMs_ = begun_ && measure_ ? work : -1.0;
+    balance_ = {};
+  }
   const std::array<StageBalance, kStageCount>& Balance() const { return balance_; }
 
  private:
@@ -272,6 +294,11 @@ class StageRunner {
     return least;
   }
 
+  double SmallStepMs() const {
+    constexpr double kItemMs = 50e-6;
+    return double(minItems_) * kItemMs;
+  }
+
   void Add(Stage stage, double work, double critical) {
     balance_[size_t(stage)].workMs += work;
     balance_[size_t(stage)].criticalMs += critical;
@@ -283,6 +310,9 @@ class StageRunner {
   std::vector<int> chunkOffset_;  // Stages: the first chunk slot of each stage
   std::vector<double> chunkMs_;   // Stages: per chunk
   bool alone_ = false;  // this step runs on the caller alone (BeginStep)
+  bool small_ = false;  // ... because the last step's work was below SmallStepMs
+  double lastWorkMs_ = -1;  // the last step's work (Reset); -1: none measured yet
+  bool begun_ = false;      // a step has begun since the runner was made
   bool nested_ = false;  // inside Beside's alone(): every call runs inline, untimed
   bool measure_;      // more than one worker: a single one's bound is 1 by definition
   bool threadClock_;  // more workers than cores: time blocks by thread CPU time

@@ -537,6 +537,8 @@ void World::StepRepeated(Real dt, int pipelineRepeats) {
   for (int s = 0; s < pipelineRepeats; ++s) w.RunPipeline(h);
   w.profile.total = Ms(start, Clock::now());
   w.profile.balance = w.run->Balance();
+  w.profile.aloneSteps = w.run->Alone() ? 1 : 0;
+  w.profile.smallSteps = w.run->SmallStep() ? 1 : 0;
   // With sleep on, the touching pairs are tracked even without events: a sleeping island's
   // contacts are not in `contacts` (it gets no pairs), yet it still touches, so the counter counts
   // the tracked pairs (as Box2D, Bullet and Chipmunk count a sleeping pile's contacts). Hit events
