@@ -363,6 +363,14 @@ def script_lines(script, stems):
     return [lines[i] for i in sorted(keep)]
 
 
+def script_quote(script, stems):
+    """The Commands paragraph quoting SCRIPT's lines that made the sets STEMS, as a sh block."""
+    return ([f"The run script `{script}` (not committed), run as `bash {script}` from the repository root; its "
+             "lines that made these sets (`b NAME COMMIT BINARY ARGS` runs BINARY with ARGS and "
+             "`--benchmark_out=NAME.json`):", "", "```sh"] +
+            (script_lines(script, stems) or ["# (no line of the script names these sets)"]) + ["```", ""])
+
+
 def pool_rows(directory):
     """(file, threads, fields) of every pool line with steps in DIR's poolstats_*.log."""
     out = []
@@ -390,6 +398,34 @@ def pool_rows(directory):
             if fields["steps"] not in ("0", "?"):
                 out.append((n, int(m.group(1)), fields))
     return out
+
+
+def frame_loop_tables(s, back, heading, back_note):
+    """A frame-loop set's section: under ### HEADING, per benchmark, its median ms per step against
+    BACK's back-to-back medians ({key + (threads,): (ms, reps, ...)}), their ratio and the late frames;
+    BACK_NOTE says where the back-to-back figures come from."""
+    fm = ms_medians(sets=[s])
+    late = collections.defaultdict(list)
+    for k, r in s.iterations():
+        if isinstance(r.get("late_frames"), (int, float)):
+            late[k].append(r["late_frames"])
+    lines = [f"### {heading}", "",
+             f"The frame loop sleeps to the next frame boundary after every step (`--frame-rate "
+             f"{s.context.get('frame_rate')}`, repetitions {'/'.join(map(str, s.repetitions()))}); only the "
+             f"steps are timed. {back_note} Ratio = frame loop / back-to-back.", ""]
+    for k3 in dict.fromkeys(k[:3] for k in fm):
+        threads = sorted(k[3] for k in fm if k[:3] == k3)
+        lines += [f"#### `{key_name(k3)}`", "", "| | " + " | ".join(f"{t}T" for t in threads) + " |",
+                  "|---|" + "---:|" * len(threads),
+                  "| frame loop | " + " | ".join(fmt_ms(fm[k3 + (t,)][0]) for t in threads) + " |",
+                  "| back-to-back | " + " | ".join(fmt_ms(back.get(k3 + (t,), (None,))[0]) for t in threads) + " |",
+                  "| ratio | " + " | ".join(f"{fm[k3 + (t,)][0] / back[k3 + (t,)][0]:.2f}" if k3 + (t,) in back
+                                           else "-" for t in threads) + " |"]
+        if late:
+            lines.append("| late frames | " + " | ".join(
+                f"{statistics.median(late[k3 + (t,)]):.0f}" if late.get(k3 + (t,)) else "-" for t in threads) + " |")
+        lines.append("")
+    return lines
 
 
 def comparisons(directory, sets, head, data, skipped, title, script):
@@ -440,31 +476,12 @@ def comparisons(directory, sets, head, data, skipped, title, script):
         lines.append("")
 
     # Frame loops against back-to-back steps.
-    back = med[head]
     for s in sets:
         if s.commit != head or not s.frame_rate():
             continue
-        fm = ms_medians(sets=[s])
-        late = collections.defaultdict(list)
-        for k, r in s.iterations():
-            if isinstance(r.get("late_frames"), (int, float)):
-                late[k].append(r["late_frames"])
-        lines += [f"### {s.context.get('frame_rate')} Hz frame loop (`{s.name}`) against back-to-back steps", "",
-                  f"The frame loop sleeps to the next frame boundary after every step (`--frame-rate "
-                  f"{s.context.get('frame_rate')}`, repetitions {'/'.join(map(str, s.repetitions()))}); only the "
-                  "steps are timed. Back-to-back: the same benchmark in bench.json. Ratio = frame loop / back-to-back.", ""]
-        for k3 in dict.fromkeys(k[:3] for k in fm):
-            threads = sorted(k[3] for k in fm if k[:3] == k3)
-            lines += [f"#### `{key_name(k3)}`", "", "| | " + " | ".join(f"{t}T" for t in threads) + " |",
-                      "|---|" + "---:|" * len(threads),
-                      "| frame loop | " + " | ".join(fmt_ms(fm[k3 + (t,)][0]) for t in threads) + " |",
-                      "| back-to-back | " + " | ".join(fmt_ms(back.get(k3 + (t,), (None,))[0]) for t in threads) + " |",
-                      "| ratio | " + " | ".join(f"{fm[k3 + (t,)][0] / back[k3 + (t,)][0]:.2f}" if k3 + (t,) in back
-                                               else "-" for t in threads) + " |"]
-            if late:
-                lines.append("| late frames | " + " | ".join(
-                    f"{statistics.median(late[k3 + (t,)]):.0f}" if late.get(k3 + (t,)) else "-" for t in threads) + " |")
-            lines.append("")
+        lines += frame_loop_tables(
+            s, med[head], f"{s.context.get('frame_rate')} Hz frame loop (`{s.name}`) against back-to-back steps",
+            "Back-to-back: the same benchmark in bench.json.")
 
     # Pool counters.
     pools = pool_rows(directory)
@@ -487,12 +504,7 @@ def comparisons(directory, sets, head, data, skipped, title, script):
     # Commands.
     lines += ["### Commands", ""]
     if script:
-        rel = script
-        lines += [f"The run script `{rel}` (not committed), run as `bash {rel}` from the repository root; its lines "
-                  "that made these sets (`b NAME COMMIT BINARY ARGS` runs BINARY with ARGS and "
-                  "`--benchmark_out=NAME.json`):", "", "```sh"]
-        lines += script_lines(script, [s.stem for s in sets]) or ["# (no line of the script names these sets)"]
-        lines += ["```", ""]
+        lines += script_quote(script, [s.stem for s in sets])
     lines += ["Each set as its JSON context records it:", ""]
     for s in sets:
         lines.append(f"- `{s.name}` ({s.commit}, {s.date}): `{s.command()}`")
@@ -701,30 +713,10 @@ def ab_section(directory, sets, base_tag, head_tag, title, script, first_bench=N
 
     # The head's frame loops against its back-to-back medians over the pairs.
     for s in frames:
-        fm = ms_medians(sets=[s])
-        late = collections.defaultdict(list)
-        for k, r in s.iterations():
-            if isinstance(r.get("late_frames"), (int, float)):
-                late[k].append(r["late_frames"])
-        lines += [f"### {s.context.get('frame_rate')} Hz frame loop of {head} (`{s.name}`) against its "
-                  "back-to-back steps", "",
-                  f"The frame loop sleeps to the next frame boundary after every step (`--frame-rate "
-                  f"{s.context.get('frame_rate')}`, repetitions {'/'.join(map(str, s.repetitions()))}); only the "
-                  f"steps are timed. Back-to-back: {head}'s median over the pairs above (its `*_{head_tag}_N.json`). "
-                  "Ratio = frame loop / back-to-back.", ""]
-        for k3 in dict.fromkeys(k[:3] for k in fm):
-            threads = sorted(k[3] for k in fm if k[:3] == k3)
-            lines += [f"#### `{key_name(k3)}`", "", "| | " + " | ".join(f"{t}T" for t in threads) + " |",
-                      "|---|" + "---:|" * len(threads),
-                      "| frame loop | " + " | ".join(fmt_ms(fm[k3 + (t,)][0]) for t in threads) + " |",
-                      "| back-to-back | " + " | ".join(fmt_ms(head_back.get(k3 + (t,), (None,))[0])
-                                                      for t in threads) + " |",
-                      "| ratio | " + " | ".join(f"{fm[k3 + (t,)][0] / head_back[k3 + (t,)][0]:.2f}"
-                                               if k3 + (t,) in head_back else "-" for t in threads) + " |"]
-            if late:
-                lines.append("| late frames | " + " | ".join(
-                    f"{statistics.median(late[k3 + (t,)]):.0f}" if late.get(k3 + (t,)) else "-" for t in threads) + " |")
-            lines.append("")
+        lines += frame_loop_tables(
+            s, head_back, f"{s.context.get('frame_rate')} Hz frame loop of {head} (`{s.name}`) against its "
+            "back-to-back steps",
+            f"Back-to-back: {head}'s median over the pairs above (its `*_{head_tag}_N.json`).")
 
     # The head's pool counters.
     if pools:
@@ -751,11 +743,7 @@ def ab_section(directory, sets, base_tag, head_tag, title, script, first_bench=N
     # Commands.
     lines += ["### Commands", ""]
     if script:
-        lines += [f"The run script `{script}` (not committed), run as `bash {script}` from the repository root; its "
-                  "lines that made these sets (`b NAME COMMIT BINARY ARGS` runs BINARY with ARGS and "
-                  "`--benchmark_out=NAME.json`):", "", "```sh"]
-        lines += script_lines(script, [s.stem for s in used]) or ["# (no line of the script names these sets)"]
-        lines += ["```", ""]
+        lines += script_quote(script, [s.stem for s in used])
     lines += ["Each set as its JSON context records it (a pair's two sets: one line when their commands agree):", ""]
     for g, pairs in groups.items():
         for p, b, h in pairs:
