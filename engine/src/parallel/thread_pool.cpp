@@ -268,7 +268,6 @@ class ThreadPool final : public TaskSystem {
     // More threads than cores would only take turns on them: the extra ones are not started
     // (every block still exists and is run by the threads that are).
     const int running = std::min(threads, UsableCores());
-    claimShare_ = uint32_t(2 * running);
     stats_ = std::getenv("QUADRANT_POOL_STATS") != nullptr;
     // QUADRANT_POOL_ALONE=0: serial steps still run the partition's blocks (on the caller), as
     // determinism tests need, which must compare the partitioned path with one thread whatever
@@ -809,17 +808,11 @@ class ThreadPool final : public TaskSystem {
         continue;
       }
       if (FrontOf(w) < BackOf(w)) {
-        // A region's stage (kRunsTag) is claimed in runs of consecutive chunks: 1 / claimShare_
-        // (2 x threads) of those left, at least one, so the threads start with runs of two and end
-        // with single chunks (8 chunks on 2 threads: 2, 2, 1, 1, 1, 1). Fewer claims (each an
-        // atomic on a line the other thread has just written), the same small last chunks: on
-        // the base-100 pyramid at 2 threads a sub-step region's time beyond half its work fell
-        // from 0.53 to 0.40 us a stage (medians), 148 -> 112 claims a region. A run's items are
-        // independent like a chunk's (task_system.h), so the bits are the same. A ParallelFor's
-        // blocks go one a claim (their indices pick per-block outputs), as do the chunks of a
-        // stage whose plan says runs = false (StageRunner::Beside's, whose first is its lone part).
-        const uint32_t left = BackOf(w) - FrontOf(w);
-        const uint32_t take = (TagOf(w) & kRunsTag) ? std::max<uint32_t>(1, (left + claimShare_ - 1) / claimShare_) : 1;
+        // Only stages whose chunks differ by design come here (a region with runs = false,
+        // StageRunner::Beside's, whose first chunk is its lone part): one chunk a claim. Runs of
+        // chunks are the lanes' (a region's runs took a stage's time beyond half its work on the
+        // base-100 pyramid at 2 threads from 0.53 to 0.40 us, 148 -> 112 claims a region).
+        const uint32_t take = 1;
         const uint64_t claimed = fromBack ? w - take : w + (uint64_t(take) << 16);
         if (!claim_.compare_exchange_weak(w, claimed, std::memory_order_acq_rel, std::memory_order_acquire)) {
           continue;
@@ -1058,7 +1051,6 @@ class ThreadPool final : public TaskSystem {
   std::vector<int> chunks_;
   int stages_ = 0;
   uint32_t tag_ = 0;
-  uint32_t claimShare_ = 1;  // a claim in a region takes 1 / claimShare_ of the chunks left (constructor)
 
   std::atomic<uint64_t> claim_{Pack(0, kDoneStage, 0, 0)};
   struct alignas(64) Lane {
