@@ -1,7 +1,8 @@
-// soft_step's bundles of contact islands (soft_step_bundles.cpp): on a sparse scene at 4 threads
-// or more the rows run bundle by bundle, each bundle through every sub-step on one thread. The
-// state must be the one colour by colour gives, bit for bit, at every thread count; and where a
-// row would need the whole world (a moving kinematic body in rows, joints) no bundle is formed.
+// soft_step's bundles of contact islands (soft_step_bundles.cpp): at 4 threads or more, on a
+// sparse scene or on a pile of many small islands, the rows run bundle by bundle, each bundle
+// through every sub-step on one thread. The state must be the one colour by colour gives, bit for
+// bit, at every thread count; no bundle is formed where a row would need the whole world (a
+// moving kinematic body in rows, joints), nor on a pile whose largest island exceeds a bundle.
 #include <gtest/gtest.h>
 
 #include <cstdint>
@@ -110,6 +111,53 @@ TEST(SoftBundlesTest, BundledRowsGiveTheColourByColourStateAtEveryThreadCount) {
       EXPECT_GT(many.bundledSteps, 60) << (gas ? "gas" : "stacks") << " at " << threads << " threads";
     }
   }
+}
+
+// Pyramids of `base` boxes a side, `count` of them side by side on the ground (each its own
+// island), and with `big` one more of base 30 beside them; 240 steps, so the piles come to rest
+// and the colouring (with the islands) is kept from step to step.
+Outcome Pyramids(int threads, int count, int base, bool big) {
+  WorldDef def;
+  def.threadCount = threads;
+  def.minParallelItems = 8;
+  World world(def);
+  BodyDef ground;
+  ground.position = {0, -0.5f};
+  ground.shape = ShapeDef::Box(400, 0.5f);
+  world.CreateBody(ground);
+  auto pyramid = [&](float left, int n) {
+    for (int row = 0; row < n; ++row) {
+      for (int j = 0; j < n - row; ++j) {
+        BodyDef b;
+        b.type = BodyType::kDynamic;
+        b.position = {left + 0.5f * Real(row) + Real(j) + 0.5f, 0.5f + Real(row)};
+        b.shape = ShapeDef::Box(0.5f, 0.5f);
+        world.CreateBody(b);
+      }
+    }
+  };
+  for (int p = 0; p < count; ++p) pyramid(-300 + Real(p) * Real(base + 1), base);
+  if (big) pyramid(200, 30);
+  Outcome run;
+  for (int s = 0; s < 240; ++s) {
+    world.Step(1.0f / 60);
+    run.bundledSteps += world.GetCounters().rowBundles > 0 ? 1 : 0;
+  }
+  run.hash = world.StateHash();
+  return run;
+}
+
+TEST(SoftBundlesTest, APileOfSmallIslandsIsBundledWithTheSameBits) {
+  const Outcome one = Pyramids(1, 40, 6, false);
+  for (const int threads : {4, 8}) {
+    const Outcome many = Pyramids(threads, 40, 6, false);
+    EXPECT_EQ(many.hash, one.hash) << threads << " threads";
+    EXPECT_GT(many.bundledSteps, 200) << threads << " threads";
+  }
+  // One island of 465 boxes beside 40 of 21: more rows than a bundle's share in one island.
+  const Outcome unevenOne = Pyramids(1, 40, 6, true), uneven = Pyramids(8, 40, 6, true);
+  EXPECT_EQ(uneven.hash, unevenOne.hash);
+  EXPECT_EQ(uneven.bundledSteps, 0);
 }
 
 TEST(SoftBundlesTest, NoBundlesWhereARowNeedsTheWholeWorld) {

@@ -19,6 +19,7 @@ void ConstraintGraph::Finish(StageRunner& run, int bodyCount, int m, bool clearL
   bool same = comparable_;
   for (int changed : changed_) same = same && changed == 0;
   ++colorings_;
+  kept_ = same;
   if (same) {
     ++reused_;
     if (beside != nullptr) run.Serial(Stage::kSolve, *beside);

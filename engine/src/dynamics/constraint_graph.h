@@ -106,6 +106,9 @@ class ConstraintGraph {
 
   // The number of constraints coloured, and the contact of the k-th in colour order.
   int Count() const { return static_cast<int>(order_.size()); }
+  // Whether this step's colouring is last step's (the ends' sequence unchanged): set before
+  // Color's `beside` runs, so it may keep what it derived from the same ends last step.
+  bool Kept() const { return kept_; }
   int ContactOf(int k) const { return order_[k]; }
   // Colour `color`'s constraints are [ColorBegin(color), ColorBegin(color + 1)) in colour
   // order; colour kColors is the overflow group, ColorBegin(kColors + 1) == Count().
@@ -170,6 +173,7 @@ class ConstraintGraph {
   std::vector<int> bundleFill_, bundleScratch_;
   int lastCount_ = -1;                            // the contacts coloured last step (-1: none yet)
   bool comparable_ = false;                       // this step has as many contacts as the last
+  bool kept_ = false;                             // this step kept last step's colouring
 
   void Prepare(StageRunner& run, int bodyCount, int m);
   // After the gather: last step's colouring kept, or the greedy pass; then the masks cleared

@@ -357,6 +357,10 @@ class SoftStepSolver final : public Solver {
   // [groupRowBegin_, groupRowEnd_) in colour order; per bundle its first body in active_.
   int bundles_ = 0;
   int islandBundles_ = 0;  // FindIslands' bundles, applied after the colouring
+  int islandsFor_ = 0;     // the threads FindIslands last found them for (0: not found last step)
+  bool islandsKept_ = false;     // FindIslands kept last step's islands
+  bool bundlesApplied_ = false;  // ApplyBundles applied bundles (last step, until it runs)
+  bool bundlesKept_ = false;     // this step's bundles and their rows' layout are last step's
   std::vector<int> bundleGroupStart_, groupRowBegin_, groupRowEnd_, bundleBodyStart_;
   // Per body, FindIslands' union-find (parent, and island at a root; -1 between steps) and the
   // bundle of a body in rows: one record, so each end a contact names is one cache line.

@@ -1,9 +1,12 @@
-// The soft step's bundles (soft_step.h): the rows of a sparse scene run bundle by bundle.
+// The soft step's bundles (soft_step.h): the rows of a sparse scene, or of a pile of small
+// islands, run bundle by bundle.
 //
-// Contract: from 4 threads on, where the rows are fewer than half the bodies and fall into many
-// contact islands (connected through dynamic bodies; static, kinematic and sleeping bodies are
-// only read), FindIslands deals the islands in contact order into bundles of about
-// kBundlesPerWorker a thread, on another thread while the colouring's greedy pass runs; then
+// Contract: from 4 threads on, where the rows fall into many contact islands (connected through
+// dynamic bodies; static, kinematic and sleeping bodies are only read), FindIslands deals the
+// islands in contact order into bundles of about kBundlesPerWorker a thread, on another thread
+// while the colouring's greedy pass runs (where the colouring is kept, so are the islands); a
+// pile (more rows than half the bodies, so no free bodies to even the bundles out) only where its
+// largest island fits in a bundle, as many_pyramids' 400 pyramids on their shelves do; then
 // ApplyBundles orders each colour's rows by bundle (ConstraintGraph::SetBundles) and BuildRows
 // lays each bundle's rows of a colour into groups of their own (LayOutBundleGroups: a group never
 // mixes bundles). The sub-steps' regions run as one, bundle by bundle (RunRegionByBundle): a
@@ -23,7 +26,10 @@
 // bundles; polygons 16000 2.63x -> 3.38-3.91x, 78 -> 30 barriers a step). The cost: a bundle's
 // last group of each colour is padded, and the islands' union-find is a serial pass over the
 // contacts (0.1-0.15 ms for 1274 on a 2-core VM, cache misses on the bodies' records), hidden
-// beside the greedy colouring, itself such a pass, where the colouring is not kept.
+// beside the greedy colouring, itself such a pass, where the colouring is not kept, and not run
+// where it is. Piles: many_pyramids 22000 (400 islands) 99 -> 13 barriers a step at 4-16 threads,
+// the model's 16-thread speed-up 9.0x -> 12.7x (unmeasured on 16 cores); its one big island
+// keeps the pyramid on the colour by colour path.
 #include <algorithm>
 
 #include "dynamics/soft_step.h"
@@ -51,17 +57,19 @@ constexpr int kMinBundleRows = 32;
 bool SoftStepSolver::MayBundle(const StageRunner& run, const StepContext& ctx, bool box2dRestitution) const {
   const WorldDef& def = *ctx.def;
   const int64_t m = static_cast<int64_t>(ctx.contacts.size());
-  // Not on a pile (more rows than half the bodies): few islands there, and finding them is a
-  // serial pass over many contacts.
-  return run.Workers() >= kMinBundleWorkers && m >= 2 * kMinBundleRows && 2 * m <= ctx.bodies->Count() && !exchange_ &&
-         ctx.joints.empty() && !def.box2dPositionSolve && !box2dRestitution &&
-         !kinematicInRows_.flag.load(std::memory_order_relaxed);
+  return run.Workers() >= kMinBundleWorkers && m >= 2 * kMinBundleRows && !exchange_ && ctx.joints.empty() &&
+         !def.box2dPositionSolve && !box2dRestitution && !kinematicInRows_.flag.load(std::memory_order_relaxed);
 }
 
 // Only Color's gather has run: the contacts' dynamic ends (ConstraintGraph::Ends) are all it reads,
 // while the greedy pass writes the colour order beside it.
 void SoftStepSolver::FindIslands(const StepContext& ctx, int workers) {
   const int m = static_cast<int>(ctx.contacts.size());
+  // The islands are a function of the ends' sequence and the threads: where the colouring kept
+  // last step's (the same ends) and last step found them for as many threads, they are its.
+  islandsKept_ = graph_.Kept() && islandsFor_ == workers;
+  if (islandsKept_) return;
+  islandsFor_ = workers;
   int bundles = 0;
   bundleNodes_.resize(size_t(ctx.bodies->Count()));  // parent and island -1 between steps
   BundleNode* node = bundleNodes_.data();
@@ -112,6 +120,10 @@ void SoftStepSolver::FindIslands(const StepContext& ctx, int workers) {
   }
   // Islands dealt in order into bundles of at least `target` rows.
   const int target = std::max(kMinBundleRows, (m + kBundlesPerWorker * workers - 1) / (kBundlesPerWorker * workers));
+  // A pile (more rows than half the bodies) only where every island fits in a bundle: it has no
+  // free bodies to even out a bundle that holds more than a thread's share.
+  const bool uneven = 2 * int64_t(m) > ctx.bodies->Count() && !islandRows_.empty() &&
+                     *std::max_element(islandRows_.begin(), islandRows_.end()) > target;
   bundleOfIsland_.resize(islandRows_.size());
   int rows = 0;
   for (size_t i = 0; i < islandRows_.size(); ++i) {
@@ -133,22 +145,30 @@ void SoftStepSolver::FindIslands(const StepContext& ctx, int workers) {
       if (x >= 0) node[x] = BundleNode{-1, -1, bundle};
     }
   }
-  islandBundles_ = bundles;
+  islandBundles_ = uneven ? 0 : bundles;
 }
 
 void SoftStepSolver::ApplyBundles(StageRunner& run) {
   bundles_ = 0;
+  const bool appliedLast = bundlesApplied_;
+  bundlesApplied_ = bundlesKept_ = false;
   if (islandBundles_ < 2 || graph_.Overflowed()) {
     graph_.ClearBundles();
     return;
   }
-  run.Serial(Stage::kSolve, [&] { graph_.SetBundles(bundleOfContact_, islandBundles_); });
+  // Where the colouring and the islands are last step's and last step applied them, the colour
+  // order, its bundles' ranges and the rows' layout are last step's too: a pile at rest (on
+  // many_pyramids 22000 the two serial passes took 0.2 and 0.1 ms a step on a 2-core VM).
+  bundlesKept_ = islandsKept_ && appliedLast && graph_.Bundles() == islandBundles_;
+  if (!bundlesKept_) run.Serial(Stage::kSolve, [&] { graph_.SetBundles(bundleOfContact_, islandBundles_); });
   bundles_ = islandBundles_;
+  bundlesApplied_ = true;
 }
 
 // BuildRows' layout with bundles: colour by colour as without, and within a colour bundle by
 // bundle, each bundle's rows in groups of their own (its last one padded).
 void SoftStepSolver::LayOutBundleGroups() {
+  if (bundlesKept_) return;  // last step's (ApplyBundles)
   constexpr int kColors = ConstraintGraph::kColors;
   const size_t stride = size_t(bundles_) + 1;
   groupStart_.assign(kColors + 2, 0);

@@ -321,20 +321,24 @@ void SoftStepSolver::LoadStates(StageRunner& run, const Bodies& bodies) {
   // of the bodies are free). Eight flags at a time: most words are all zero there. Written
   // through a pointer into a list sized for every body (push_back was 23 instructions a body),
   // then cut to length.
-  active_.resize(count);
-  int* out = active_.data();
-  int listed = 0;
-  for (int i = 0; i < count; i += 8) {
-    uint64_t eight;
-    std::memcpy(&eight, &inRows_[i], sizeof eight);
-    if (eight == 0) continue;
-    for (int k = i; k < i + 8 && k < count; ++k) {
-      out[listed] = k;
-      listed += inRows_[k] != 0;
+  // Bundles kept from last step (ApplyBundles): the same ends, so the same bodies in rows, and
+  // the list is last step's, in bundle order.
+  if (!bundlesKept_) {
+    active_.resize(count);
+    int* out = active_.data();
+    int listed = 0;
+    for (int i = 0; i < count; i += 8) {
+      uint64_t eight;
+      std::memcpy(&eight, &inRows_[i], sizeof eight);
+      if (eight == 0) continue;
+      for (int k = i; k < i + 8 && k < count; ++k) {
+        out[listed] = k;
+        listed += inRows_[k] != 0;
+      }
     }
+    active_.resize(listed);
+    if (bundles_ > 0) OrderActiveByBundle();  // each bundle's bodies together
   }
-  active_.resize(listed);
-  if (bundles_ > 0) OrderActiveByBundle();  // each bundle's bodies together
   // Where the rows' bodies start (StoreRowStates adds their motion to it); the free bodies
   // need no snapshot (MoveFree).
   center0_.resize(count);

@@ -77,7 +77,11 @@ void SoftStepSolver::Run(StepContext& ctx) {
   // Built only where the step may bundle: its three references exceed std::function's inline
   // buffer, so it allocates.
   std::optional<std::function<void()>> islands;
-  if (mayBundle) islands.emplace([&] { FindIslands(ctx, run.Workers()); });
+  if (mayBundle) {
+    islands.emplace([&] { FindIslands(ctx, run.Workers()); });
+  } else {
+    islandsFor_ = 0;  // the next step that may bundle finds them anew
+  }
   const std::function<void()>* beside = islands ? &*islands : nullptr;
   const bool supported = def.softMassRatioLimit > 0;
   NextStamp(bodies.Count(), supported);
@@ -102,6 +106,7 @@ void SoftStepSolver::Run(StepContext& ctx) {
     ApplyBundles(run);
   } else {
     bundles_ = 0;
+    bundlesApplied_ = bundlesKept_ = false;
     graph_.ClearBundles();
   }
   // Only restitution and Box2D's position pass read the list.
