@@ -83,6 +83,10 @@ KINDS = [
      "threads (quadrant_task_overhead's Google Benchmark JSON)", None),
     ("machine.txt", "the machine's nproc / lscpu / uptime at the run (the lent machine's own "
      "description; tools/device_results.py copies it)", "bench.json"),
+    ("scaling.json", "the scaling model's predicted speed-ups at 2-16 threads from recordings on "
+     "this machine, against the 16-core reference (`tools/quadrant scaling`)", None),
+    ("scaling.md", "the scaling model's report: speed-ups, serial fraction, barriers, per stage",
+     "scaling.json"),
     ("history.csv", "per-benchmark medians of every `tools/quadrant bench --record` run "
      "(tools/history.py); date and commit of its last record", None),
     ("history.png", "the history's plot (tools/history.py)", "history.csv"),

@@ -52,6 +52,7 @@ Exit status: 0 done, 1 a recording failed, 2 bad arguments or a malformed trace.
 """
 
 import argparse
+import datetime
 import heapq
 import json
 import math
@@ -230,6 +231,13 @@ def one_thread_us(trace):
     return total, model_steps(t1["steps"], 1, Params.free())
 
 
+def shown_path(path):
+    """A path as a report shows it: inside the checkout, relative to its root."""
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    full = os.path.abspath(path)
+    return os.path.relpath(full, root) if full.startswith(root + os.sep) else path
+
+
 def reference_from_json(path):
     """A measured reference from a quadrant_bench Google Benchmark JSON (a 16-core run committed
     under results/<machine>/bench.json): per (scene, count), the default engine's (`quadrant`)
@@ -259,7 +267,7 @@ def reference_from_json(path):
     if not table:
         raise TraceError(f"--reference {path}: no 'quadrant' rows measured at 1 thread")
     context = data.get("context") if isinstance(data.get("context"), dict) else {}
-    about = (f"The measured reference is {path} (machine {context.get('machine', 'unknown')}, commit "
+    about = (f"The measured reference is {shown_path(path)} (machine {context.get('machine', 'unknown')}, commit "
              f"{context.get('commit', 'unknown')}): the default engine's medians.")
     return table, about
 
@@ -615,8 +623,13 @@ def main(argv=None):
         os.makedirs(args.out, exist_ok=True)
         with open(os.path.join(args.out, "scaling.md"), "w", encoding="utf-8") as f:
             f.write(text)
+        # Where and when the recordings were modelled (results/README.md reads date and commit).
+        context = {"date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
+                   "machine": os.environ.get("QUADRANT_MACHINE"), "commit": os.environ.get("QUADRANT_COMMIT"),
+                   "reference": shown_path(args.reference) if os.path.exists(args.reference) else args.reference}
         with open(os.path.join(args.out, "scaling.json"), "w", encoding="utf-8") as f:
-            json.dump({"params": params.as_dict(), "fit": args.fit, "threads": threads, "cases": cases}, f, indent=1)
+            json.dump({"context": context, "params": params.as_dict(), "fit": args.fit, "threads": threads,
+                       "cases": cases}, f, indent=1)
     return 0
 
 

@@ -147,10 +147,15 @@ class Model(unittest.TestCase):
             r = subprocess.run([sys.executable, os.path.join(TOOLS, "scaling.py"), "--trace", path,
                                 "--threads", "2", "--out", out, "--handover-us", "0", "--claim-us", "0",
                                 "--barrier-us", "1", "--wake-us", "0", "--wake-call-us", "0"],
-                               capture_output=True, text=True, check=False)
+                               capture_output=True, text=True, check=False,
+                               env=dict(os.environ, QUADRANT_MACHINE="test-2c", QUADRANT_COMMIT="abc1234"))
             self.assertEqual(r.returncode, 0, r.stderr)
             with open(os.path.join(out, "scaling.json"), encoding="utf-8") as f:
                 result = json.load(f)
+            # The context results/README.md reads: where, at which commit, when, against what.
+            self.assertEqual(result["context"]["machine"], "test-2c")
+            self.assertEqual(result["context"]["commit"], "abc1234")
+            self.assertRegex(result["context"]["date"], r"^\d{4}-\d\d-\d\dT")
             row = result["cases"][0]["threads"]["2"]
             self.assertAlmostEqual(row["speedup"], 18 / 16)
             self.assertAlmostEqual(row["serial_fraction"], 10 / 18)
