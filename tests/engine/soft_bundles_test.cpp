@@ -22,6 +22,14 @@ struct Outcome {
 
 enum class Extra { kNone, kKinematic, kJoint };
 
+// A static ground slab 1 m thick, its top at y = 0.
+void AddGround(World& world, Real halfWidth) {
+  BodyDef ground;
+  ground.position = {0, -0.5f};
+  ground.shape = ShapeDef::Box(halfWidth, 0.5f);
+  world.CreateBody(ground);
+}
+
 // Sixty stacks of three boxes on the ground (the islands), with 600 circles falling from above
 // (free bodies, until they land); restitution on every fourth circle, so both the lean rows and
 // the constraint list are taken; or the elastic gas of circle stress (restitution, no gravity).
@@ -35,10 +43,7 @@ Outcome Sparse(int threads, bool gas, Extra extra = Extra::kNone) {
     def.restitutionThreshold = 0;
   }
   World world(def);
-  BodyDef ground;
-  ground.position = {0, -0.5f};
-  ground.shape = ShapeDef::Box(200, 0.5f);
-  world.CreateBody(ground);
+  AddGround(world, 200);
   std::mt19937 rng(7);
   std::uniform_real_distribution<float> unit(-1, 1);
   if (gas) {
@@ -122,10 +127,7 @@ Outcome Pyramids(int threads, int count, int base, bool big, bool edits = false)
   def.threadCount = threads;
   def.minParallelItems = 8;
   World world(def);
-  BodyDef ground;
-  ground.position = {0, -0.5f};
-  ground.shape = ShapeDef::Box(400, 0.5f);
-  world.CreateBody(ground);
+  AddGround(world, 400);
   std::vector<BodyId> ids;
   auto pyramid = [&](float left, int n) {
     for (int row = 0; row < n; ++row) {
