@@ -334,6 +334,9 @@ class SoftStepSolver final : public Solver {
   std::vector<uint8_t> regionOnBodies_;  // per region stage: over active_ (1) or over groups (0)
   std::vector<std::function<void(int, int)>> regionFns_;
   std::vector<int> active_;          // the bodies with inRows_ set, ascending
+  // LoadStates' scan: per block of the flags its bodies in rows, where it began, the blocks in order.
+  std::vector<std::vector<int>> activeParts_;
+  std::vector<int> activePartBegin_, partOrder_;
   std::vector<uint32_t> supported_;  // MarkRow: stamp_ for a supported body this step
   uint32_t stamp_ = 0;
   // Set by BuildRows (relaxed atomic stores, all of 1) when a row joins two dynamic bodies whose
