@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <vector>
 
 #include "quadrant/world.h"
 #include "dynamics/soft_rows.h"
@@ -215,6 +216,55 @@ TEST(SoftMassRatioLimitTest, ALimitNoContactReachesChangesNothing) {
   // same bits as with the limit off.
   EXPECT_EQ(RunSlab(2000).hash, RunSlab(0).hash);
   EXPECT_NE(RunSlab(10).hash, RunSlab(0).hash);
+}
+
+// Forty columns of three light boxes (1 kg) under a heavy one (100 kg, over the limit of 10),
+// each created top down, so that in the contacts' body order support climbs one box a pass
+// (PropagateSupport). Passes split across the threads from 8 contacts on. Returns the heavy
+// boxes' largest sink below their rest height and the state hash.
+struct PileRun {
+  double heavySink = 0;
+  uint64_t hash = 0;
+};
+PileRun RunHeavyOnPiles(int threads, Real massRatioLimit) {
+  WorldDef def;
+  def.solver = SolverType::kSoftStep;
+  def.softMassRatioLimit = massRatioLimit;
+  def.threadCount = threads;
+  def.minParallelItems = 8;
+  World world(def);
+  BodyDef ground;
+  ground.position = {0, -0.5f};
+  ground.shape = ShapeDef::Box(100, 0.5f);
+  world.CreateBody(ground);
+  std::vector<BodyId> heavy;
+  for (int col = 0; col < 40; ++col) {
+    for (int k = 3; k >= 0; --k) {
+      BodyDef b;
+      b.type = BodyType::kDynamic;
+      b.position = {Real(col) * 3 - 60, 0.5f + Real(k)};
+      b.shape = ShapeDef::Box(0.5f, 0.5f);
+      b.shape.density = k == 3 ? 100 : 1;
+      const BodyId id = world.CreateBody(b);
+      if (k == 3) heavy.push_back(id);
+    }
+  }
+  PileRun r;
+  for (int s = 0; s < 600; ++s) {
+    world.Step(1.0f / 60);
+    for (const BodyId id : heavy) r.heavySink = std::max(r.heavySink, 3.5 - double(world.GetPosition(id).y));
+  }
+  r.hash = world.StateHash();
+  return r;
+}
+
+TEST(SoftMassRatioLimitTest, SupportClimbsAPileWithTheSameBitsAtEveryThreadCount) {
+  const PileRun one = RunHeavyOnPiles(1, 10);
+  for (int threads : {2, 4, 8}) EXPECT_EQ(RunHeavyOnPiles(threads, 10).hash, one.hash) << threads << " threads";
+  // Held through the pile: the top box presses the boxes below as on a box that touches the
+  // ground.
+  const PileRun unlimited = RunHeavyOnPiles(1, 0);
+  EXPECT_LT(one.heavySink, 0.5 * unlimited.heavySink);
 }
 
 TEST(SoftMassRatioLimitTest, BadLimitIsRefused) {

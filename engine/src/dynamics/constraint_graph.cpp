@@ -27,7 +27,15 @@ void ConstraintGraph::Finish(StageRunner& run, int bodyCount, int m, bool clearL
   }
   auto greedy = [&] {
     int counts[kColors + 1] = {};
+    // The ends' masks a few contacts ahead: a sparse scene's contacts join bodies far apart, and
+    // each mask is a cache miss otherwise (polygons 64000, 3100 contacts: about 60 ns a contact).
+    constexpr int kAhead = 16;
     for (int c = 0; c < m; ++c) {
+      if (c + kAhead < m) {
+        const auto [pa, pb] = ends_[c + kAhead];
+        if (pa >= 0) __builtin_prefetch(&bodyColors_[pa], 1);
+        if (pb >= 0) __builtin_prefetch(&bodyColors_[pb], 1);
+      }
       const auto [a, b] = ends_[c];
       const uint64_t used = (a >= 0 ? bodyColors_[a] : 0) | (b >= 0 ? bodyColors_[b] : 0);
       const int color = used == ~uint64_t(0) ? kColors : std::countr_one(used);

@@ -132,7 +132,6 @@ class SoftStepSolver final : public Solver {
   void FindIslands(const StepContext& ctx, int workers);
   void ApplyBundles(StageRunner& run);
   void LayOutBundleGroups();
-  void OrderActiveByBundle();
   void RunRegionByBundle(StageRunner& run);
 
   // The rows (soft_step_rows.cpp).
@@ -151,7 +150,7 @@ class SoftStepSolver final : public Solver {
   // touches a supported one whose mass is within the limit of its own is supported too, so a
   // heavy body on a pile that stands on the ground is held as on a body that touches it. Run
   // only after a step that had a contact over the limit (overLimit_): nothing else reads it.
-  void PropagateSupport(const StepContext& ctx, Real massLimit);
+  void PropagateSupport(StageRunner& run, const StepContext& ctx, Real massLimit);
   void MarkOverLimit() { std::atomic_ref<uint8_t>(overLimit_).store(1, std::memory_order_relaxed); }
 
   // The colouring's gather calls this for a contact with dynamic ends a and b (-1 for an end that
@@ -313,12 +312,12 @@ class SoftStepSolver final : public Solver {
   };
 
   // A flag any thread may set during a pass (the relax pass's deep points, the position pass's
-  // moved rows), alone in its cache line and stored only while still false: as a local of the
+  // moved rows, PropagateSupport's marks), alone in its cache line and stored only while still false: as a local of the
   // caller's frame, each store took that line, with the caller's other locals, from the other core.
   struct alignas(64) SharedFlag {
     std::atomic<bool> flag{false};
   };
-  SharedFlag deep_, moved_;
+  SharedFlag deep_, moved_, support_;
 
   static constexpr int kFlagPad = 8;
   StateExchange exchange_;
@@ -334,9 +333,11 @@ class SoftStepSolver final : public Solver {
   std::vector<uint8_t> regionOnBodies_;  // per region stage: over active_ (1) or over groups (0)
   std::vector<std::function<void(int, int)>> regionFns_;
   std::vector<int> active_;          // the bodies with inRows_ set, ascending
-  // LoadStates' scan: per block of the flags its bodies in rows, where it began, the blocks in order.
-  std::vector<std::vector<int>> activeParts_;
-  std::vector<int> activePartBegin_, partOrder_;
+  // LoadStates' scan: per block of the flags its bodies in rows (bundled, with their bundles),
+  // where it began, the blocks that ran in index order; bundled, per block and bundle its count,
+  // then its place in active_.
+  std::vector<std::vector<int>> activeParts_, activePartBundles_;
+  std::vector<int> activePartBegin_, partOrder_, partBundleStart_;
   std::vector<uint32_t> supported_;  // MarkRow: stamp_ for a supported body this step
   uint32_t stamp_ = 0;
   // Set by BuildRows (relaxed atomic stores, all of 1) when a row joins two dynamic bodies whose
@@ -372,7 +373,6 @@ class SoftStepSolver final : public Solver {
   };
   std::vector<BundleNode> bundleNodes_;
   std::vector<int> islandRows_, bundleOfIsland_, bundleOfContact_;
-  std::vector<int> bundleFill_, activeScratch_;
   // Bundled, the free bodies' pass over [0, freeCount_) runs beside the first region's bundles,
   // in blocks the threads take after them (RunRegionByBundle), as StageRunner::Beside would.
   // MoveFreeBodies' arguments, held as plain pointers: no allocation a step.

@@ -89,7 +89,7 @@ void SoftStepSolver::Run(StepContext& ctx) {
     graph_.Color(run, ctx, /*clearLater=*/true, [this](int a, int b) { MarkRow<true>(a, b); }, beside);
     // Only where last step had a contact over the limit (issue #26: Solver2D's heavy boxes on
     // pyramids, whose top boxes touch no static body, toppled them unheld).
-    if (overLimit_) run.Serial(Stage::kSolve, [&] { PropagateSupport(ctx, def.softMassRatioLimit); });
+    if (overLimit_) PropagateSupport(run, ctx, def.softMassRatioLimit);
     overLimit_ = 0;
   } else {
     graph_.Color(run, ctx, /*clearLater=*/true, [this](int a, int b) { MarkRow<false>(a, b); }, beside);
