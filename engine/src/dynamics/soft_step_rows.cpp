@@ -205,6 +205,7 @@ void SoftStepSolver::FillLeanGroup(const StepContext& ctx, SoftRowGroup& g, int 
   alignas(32) Real rax[2][kGroupRows] = {}, ray[2][kGroupRows] = {}, rbx[2][kGroupRows] = {}, rby[2][kGroupRows] = {};
   alignas(32) Real limitedLane[kGroupRows] = {};
   unsigned padLane = 0, padPoint[2] = {0, 0};
+  PrefetchRowContacts(first + kGroupRows, std::min(first + 2 * kGroupRows, graph_.Count()));  // the next group's
   for (int lane = 0; lane < kGroupRows; ++lane) {
     const int c = first + lane;
     if (c >= colorEnd) {

@@ -371,6 +371,11 @@ template <bool kRotation, bool kFriction, RelaxBias kRelax, bool kStore>
 void SoftStepSolver::RelaxPass(StageRunner& run, bool simd, const SoftSolveParams& prm, bool foldWarm) {
   ForEachGroup(run, simd, [this, prm, foldWarm](auto lanes, SoftRowGroup& g, int lane) {
     RelaxBiasRows* cache = kRelax == RelaxBias::kCompute ? nullptr : &relaxBias_[&g - groups_.data()];
+    // The contacts StoreLaneImpulses writes, a group ahead (a group's solve is too short to
+    // hide a miss): the next group in the list, which the same chunk most often takes next.
+    if constexpr (kStore) {
+      if (&g + 1 < groups_.data() + groups_.size()) PrefetchLaneContacts((&g)[1], lane, lane + kLaneWidth<decltype(lanes)>);
+    }
     SolveRows<decltype(lanes), kRotation, kFriction, false, kRelax>(states_.data(), g, lane, prm, cache);
     if constexpr (kStore) StoreLaneImpulses(g, lane, lane + kLaneWidth<decltype(lanes)>);
     if (foldWarm) WarmStartRows<decltype(lanes), kRotation>(warmNext_.data(), g, lane);
