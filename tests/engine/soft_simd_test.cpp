@@ -17,6 +17,14 @@
 namespace quadrant {
 namespace {
 
+// A static ground slab 1 m thick, its top at y = 0.
+void AddGround(World& world, Real halfWidth) {
+  BodyDef ground;
+  ground.position = {0, -0.5f};
+  ground.shape = ShapeDef::Box(halfWidth, 0.5f);
+  world.CreateBody(ground);
+}
+
 uint64_t RunPile(bool simd, int threads, bool vex = true) {
   WorldDef def;
   def.solver = SolverType::kSoftStep;
@@ -25,10 +33,7 @@ uint64_t RunPile(bool simd, int threads, bool vex = true) {
   def.threadCount = threads;
   def.minParallelItems = 8;  // split every section that has 8 items: colours run on several threads
   World world(def);
-  BodyDef ground;
-  ground.position = {0, -0.5f};
-  ground.shape = ShapeDef::Box(30, 0.5f);
-  world.CreateBody(ground);
+  AddGround(world, 30);
   BodyDef platform;  // kinematic: read by the rows, never written
   platform.type = BodyType::kKinematic;
   platform.position = {12, 2};
@@ -79,10 +84,7 @@ TEST(SoftSimdTest, AvxEncodingGivesTheSameStateAsSse2WithOverlapAndBounces) {
     def.threadCount = 2;
     def.minParallelItems = 8;
     World world(def);
-    BodyDef ground;
-    ground.position = {0, -0.5f};
-    ground.shape = ShapeDef::Box(20, 0.5f);
-    world.CreateBody(ground);
+    AddGround(world, 20);
     for (int i = 0; i < 60; ++i) {  // spawned 0.2 m into each other: the position pass acts
       BodyDef b;
       b.type = BodyType::kDynamic;
@@ -176,10 +178,7 @@ SlabRun RunSlab(Real massRatioLimit) {
   def.solver = SolverType::kSoftStep;
   def.softMassRatioLimit = massRatioLimit;
   World world(def);
-  BodyDef ground;
-  ground.position = {0, -0.5f};
-  ground.shape = ShapeDef::Box(20, 0.5f);
-  world.CreateBody(ground);
+  AddGround(world, 20);
   BodyDef slab;
   slab.type = BodyType::kDynamic;
   slab.position = {0, 0.1f};
@@ -233,10 +232,7 @@ PileRun RunHeavyOnPiles(int threads, Real massRatioLimit) {
   def.threadCount = threads;
   def.minParallelItems = 8;
   World world(def);
-  BodyDef ground;
-  ground.position = {0, -0.5f};
-  ground.shape = ShapeDef::Box(100, 0.5f);
-  world.CreateBody(ground);
+  AddGround(world, 100);
   std::vector<BodyId> heavy;
   for (int col = 0; col < 40; ++col) {
     for (int k = 3; k >= 0; --k) {
