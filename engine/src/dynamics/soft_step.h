@@ -330,8 +330,9 @@ class SoftStepSolver final : public Solver {
   };
 
   // A flag any thread may set during a pass (the relax pass's deep points, the position pass's
-  // moved rows, PropagateSupport's marks), alone in its cache line and stored only while still false: as a local of the
-  // caller's frame, each store took that line, with the caller's other locals, from the other core.
+  // moved rows, PropagateSupport's marks), alone in its cache line and stored only while still
+  // false: as a local of the caller's frame, each store took that line, with the caller's other
+  // locals, from the other core.
   struct alignas(64) SharedFlag {
     std::atomic<bool> flag{false};
   };

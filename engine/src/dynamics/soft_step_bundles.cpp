@@ -27,9 +27,10 @@
 // last group of each colour is padded, and the islands' union-find is a serial pass over the
 // contacts (cache misses on the bodies' records: 71 us for 64000 circles' 1366 contacts, 121 us
 // for 64000 polygons' 3079, prefetched; one core of a 2-core VM), beside the greedy colouring,
-// itself such a pass, where the colouring is not kept, and not run where it is. Piles: many_pyramids 22000 (400 islands) 99 -> 13 barriers a step at 4-16 threads,
-// the model's 16-thread speed-up 9.0x -> 12.7x (unmeasured on 16 cores); its one big island
-// keeps the pyramid on the colour by colour path.
+// itself such a pass, where the colouring is not kept, and not run where it is. Piles:
+// many_pyramids 22000 (400 islands) 99 -> 13 barriers a step at 4-16 threads, the model's
+// 16-thread speed-up 9.0x -> 12.7x (unmeasured on 16 cores); its one big island keeps the
+// pyramid on the colour by colour path.
 #include <algorithm>
 
 #include "dynamics/soft_step.h"
